@@ -1,0 +1,54 @@
+"""Exceptions that carry the file and key a user has to fix.
+
+Every problem with user input (a study or scene file, a record, a parameter) raises
+:class:`InputError`.  The command line turns it into one clear message on standard error and
+exit status 2; a traceback is reserved for bugs.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+
+
+class InputError(ValueError):
+    """Bad user input: names the file (if any), the key or line, and what is allowed.
+
+    Parameters
+    ----------
+    message : str
+        What is wrong and, where possible, the allowed values.
+    file : str, optional
+        The file the problem is in.
+    key : str, optional
+        Dotted key path (``"contact.gap_m"``) or a line reference (``"line 3"``).
+    """
+
+    def __init__(self, message: str, *, file: str | None = None, key: str | None = None):
+        self.message = message
+        self.file = None if file is None else str(file)
+        self.key = key
+        super().__init__(self.__str__())
+
+    def __str__(self) -> str:
+        where = []
+        if self.file:
+            where.append(self.file)
+        if self.key:
+            where.append(self.key)
+        prefix = ": ".join(where)
+        return f"{prefix}: {self.message}" if prefix else self.message
+
+
+class InputErrors(InputError):
+    """Several input problems found at once (a study file reports all of them together)."""
+
+    def __init__(self, errors: Iterable[InputError]):
+        self.errors = list(errors)
+        text = "\n".join(str(e) for e in self.errors)
+        ValueError.__init__(self, text)
+        self.message = text
+        self.file = None
+        self.key = None
+
+    def __str__(self) -> str:
+        return "\n".join(str(e) for e in self.errors)

@@ -1,0 +1,79 @@
+import math
+
+import numpy as np
+import pytest
+from reference_impact import jankowski_impact
+
+from pound_mc import relations
+from pound_mc.errors import InputError
+
+
+@pytest.mark.parametrize("e", [0.1, 0.3, 0.5, 0.65, 0.8, 0.9, 0.99, 1.0])
+def test_jankowski2008_is_eq_2_9_to_machine_precision(e):
+    # Jankowski (2008) eq. (2.9): xi = sqrt(5) (1 - e^2) / (2 pi e), written out here.
+    expected = math.sqrt(5.0) * (1.0 - e * e) / (2.0 * math.pi * e)
+    assert relations.xi_from_e(e, "jankowski2008") == pytest.approx(expected, rel=1e-15, abs=1e-16)
+
+
+def test_jankowski2006_closed_form():
+    # Jankowski (2006) EESD 35: xi = 9 sqrt5 (1-e^2) / (2 e (e (9 pi - 16) + 16)); at e = 0.5
+    # by hand: 9*2.2360680*0.75 / (2*0.5*(0.5*12.2743339+16)) = 15.093459/22.137167 = 0.6818153
+    assert relations.xi_jankowski2006(0.5) == pytest.approx(0.6818153, rel=1e-6)
+
+
+def test_kelvin_closed_form():
+    # Anagnostopoulos (1992): xi = -ln e / sqrt(pi^2 + ln^2 e); e = exp(-pi) gives 1/sqrt(2).
+    assert relations.xi_kelvin(math.exp(-math.pi)) == pytest.approx(1 / math.sqrt(2), rel=1e-14)
+
+
+@pytest.mark.parametrize("e", np.linspace(0.1, 0.99, 8).round(4))
+def test_exact_relation_rebounds_with_target(e):
+    # Independent check: Radau in physical units (tests/reference_impact.py), not the table.
+    achieved, _, _ = jankowski_impact(1.5, 0.7, 5.0e9, relations.xi_exact(e))
+    assert abs(achieved - e) < 1e-4
+
+
+@pytest.mark.parametrize(
+    ("target", "published"),
+    # DESIGN.md section 2: eq. 2.9 aimed at 0.3/0.5/0.65/0.8 gives ~0.377/0.558/0.685/0.813
+    [(0.3, 0.377), (0.5, 0.558), (0.65, 0.685), (0.8, 0.813)],
+)
+def test_jankowski2008_really_produces(target, published):
+    xi = relations.xi_jankowski2008(target)
+    independent, _, _ = jankowski_impact(2.0, 1.2, 8.0e9, xi)
+    assert relations.effective_restitution(target, "jankowski2008") == pytest.approx(
+        independent, abs=1e-4
+    )
+    assert independent == pytest.approx(published, abs=6e-4)
+
+
+def test_table_matches_high_accuracy_integration():
+    # The shipped table is what the generator computes: spot-check three rows afresh.
+    table = relations.exact_table()
+    for i in (5, 150, 390):
+        xi, e = table.loc[i, ["xi", "e"]]
+        assert relations.single_impact_restitution(xi) == pytest.approx(e, abs=1e-11)
+
+
+def test_exact_roundtrip_and_monotone():
+    e = np.linspace(0.05, 1.0, 200)
+    xi = relations.xi_exact(e)
+    assert np.all(np.diff(xi) < 0)
+    assert np.allclose(relations.restitution_of_xi(xi), e, atol=1e-8)
+
+
+@pytest.mark.parametrize("bad", [0.0, -0.2, 1.01, float("nan")])
+def test_bad_restitution(bad):
+    with pytest.raises(InputError, match=r"\(0, 1\]"):
+        relations.xi_from_e(bad)
+
+
+def test_unknown_relation_lists_choices():
+    with pytest.raises(InputError, match="exact.*jankowski2006"):
+        relations.xi_from_e(0.5, "nope")
+
+
+def test_hertzdamp_zeta_closed_forms():
+    # Muthukumar & DesRoches (2006): 3(1-e^2)/(4 v0); Ye et al. (2009): 8(1-e)/(5 e v0).
+    assert relations.hertzdamp_zeta(0.6, 0.5, "muthukumar2006") == pytest.approx(0.96)
+    assert relations.hertzdamp_zeta(0.6, 0.5, "ye2009") == pytest.approx(8 * 0.4 / (5 * 0.6 * 0.5))
