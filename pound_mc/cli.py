@@ -17,6 +17,7 @@ from pound_mc.errors import InputError
 # Modules that contribute subcommands, in the order they appear in ``--help``.
 _SUBCOMMAND_MODULES = [
     "pound_mc.cli_physics",
+    "pound_mc.cli_records",
 ]
 
 
