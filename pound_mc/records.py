@@ -177,7 +177,7 @@ def _check_samples(data: np.ndarray, dt: float, *, file, what: str = "record") -
         i = int(bad[0])
         raise InputError(
             f"{bad.size} non-finite sample(s) (NaN or infinite); first is sample {i} "
-            f"(t = {i * dt:g} s): {data[i]!r}",
+            f"(0-based index; t = {i * dt:g} s): {float(data[i])}",
             file=file,
         )
 
@@ -302,7 +302,8 @@ def _read_at2_values(path: Path) -> tuple[np.ndarray, float, dict[str, Any]]:
         running = np.cumsum([len(line.split()) for line in body])
         line_no = 5 + int(np.searchsorted(running, i, side="right"))
         raise InputError(
-            f"non-finite sample (NaN or infinite) {values[i]!r}: sample {i} (t = {i * dt:g} s)",
+            f"non-finite sample (NaN or infinite) {float(values[i])}: "
+            f"sample {i} (0-based index; t = {i * dt:g} s)",
             file=path,
             key=f"line {line_no}",
         )

@@ -65,10 +65,13 @@ def test_knet_pga_matches_the_header_after_demeaning():
     assert raw.stats.calib == pytest.approx(0.01 * int(scale[1]) / int(scale[2]), rel=1e-15)
     np.testing.assert_allclose(tr.data, raw.data * raw.stats.calib, rtol=1e-15)
     assert tr.stats.pound.units == "m/s^2" and tr.stats.pound.component == "EW"
-    # the header's maximum is that of the demeaned record, 4.383 gal = 0.04383 m/s^2
+    # the header's maximum is that of the demeaned record, 4.383 gal = 0.04383 m/s^2; the
+    # header gives 3 decimals in gal, so it is exact to +-0.0005 gal = 5e-6 m/s^2
     demeaned = load_record("builtin:knet-akt013")
     pga = np.max(np.abs(demeaned.data))
-    assert pga == pytest.approx(header_gal * 0.01, rel=1e-3)  # measured 0.0438328 m/s^2
+    assert pga == pytest.approx(header_gal * 0.01, abs=5e-6)  # measured 0.0438328 m/s^2
+    assert demeaned.stats.pound.units == "m/s^2"
+    assert record_info(demeaned)["units"] == "m/s^2"
     assert "M5.9" in demeaned.stats.pound.event
 
 
@@ -104,9 +107,14 @@ def test_every_builtin_resolves_without_network():
 
 def _at2(path: Path, values, *, per_line=5, variant="nga", dt=0.02, npts=None, units_line=None):
     npts = len(values) if npts is None else npts
+    # PEER files write DT without the leading zero ("DT=   .0100 SEC", as in the shipped
+    # RSN6 El Centro file); the "-dot" variants do the same
+    dot = f"{dt:.4f}".removeprefix("0")
     line4 = {
         "nga": f"NPTS= {npts:6d}, DT=   {dt:.4f} SEC,",
         "old": f"{npts}   {dt:.4f}   NPTS, DT",
+        "nga-dot": f"NPTS= {npts:6d}, DT=   {dot} SEC",
+        "old-dot": f"{npts:7d}   {dot}   NPTS, DT",
     }[variant]
     lines = [
         "PEER NGA STRONG MOTION DATABASE RECORD",
@@ -123,10 +131,12 @@ def _at2(path: Path, values, *, per_line=5, variant="nga", dt=0.02, npts=None, u
 VALUES = [0.001 * (-1) ** i * (i % 7) for i in range(23)]
 
 
-@pytest.mark.parametrize("variant", ["nga", "old"])
+@pytest.mark.parametrize("variant", ["nga", "old", "nga-dot", "old-dot"])
 @pytest.mark.parametrize("per_line", [1, 5, 8])
 def test_at2_header_variants_and_line_widths_parse_identically(tmp_path, variant, per_line):
     path = _at2(tmp_path / "r.at2", VALUES, per_line=per_line, variant=variant)
+    if variant.endswith("-dot"):
+        assert re.search(r"\s\.0200\s", path.read_text().splitlines()[3])
     tr = read_at2(path)
     reference = read_at2(_at2(tmp_path / "ref.at2", VALUES))
     np.testing.assert_array_equal(tr.data, reference.data)
@@ -222,7 +232,12 @@ def test_non_finite_samples(tmp_path, bad):
     lines[5] = "  ".join(tokens)
     path.write_text("\n".join(lines))
     msg = _message(read_at2, path)
-    assert "nan.AT2: line 6" in msg and "NaN or infinite" in msg and "sample 7" in msg
+    assert "nan.AT2: line 6" in msg and "NaN or infinite" in msg
+    # the eighth value (line 5 holds samples 0-4): the index is 0-based and says so
+    assert "sample 7 (0-based index" in msg
+    # the value is printed plainly, not as numpy's repr
+    assert "np.float64" not in msg
+    assert f" {float(bad)}: " in msg
 
 
 def test_at2_header_problems(tmp_path):
@@ -409,3 +424,35 @@ def test_cli_records_info_errors(capsys):
     assert "unknown built-in record 'nowhere'" in err
     assert main(["records", "info", "builtin:evt-mola-2012", "--component", "7"]) == 2
     assert "no component '7'" in capsys.readouterr().err
+
+
+def _bad_record_files(tmp_path) -> dict[str, Path]:
+    """Broken records, each with the problem its name says."""
+    files = {"missing": tmp_path / "missing.AT2"}
+    files["truncated"] = _at2(tmp_path / "truncated.AT2", VALUES, npts=30)
+    nan = _at2(tmp_path / "nan.AT2", VALUES)
+    nan.write_text(nan.read_text().replace("1.0000000E-03", "NaN", 1))
+    files["nan"] = nan
+    zero = _at2(tmp_path / "zerodt.AT2", VALUES)
+    zero.write_text(zero.read_text().replace("DT=   0.0200", "DT=   0.0000"))
+    files["zero dt"] = zero
+    files["empty"] = tmp_path / "empty.AT2"
+    files["empty"].write_text("")
+    return files
+
+
+@pytest.mark.parametrize("problem", ["missing", "truncated", "nan", "zero dt", "empty"])
+def test_cli_records_info_bad_files(tmp_path, capsys, problem):
+    path = _bad_record_files(tmp_path)[problem]
+    assert main(["records", "info", str(path)]) == 2
+    captured = capsys.readouterr()
+    assert path.name in captured.err
+    assert "Traceback" not in captured.err and "Traceback" not in captured.out
+    expected = {
+        "missing": "file not found",
+        "truncated": "NPTS = 30",
+        "nan": "NaN or infinite",
+        "zero dt": "sampling interval must be > 0 s",
+        "empty": "the file is empty",
+    }[problem]
+    assert expected in captured.err

@@ -53,6 +53,40 @@ def test_mean_periodogram_matches_clough_penzien_spectrum():
     assert np.max(np.abs(wrong - 1.0)) > 0.10
 
 
+def _clough_penzien_written_out(w, wg, zg, wf, zf, s0):
+    # Clough & Penzien (1975): S(w) = S0 (wg^4 + 4 zg^2 wg^2 w^2) / ((wg^2 - w^2)^2
+    # + 4 zg^2 wg^2 w^2) * w^4 / ((wf^2 - w^2)^2 + 4 zf^2 wf^2 w^2), written out independently
+    # of pound_mc.synthetic.  Convention (pound_mc/synthetic.py module docstring and
+    # clough_penzien_psd): w is angular frequency in rad/s and S is two-sided in w, i.e. the
+    # variance is the integral of S over -inf < w < inf, so S0 is the two-sided intensity
+    # [m^2/s^3]; no factor 2 or 2 pi enters.
+    kanai_tajimi = (wg**4 + 4 * zg**2 * wg**2 * w**2) / (
+        (wg**2 - w**2) ** 2 + 4 * zg**2 * wg**2 * w**2
+    )
+    high_pass = w**4 / ((wf**2 - w**2) ** 2 + 4 * zf**2 * wf**2 * w**2)
+    return s0 * kanai_tajimi * high_pass
+
+
+@pytest.mark.parametrize("soil", ["default", "medium"])
+def test_psd_is_the_clough_penzien_formula(soil):
+    w = np.concatenate([np.linspace(0.0, 120.0, 2401), [0.01, 1.5, 10.0, 15.0, 300.0, 3000.0]])
+    if soil == "default":
+        p = synthetic.DEFAULTS  # the function's keyword defaults must be these (firm soil)
+        package = synthetic.clough_penzien_psd(w)
+    else:
+        p = {**synthetic.SOIL_PARAMETERS["medium"], "S0": 0.037}
+        package = synthetic.clough_penzien_psd(w, **p)
+    args = (p["omega_g"], p["zeta_g"], p["omega_f"], p["zeta_f"], p["S0"])
+    expected = _clough_penzien_written_out(w, *args)
+    np.testing.assert_allclose(package, expected, rtol=1e-12, atol=0.0)
+    assert package[0] == 0.0 and np.all(package[1:] > 0)
+    # the comparison discriminates the conventions: w read in Hz, or a one-sided S0, fail it
+    f_hz = w / (2 * np.pi)
+    assert not np.allclose(package, _clough_penzien_written_out(f_hz, *args), rtol=1e-12, atol=0)
+    one_sided = _clough_penzien_written_out(w, *args[:4], args[4] / 2)
+    assert not np.allclose(package, one_sided, rtol=1e-12, atol=0)
+
+
 def test_psd_integrates_to_kanai_tajimi_variance():
     # With the high-pass corner far below omega_g, the Clough-Penzien spectrum tends to the
     # Kanai-Tajimi one, whose variance is pi S0 omega_g (1 + 4 zeta_g^2) / (2 zeta_g)

@@ -1,0 +1,308 @@
+"""Structural models of the two buildings: SDOF oscillators and shear buildings.
+
+Both are described to the integrators by their classical modes: mass-normalised mode shapes
+``phi`` (floors x modes, ``phi.T @ M @ phi = I``), circular frequencies ``omega`` [rad/s],
+damping ratios ``zeta`` [-] (the building's damping ratio in every mode: classical damping) and
+participation factors ``gamma = phi.T @ M @ 1`` [kg^0.5], so that each modal coordinate obeys
+``q'' + 2 zeta omega q' + omega^2 q = -gamma a_g(t) + phi.T @ f(t)``.  Floor displacements are
+``x = phi @ q``, relative to the ground, positive to the right.
+
+Contacts (``../shared/DESIGN.md`` section 6): an SDOF pair has one contact between the two
+masses; with shear buildings every pair of floors at equal height can pound, each with its own
+gap, and the masses that meet are the two storey masses.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from pound_mc.errors import InputError
+
+__all__ = [
+    "Building",
+    "Contact",
+    "sdof",
+    "shear_building",
+    "building_from_dict",
+    "contacts_between",
+]
+
+#: Floors whose elevations differ by less than this are at equal height [m].
+HEIGHT_TOLERANCE_M = 1e-6
+
+
+@dataclass(frozen=True)
+class Building:
+    """A linear building model with classical damping.
+
+    Attributes
+    ----------
+    model : {"sdof", "shear"}
+        Kind of model.
+    storey_mass_kg : numpy.ndarray
+        Floor masses, bottom to top [kg].
+    storey_stiffness_N_per_m : numpy.ndarray
+        Storey (inter-floor) stiffnesses, bottom to top [N/m].
+    elevation_m : numpy.ndarray or None
+        Floor elevations above the ground [m] (``None`` for an SDOF without a height).
+    damping_ratio : float
+        Damping ratio of every mode [-].
+    """
+
+    model: str
+    storey_mass_kg: np.ndarray
+    storey_stiffness_N_per_m: np.ndarray
+    elevation_m: np.ndarray | None
+    damping_ratio: float
+    omega: np.ndarray = field(init=False, repr=False)
+    phi: np.ndarray = field(init=False, repr=False)
+    gamma: np.ndarray = field(init=False, repr=False)
+
+    def __post_init__(self):
+        omega, phi = _modes(self.mass_matrix(), self.stiffness_matrix())
+        gamma = phi.T @ self.storey_mass_kg
+        object.__setattr__(self, "omega", omega)
+        object.__setattr__(self, "phi", phi)
+        object.__setattr__(self, "gamma", gamma)
+
+    @property
+    def n_floors(self) -> int:
+        """Number of floors (degrees of freedom)."""
+        return int(self.storey_mass_kg.size)
+
+    @property
+    def periods_s(self) -> np.ndarray:
+        """Natural periods [s], longest first."""
+        return 2.0 * np.pi / self.omega
+
+    def mass_matrix(self) -> np.ndarray:
+        """Diagonal mass matrix [kg]."""
+        return np.diag(self.storey_mass_kg)
+
+    def stiffness_matrix(self) -> np.ndarray:
+        """Shear-building stiffness matrix [N/m] (tridiagonal)."""
+        k = self.storey_stiffness_N_per_m
+        n = k.size
+        mat = np.zeros((n, n))
+        for i in range(n):
+            mat[i, i] += k[i]
+            if i + 1 < n:
+                mat[i, i] += k[i + 1]
+                mat[i, i + 1] = mat[i + 1, i] = -k[i + 1]
+        return mat
+
+    def damping_matrix(self) -> np.ndarray:
+        """Classical damping matrix ``M phi diag(2 zeta omega) phi.T M`` [N s/m]."""
+        m = self.mass_matrix()
+        return m @ self.phi @ np.diag(2.0 * self.damping_ratio * self.omega) @ self.phi.T @ m
+
+
+def _modes(m: np.ndarray, k: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Mass-normalised modes of ``K phi = omega^2 M phi`` with ``M`` diagonal."""
+    m_half = np.sqrt(np.diag(m))
+    a = k / np.outer(m_half, m_half)
+    w2, vecs = np.linalg.eigh(a)
+    phi = vecs / m_half[:, None]
+    # a deterministic sign: the top floor moves positively in every mode
+    signs = np.where(phi[-1, :] < 0.0, -1.0, 1.0)
+    return np.sqrt(w2), phi * signs
+
+
+def _check_positive(values, *, key: str, file=None) -> np.ndarray:
+    arr = np.atleast_1d(np.asarray(values, dtype=float))
+    if arr.ndim != 1 or arr.size == 0:
+        raise InputError("must be a number or a non-empty list of numbers", file=file, key=key)
+    if not np.all(np.isfinite(arr)) or np.any(arr <= 0.0):
+        raise InputError(f"must be finite and > 0, got {values!r}", file=file, key=key)
+    return arr
+
+
+def _check_damping(value, *, key: str, file=None) -> float:
+    if not (isinstance(value, int | float) and 0.0 <= value < 1.0):
+        raise InputError(
+            f"must be a number in [0, 1) (underdamped modes), got {value!r}", file=file, key=key
+        )
+    return float(value)
+
+
+def sdof(
+    period_s: float,
+    mass_kg: float,
+    damping_ratio: float = 0.05,
+    height_m: float | None = None,
+    *,
+    file=None,
+    prefix: str = "",
+) -> Building:
+    """Single-degree-of-freedom building.
+
+    Parameters
+    ----------
+    period_s : float
+        Natural period [s].
+    mass_kg : float
+        Mass [kg].
+    damping_ratio : float
+        Viscous damping ratio [-].
+    height_m : float, optional
+        Height of the mass [m]; needed only to pair it with a shear building's floors.
+    """
+    t = _check_positive(period_s, key=f"{prefix}period_s", file=file)[0]
+    m = _check_positive(mass_kg, key=f"{prefix}mass_kg", file=file)[0]
+    z = _check_damping(damping_ratio, key=f"{prefix}damping_ratio", file=file)
+    elevation = None
+    if height_m is not None:
+        elevation = _check_positive(height_m, key=f"{prefix}height_m", file=file)
+    k = m * (2.0 * math.pi / t) ** 2
+    return Building("sdof", np.array([m]), np.array([k]), elevation, z)
+
+
+def shear_building(
+    storey_mass_kg,
+    storey_stiffness_N_per_m,
+    storey_height_m,
+    damping_ratio: float = 0.05,
+    *,
+    file=None,
+    prefix: str = "",
+) -> Building:
+    """Shear building (lumped storey masses, storey shear springs, classical damping).
+
+    Parameters
+    ----------
+    storey_mass_kg : array_like
+        Floor masses, bottom to top [kg].
+    storey_stiffness_N_per_m : array_like
+        Storey stiffnesses, bottom to top [N/m].
+    storey_height_m : array_like
+        Storey heights, bottom to top [m]; floor elevations are their cumulative sums.
+    damping_ratio : float
+        Damping ratio of every mode [-].
+    """
+    m = _check_positive(storey_mass_kg, key=f"{prefix}storey_mass_kg", file=file)
+    k = _check_positive(
+        storey_stiffness_N_per_m, key=f"{prefix}storey_stiffness_N_per_m", file=file
+    )
+    h = _check_positive(storey_height_m, key=f"{prefix}storey_height_m", file=file)
+    if not (m.size == k.size == h.size):
+        raise InputError(
+            f"storey lists differ in length (masses {m.size}, stiffnesses {k.size}, "
+            f"heights {h.size})",
+            file=file,
+            key=f"{prefix}storey_mass_kg",
+        )
+    z = _check_damping(damping_ratio, key=f"{prefix}damping_ratio", file=file)
+    return Building("shear", m, k, np.cumsum(h), z)
+
+
+def building_from_dict(spec: dict, *, file=None, side: str = "left") -> Building:
+    """Build a :class:`Building` from a scene file's ``[left]`` or ``[right]`` table."""
+    prefix = f"{side}."
+    model = spec.get("model", "sdof")
+    if model == "sdof":
+        allowed = {"model", "period_s", "mass_kg", "damping_ratio", "height_m"}
+        _unknown(spec, allowed, file=file, prefix=prefix)
+        for key in ("period_s", "mass_kg"):
+            if key not in spec:
+                raise InputError("is required for model = 'sdof'", file=file, key=prefix + key)
+        return sdof(
+            spec["period_s"],
+            spec["mass_kg"],
+            spec.get("damping_ratio", 0.05),
+            spec.get("height_m"),
+            file=file,
+            prefix=prefix,
+        )
+    if model == "shear":
+        allowed = {
+            "model",
+            "storey_mass_kg",
+            "storey_stiffness_N_per_m",
+            "storey_height_m",
+            "damping_ratio",
+        }
+        _unknown(spec, allowed, file=file, prefix=prefix)
+        for key in ("storey_mass_kg", "storey_stiffness_N_per_m", "storey_height_m"):
+            if key not in spec:
+                raise InputError("is required for model = 'shear'", file=file, key=prefix + key)
+        return shear_building(
+            spec["storey_mass_kg"],
+            spec["storey_stiffness_N_per_m"],
+            spec["storey_height_m"],
+            spec.get("damping_ratio", 0.05),
+            file=file,
+            prefix=prefix,
+        )
+    raise InputError(
+        f"unknown model {model!r}; allowed: 'sdof', 'shear'", file=file, key=prefix + "model"
+    )
+
+
+def _unknown(spec: dict, allowed: set, *, file, prefix: str) -> None:
+    extra = sorted(set(spec) - allowed)
+    if extra:
+        raise InputError(
+            f"unknown key(s) {', '.join(extra)}; allowed: {', '.join(sorted(allowed))}",
+            file=file,
+            key=prefix + extra[0],
+        )
+
+
+@dataclass(frozen=True)
+class Contact:
+    """One pair of floors that can pound.
+
+    Attributes
+    ----------
+    left_floor, right_floor : int
+        Floor indices (0 = first floor above ground).
+    elevation_m : float or None
+        Height of the contact [m] (``None`` for an SDOF pair without heights).
+    m_left, m_right : float
+        Masses that meet [kg].
+    """
+
+    left_floor: int
+    right_floor: int
+    elevation_m: float | None
+    m_left: float
+    m_right: float
+
+    @property
+    def m_eff(self) -> float:
+        """Effective mass ``m1 m2 / (m1 + m2)`` [kg]."""
+        return self.m_left * self.m_right / (self.m_left + self.m_right)
+
+
+def contacts_between(left: Building, right: Building, *, file=None) -> list[Contact]:
+    """Pairs of floors that can pound: every pair at equal height (one for an SDOF pair)."""
+    if (
+        left.model == "sdof"
+        and right.model == "sdof"
+        and (left.elevation_m is None or right.elevation_m is None)
+    ):
+        return [Contact(0, 0, None, left.storey_mass_kg[0], right.storey_mass_kg[0])]
+    for side, b in (("left", left), ("right", right)):
+        if b.elevation_m is None:
+            raise InputError(
+                "an SDOF paired with a shear building needs height_m",
+                file=file,
+                key=f"{side}.height_m",
+            )
+    out = []
+    for i, zl in enumerate(left.elevation_m):
+        for j, zr in enumerate(right.elevation_m):
+            if abs(zl - zr) <= HEIGHT_TOLERANCE_M:
+                out.append(
+                    Contact(i, j, float(zl), left.storey_mass_kg[i], right.storey_mass_kg[j])
+                )
+    if not out:
+        raise InputError(
+            "no floors of the two buildings are at equal height, so they cannot pound",
+            file=file,
+            key="right.storey_height_m",
+        )
+    return out
