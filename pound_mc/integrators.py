@@ -27,7 +27,7 @@ Methods (names pinned by DESIGN.md section 4):
 
 Every run returns the outputs of :data:`OUTPUTS` and a status: 0 ok, 1 unstable (non-finite or
 diverging state, or an energy balance broken by more than :data:`UNSTABLE_ENERGY_FRACTION` of
-the energy put in), 2 not converged (Newton).  Fixed-step methods report maxima over their
+the energy put in, either way), 2 not converged (Newton).  Fixed-step methods report maxima over their
 step points.
 """
 
@@ -873,7 +873,7 @@ def _finish(out, cout, peaks, side, phase, q, v, omega, e0, e_in, e_d, w_c, stor
             status = 1
     if status == 0 and not math.isfinite(residual):
         status = 1
-    if status == 0 and residual < -UNSTABLE_ENERGY_FRACTION:
+    if status == 0 and abs(residual) > UNSTABLE_ENERGY_FRACTION:
         status = 1
     impacts = 0.0
     maxpen = -_INF
@@ -969,6 +969,7 @@ def _fixed(
     khat = np.empty(n)
     fc = np.zeros(nc)
     fn = np.zeros(nc)
+    fprev = np.zeros(nc)
     zhd = np.zeros(nc)
     dpen = np.zeros(nc)
     ddpen = np.zeros(nc)
@@ -1047,6 +1048,27 @@ def _fixed(
             # backward-difference velocity consistent with the scheme
             for j in range(n):
                 v[j] = (qn[j] - qprev[j]) / (2.0 * h)
+            # energies at step n with the central velocity, trapezoidal between n-1 and n
+            pin1, pd1 = _powers(v, ag_n, omega, zeta, gamma)
+            pc1 = 0.0
+            for c in range(nc):
+                pc1 += fc[c] * _dot(psi[c], v)
+            if step > 0:
+                e_in += 0.5 * h * (pin_prev + pin1)
+                e_d += 0.5 * h * (pd_prev + pd1)
+                w_c += 0.5 * h * (pc_prev + pc1)
+                for c in range(nc):
+                    cout[c, 3] += 0.5 * h * (fprev[c] + fc[c])
+            for c in range(nc):
+                fprev[c] = fc[c]
+                if fc[c] > cout[c, 0]:
+                    cout[c, 0] = fc[c]
+                if fc[c] > peak_f:
+                    peak_f = fc[c]
+                    peak_t = t1 - h
+            pin_prev = pin1
+            pd_prev = pd1
+            pc_prev = pc1
             for j in range(n):
                 qprev[j] = q[j]
                 q[j] = qn[j]
@@ -1145,35 +1167,30 @@ def _fixed(
                 fn[c] = _force(model, d1, dd1, beta[c], xi[c], meff[c], zhd[c], _phase_of(d1, dd1))
             if d1 > cout[c, 2]:
                 cout[c, 2] = d1
-        # energies (trapezoidal); contact work with the force acting over the step
-        if method == 3:
-            pin1, pd1 = _powers(v, ag1, omega, zeta, gamma)
-        else:
+        if method != 3:
+            # energies (trapezoidal); contact work with the force acting over the step
             pin1, pd1 = _powers(vn, ag1, omega, zeta, gamma)
-        pc1 = 0.0
-        for c in range(nc):
-            pc1 += fn[c] * ddpen[c]
-        e_in += 0.5 * h * (pin_prev + pin1)
-        e_d += 0.5 * h * (pd_prev + pd1)
-        w_c += 0.5 * h * (pc_prev + pc1)
-        for c in range(nc):
-            cout[c, 3] += 0.5 * h * (fc[c] + fn[c])
-            if fn[c] > cout[c, 0]:
-                cout[c, 0] = fn[c]
-            if fn[c] > peak_f:
-                peak_f = fn[c]
-                peak_t = t1
-        pin_prev = pin1
-        pd_prev = pd1
-        pc_prev = pc1
+            pc1 = 0.0
+            for c in range(nc):
+                pc1 += fn[c] * ddpen[c]
+            e_in += 0.5 * h * (pin_prev + pin1)
+            e_d += 0.5 * h * (pd_prev + pd1)
+            w_c += 0.5 * h * (pc_prev + pc1)
+            for c in range(nc):
+                cout[c, 3] += 0.5 * h * (fc[c] + fn[c])
+                if fn[c] > cout[c, 0]:
+                    cout[c, 0] = fn[c]
+                if fn[c] > peak_f:
+                    peak_f = fn[c]
+                    peak_t = t1
+            pin_prev = pin1
+            pd_prev = pd1
+            pc_prev = pc1
         if method != 3:
             for j in range(n):
                 q[j] = qn[j]
                 v[j] = vn[j]
                 a[j] = an[j]
-        else:
-            for j in range(n):
-                v[j] = vn[j]
         for c in range(nc):
             fc[c] = fn[c]
         bad = False
@@ -1195,6 +1212,12 @@ def _fixed(
             hf[i, c] = fc[c]
     stored = 0.0
     phase = np.zeros(nc, dtype=np.int64)
+    if method == 3:
+        # energies were integrated up to the last step n with its central velocity
+        for j in range(n):
+            q[j] = qprev[j]
+        for c in range(nc):
+            dpen[c] = _dot(psi[c], q) - gap[c]
     for c in range(nc):
         if dpen[c] > 0.0:
             stored += _stored(model, dpen[c], beta[c])
