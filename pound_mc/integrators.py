@@ -26,8 +26,8 @@ Methods (names pinned by DESIGN.md section 4):
     Explicit central differences, contact force from the backward-difference velocity.
 
 Every run returns the outputs of :data:`OUTPUTS` and a status: 0 ok, 1 unstable (non-finite or
-diverging state, or an energy balance broken by more than :data:`UNSTABLE_ENERGY_FRACTION` of
-the energy put in, either way), 2 not converged (Newton).  Fixed-step methods report maxima over their
+diverging state, or an energy balance broken either way by more than
+:data:`UNSTABLE_ENERGY_FRACTION` of the energy put in), 2 not converged (Newton).  Fixed-step methods report maxima over their
 step points.
 """
 

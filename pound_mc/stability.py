@@ -73,8 +73,11 @@ def _energy_gain(method: str, omega_dt: float) -> float:
 
 
 def predicted_limit(method: str) -> float:
-    """Largest ``Omega = dt omega_c`` at which one linearised contact gains less energy than
-    the instability flag allows (inf for methods without a limit)."""
+    """Largest stable ``Omega = dt omega_c`` predicted by the linearised scheme.
+
+    Stable means one contact gains less energy than the instability flag allows; inf for
+    methods without a limit.
+    """
     from pound_mc.integrators import UNSTABLE_ENERGY_FRACTION
 
     if method not in BOUNDED:
