@@ -27,8 +27,8 @@ Methods (names pinned by DESIGN.md section 4):
 
 Every run returns the outputs of :data:`OUTPUTS` and a status: 0 ok, 1 unstable (non-finite or
 diverging state, or an energy balance broken either way by more than
-:data:`UNSTABLE_ENERGY_FRACTION` of the energy put in), 2 not converged (Newton).  Fixed-step methods report maxima over their
-step points.
+:data:`UNSTABLE_ENERGY_FRACTION` of the energy put in), 2 not converged (Newton).
+Fixed-step methods report maxima over their step points.
 """
 
 from __future__ import annotations
