@@ -18,6 +18,8 @@ from pound_mc.errors import InputError
 _SUBCOMMAND_MODULES = [
     "pound_mc.cli_physics",
     "pound_mc.cli_records",
+    "pound_mc.cli_scene",
+    "pound_mc.cli_study",
 ]
 
 

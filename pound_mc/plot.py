@@ -15,7 +15,13 @@ from matplotlib.figure import Figure
 from pound_mc import materials, relations
 from pound_mc.droptest import DropTestResult, drop_test
 
-__all__ = ["restitution_chart", "restitution_ranges_chart", "droptest_chart", "save"]
+__all__ = [
+    "restitution_chart",
+    "restitution_ranges_chart",
+    "droptest_chart",
+    "spectrum_chart",
+    "save",
+]
 
 _MATERIAL_COLOURS = {
     "steel": "tab:blue",
@@ -129,4 +135,73 @@ def droptest_chart(result: DropTestResult, path: str | Path | None = None) -> Fi
         f"t_c = {result.contact_duration_s * 1e3:.3f} ms",
         fontsize=9,
     )
+    return save(fig, path)
+
+
+def _spectrum_selection(ds, x=None, line=None):
+    """Pick the x axis and the line axis of an impact force spectrum chart."""
+    grid_dims = [d for d in ds["peak_force"].dims if d not in ("record", "sample")]
+    if not grid_dims:
+        raise ValueError("the dataset has no grid axis to draw a spectrum against")
+    x = x or grid_dims[0]
+    rest = [d for d in grid_dims if d != x]
+    line = line if line is not None else (rest[0] if rest else None)
+    return x, line, [d for d in rest if d != line]
+
+
+def spectrum_chart(ds, path: str | Path | None = None, *, x=None, line=None, record=0) -> Figure:
+    """Impact force spectrum: median peak force against a grid axis with a 5-95 % band.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A study dataset (:mod:`pound_mc.dataset`).
+    path : str or Path, optional
+        Where to write the PNG.
+    x : str, optional
+        Grid dimension on the horizontal axis (default: the first).
+    line : str, optional
+        Grid dimension drawn as one line per value (default: the second, if any); other grid
+        dimensions are held at their first value.
+    record : int
+        Which record (index).
+    """
+    x, line, others = _spectrum_selection(ds, x, line)
+    q = ds["peak_force_quantile"].isel(record=record, **{d: 0 for d in others})
+    fig = Figure(figsize=(7.2, 4.6), layout="constrained")
+    ax = fig.add_subplot()
+    line_values = [None] if line is None else list(ds[line].values)
+    colours = [f"C{i % 10}" for i in range(len(line_values))]
+    for value, colour in zip(line_values, colours, strict=True):
+        sel = q if value is None else q.sel({line: value})
+        xs = ds[x].values
+        if value is None:
+            label = "median"
+        else:
+            lattrs = ds[line].attrs
+            units = lattrs.get("units", "")
+            label = f"{lattrs.get('long_name', line)} = {value:g}" + (
+                f" {units}" if units not in ("", "1") else ""
+            )
+        ax.plot(xs, sel.sel(quantile=0.5).values / 1e6, color=colour, lw=1.6, label=label)
+        ax.fill_between(
+            xs,
+            sel.sel(quantile=0.05).values / 1e6,
+            sel.sel(quantile=0.95).values / 1e6,
+            color=colour,
+            alpha=0.18,
+            lw=0,
+        )
+    xattrs = ds[x].attrs
+    ax.set(
+        xlabel=f"{xattrs.get('long_name', x)} [{xattrs.get('units', '')}]",
+        ylabel="peak impact force [MN]",
+        title=(
+            f"Impact force spectrum ({ds.attrs.get('study_name', '')}, record "
+            f"{ds['record'].values[record]}): median and 5-95 % over {ds.sizes['sample']} samples"
+        ),
+    )
+    ax.title.set_fontsize(9)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
     return save(fig, path)

@@ -1,0 +1,338 @@
+"""Execute a study: chunks of simulations through the compiled kernels, resumable.
+
+The simulations of a study are numbered in C order of ``study.shape`` = ``(record, *grid
+axes, sample)`` and cut into chunks of ``chunk_size``.  Each finished chunk is written
+atomically to ``<out>/<name>/chunk_NNNNNN.npz`` (temporary file renamed into place), so an
+interrupted run (Ctrl-C, a killed process) loses at most the chunks in flight; re-running the
+same study skips the finished ones.  A changed study file is detected by its hash and refused
+unless ``fresh=True``.  When every chunk is done the dataset is assembled and written to
+``<out>/<name>.nc``.
+
+Every simulation writes only its own output slot and all random numbers are drawn before any
+chunk runs, so results do not depend on thread count, chunk size or backend.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import signal
+import sys
+import threading
+import time
+from contextlib import contextmanager
+from dataclasses import dataclass
+from pathlib import Path
+
+import numba
+import numpy as np
+
+from pound_mc import __version__
+from pound_mc.dataset import RESULT_VARIABLES, build_dataset, write_netcdf
+from pound_mc.errors import InputError
+
+__all__ = [
+    "RunReport",
+    "run_study",
+    "plan_text",
+    "study_parameters",
+    "chunk_ranges",
+    "default_chunk_size",
+]
+
+_MANIFEST = "manifest.json"
+
+
+@dataclass
+class RunReport:
+    """What a run did."""
+
+    path: Path | None
+    n_simulations: int
+    chunks_total: int
+    chunks_run: int
+    seconds: float
+    complete: bool
+    interrupted: bool = False
+    simulations_run: int = 0
+
+    @property
+    def rate(self) -> float:
+        """Simulations per second over the chunks run in this call."""
+        return self.simulations_run / self.seconds if self.seconds > 0 else float("nan")
+
+
+def default_chunk_size(n: int) -> int:
+    """Simulations per chunk when the study does not say: about 50 chunks, 256 to 8192 each.
+
+    Small enough for a live progress bar and little work lost to an interruption, large
+    enough to keep every thread busy and the chunk files few.
+    """
+    return int(min(8192, max(256, -(-n // 50))))
+
+
+def chunk_ranges(n: int, chunk_size: int) -> list[tuple[int, int]]:
+    """Half-open index ranges ``[start, stop)`` covering ``range(n)``."""
+    return [(s, min(s + chunk_size, n)) for s in range(0, n, chunk_size)]
+
+
+@contextmanager
+def _threads(n: int | None):
+    if n is None:
+        yield
+        return
+    if n < 1:
+        raise InputError(f"must be >= 1, got {n}", key="--workers")
+    old = numba.get_num_threads()
+    numba.set_num_threads(min(n, numba.config.NUMBA_NUM_THREADS))
+    try:
+        yield
+    finally:
+        numba.set_num_threads(old)
+
+
+@contextmanager
+def _stop_between_chunks():
+    """Turn the first Ctrl-C into a request to stop after the chunk in flight.
+
+    Yields a :class:`threading.Event` that is set on SIGINT; a second Ctrl-C raises
+    :class:`KeyboardInterrupt` at once.  Outside the main thread nothing is installed.
+    """
+    stop = threading.Event()
+    if threading.current_thread() is not threading.main_thread():
+        yield stop
+        return
+
+    def handler(signum, frame):
+        if stop.is_set():
+            raise KeyboardInterrupt
+        stop.set()
+        print(
+            "\nCtrl-C: stopping after the chunk in flight (press again to abort at once)",
+            file=sys.stderr,
+        )
+
+    old = signal.signal(signal.SIGINT, handler)
+    try:
+        yield stop
+    finally:
+        signal.signal(signal.SIGINT, old)
+
+
+def _atomic_savez(path: Path, **arrays) -> None:
+    tmp = path.with_name(f".{path.name}.part")
+    with open(tmp, "wb") as fh:
+        np.savez(fh, **arrays)
+        fh.flush()
+        os.fsync(fh.fileno())
+    os.replace(tmp, path)
+
+
+def _atomic_write_text(path: Path, text: str) -> None:
+    tmp = path.with_name(f".{path.name}.part")
+    tmp.write_text(text)
+    os.replace(tmp, path)
+
+
+def study_parameters(study, samples: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """Per-simulation value of every varied scene key, broadcast to ``study.shape``.
+
+    Keys fixed in the scene are not included; the chunk runner takes them from the scene.
+    """
+    shape = study.shape
+    out = {}
+    for axis, (key, values) in enumerate(study.grid.items(), start=1):
+        view = [1] * len(shape)
+        view[axis] = values.size
+        out[key] = np.broadcast_to(values.reshape(view), shape)
+    for key, values in samples.items():
+        view = [1] * len(shape)
+        view[-1] = values.size
+        out[key] = np.broadcast_to(values.reshape(view), shape)
+    return out
+
+
+def plan_text(study, chunk_size: int | None = None, seconds_per_simulation: float | None = None):
+    """A human-readable plan: axes, counts, chunks and (optionally) the estimated time."""
+    chunk_size = chunk_size or study.chunk_size or default_chunk_size(study.n_simulations)
+    lines = [f"study {study.name!r} (seed {study.seed}, hash {study.hash[:12]})"]
+    lines.append(f"  records   : {len(study.records)} ({', '.join(study.record_names)})")
+    for key, values in study.grid.items():
+        lines.append(
+            f"  grid      : {key} = {values.size} values {values.min():g} .. {values.max():g}"
+        )
+    lines.append(f"  sampling  : n = {study.n}, method {study.method}, seed {study.sampling_seed}")
+    for v in study.variables:
+        lines.append(f"    {v.key}: {v.source}")
+    n = study.n_simulations
+    lines.append(
+        f"  simulations: {n:,} in {len(chunk_ranges(n, chunk_size))} chunks of {chunk_size}"
+    )
+    if seconds_per_simulation is not None:
+        total = n * seconds_per_simulation
+        lines.append(
+            f"  estimated : {seconds_per_simulation * 1e3:.3f} ms per simulation -> "
+            f"{total:.1f} s ({total / 3600:.2f} h) with the current threads"
+        )
+    return "\n".join(lines)
+
+
+def _check_manifest(work: Path, study, fresh: bool) -> None:
+    manifest = work / _MANIFEST
+    if manifest.exists():
+        try:
+            old = json.loads(manifest.read_text())
+        except (OSError, ValueError):
+            old = {}
+        if old.get("study_hash") != study.hash:
+            if not fresh:
+                raise InputError(
+                    f"the study changed since the results in {work} were started "
+                    "(hash differs); run with --fresh to discard them and start again",
+                    file=str(study.path) if study.path else None,
+                )
+            shutil.rmtree(work)
+        elif fresh:
+            shutil.rmtree(work)
+    elif fresh and work.exists():
+        shutil.rmtree(work)
+    work.mkdir(parents=True, exist_ok=True)
+    if not manifest.exists():
+        _atomic_write_text(
+            manifest,
+            json.dumps(
+                {
+                    "study_name": study.name,
+                    "study_hash": study.hash,
+                    "n_simulations": study.n_simulations,
+                    "shape": list(study.shape),
+                    "pound_mc_version": __version__,
+                },
+                indent=1,
+            ),
+        )
+
+
+def _load_chunk(path: Path, study, start: int, stop: int) -> dict | None:
+    """A finished chunk's arrays, or None if it is missing or not from this study."""
+    if not path.exists():
+        return None
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            if str(data["study_hash"]) != study.hash:
+                return None
+            if int(data["start"]) != start or int(data["stop"]) != stop:
+                return None
+            return {name: data[name] for name in RESULT_VARIABLES}
+    except (OSError, ValueError, KeyError, EOFError):
+        return None  # unreadable or partial: run it again
+
+
+def run_study(
+    study,
+    out_dir: str | Path = "outputs",
+    *,
+    workers: int | None = None,
+    fresh: bool = False,
+    chunk_size: int | None = None,
+    progress: bool = True,
+    engine=None,
+    max_chunks: int | None = None,
+):
+    """Run every simulation of ``study`` and write ``<out_dir>/<name>.nc``.
+
+    Parameters
+    ----------
+    study : pound_mc.study.Study
+        A validated study.
+    out_dir : str or Path
+        Output folder; chunk files go to ``<out_dir>/<name>/``.
+    workers : int, optional
+        Number of threads of the compiled kernels (default: numba's default).
+    fresh : bool
+        Discard earlier results of this study (needed after the study file changed).
+    chunk_size : int, optional
+        Simulations per chunk (default: the study's ``chunk_size``, else
+        :func:`default_chunk_size`).
+    progress : bool
+        Show a progress bar with rate and ETA.
+    engine : pound_mc.engine.StudyEngine, optional
+        Prepared engine (records loaded, samples drawn); made from ``study`` if not given.
+    max_chunks : int, optional
+        Stop after running this many chunks (the run stays resumable); for tests and drills.
+
+    Returns
+    -------
+    RunReport
+        Counts, time and the dataset path (``None`` while incomplete).
+    """
+    from tqdm.auto import tqdm
+
+    from pound_mc.engine import StudyEngine
+
+    out_dir = Path(out_dir)
+    chunk_size = chunk_size or study.chunk_size or default_chunk_size(study.n_simulations)
+    engine = engine or StudyEngine(study)
+    work = out_dir / study.name
+    _check_manifest(work, study, fresh)
+
+    n = study.n_simulations
+    ranges = chunk_ranges(n, chunk_size)
+    flat = {name: np.empty(n, dtype=dtype) for name, (_, _, dtype) in RESULT_VARIABLES.items()}
+    todo = []
+    for k, (start, stop) in enumerate(ranges):
+        path = work / f"chunk_{chunk_size}_{k:06d}.npz"
+        done = _load_chunk(path, study, start, stop)
+        if done is None:
+            todo.append((k, start, stop, path))
+        else:
+            for name in RESULT_VARIABLES:
+                flat[name][start:stop] = done[name]
+
+    t0 = time.perf_counter()
+    ran = 0
+    simulations_run = 0
+    interrupted = False
+    bar = tqdm(
+        total=n,
+        initial=n - sum(stop - start for _, start, stop, _ in todo),
+        unit="sim",
+        unit_scale=True,
+        disable=not progress,
+        desc=study.name,
+        smoothing=0.1,
+    )
+    try:
+        with _threads(workers), _stop_between_chunks() as stop_requested:
+            for _k, start, stop, path in todo:
+                if stop_requested.is_set():
+                    interrupted = True
+                    break
+                if max_chunks is not None and ran >= max_chunks:
+                    break
+                result = engine.run_range(start, stop)
+                _atomic_savez(
+                    path,
+                    study_hash=np.array(study.hash),
+                    start=np.array(start),
+                    stop=np.array(stop),
+                    **result,
+                )
+                for name in RESULT_VARIABLES:
+                    flat[name][start:stop] = result[name]
+                ran += 1
+                simulations_run += stop - start
+                bar.update(stop - start)
+    finally:
+        bar.close()
+    seconds = time.perf_counter() - t0
+    complete = ran == len(todo)
+    if not complete:
+        return RunReport(None, n, len(ranges), ran, seconds, False, interrupted, simulations_run)
+
+    results = {name: flat[name].reshape(study.shape) for name in RESULT_VARIABLES}
+    ds = build_dataset(study, results, engine.dataset_parameters(), provenance=engine.provenance())
+    path = write_netcdf(ds, out_dir / f"{study.name}.nc")
+    seconds = time.perf_counter() - t0
+    return RunReport(path, n, len(ranges), ran, seconds, True, False, simulations_run)

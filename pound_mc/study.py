@@ -1,0 +1,513 @@
+"""Study files: schema, validation and the plan of simulations.
+
+A study is a scene (``[record]`` or ``[[records]]``, ``[left]``, ``[right]``, ``[contact]``,
+``[integrator]``; see :mod:`pound_mc.scene`) plus
+
+``[study]``
+    ``name`` (letters, digits, ``-``, ``_``), ``seed`` (integer >= 0), optional
+    ``description`` and ``chunk_size`` (simulations per chunk file; default about 1/50 of the
+    study, between 256 and 8192: :func:`pound_mc.runner.default_chunk_size`).
+``[grid]``
+    Axes of the spectra, keyed by the scene key they vary (``"left.period_s"``): a list of
+    numbers or ``{ start, stop, num }`` (evenly spaced, both ends included).
+``[sampling]``
+    ``n`` samples per grid point and record, ``method`` (``random`` | ``lhs`` | ``sobol``,
+    default ``sobol``), optional ``seed`` (default: the study's), and ``[sampling.vary]``
+    (:mod:`pound_mc.sampling`).
+
+Every problem in a file is reported at once (:class:`~pound_mc.errors.InputErrors`), each
+naming the file and the key.  Nothing is written while validating.
+"""
+
+from __future__ import annotations
+
+import copy
+import hashlib
+import math
+import re
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from pound_mc import sampling
+from pound_mc.errors import InputError, InputErrors
+
+__all__ = ["Study", "load_study", "study_from_text", "NUMERIC_SCENE_KEYS", "grid_dim_name"]
+
+_STUDY_KEYS = {"name", "seed", "description", "chunk_size"}
+_SAMPLING_KEYS = {"n", "method", "seed", "vary"}
+_TOP_LEVEL = {"study", "record", "records", "left", "right", "contact", "integrator", "grid",
+              "sampling"}  # fmt: skip
+
+#: Scene keys that may be a grid axis or a sampled variable (scalar numbers).
+NUMERIC_SCENE_KEYS = {
+    "left.period_s",
+    "left.damping_ratio",
+    "left.mass_kg",
+    "right.period_s",
+    "right.damping_ratio",
+    "right.mass_kg",
+    "contact.gap_m",
+    "contact.beta",
+    "contact.k_N_per_m",
+    "contact.xi",
+    "contact.e",
+    "integrator.dt_s",
+}
+# Keys that replace each other: varying e drops a fixed xi from the scene and vice versa.
+_EXCLUSIVE = {"contact.e": "contact.xi", "contact.xi": "contact.e"}
+_NAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_-]*$")
+
+
+def grid_dim_name(key: str) -> str:
+    """Dataset dimension name of a scene key (``"left.period_s"`` -> ``"left_period_s"``)."""
+    return key.replace(".", "_")
+
+
+@dataclass
+class Study:
+    """A validated study definition."""
+
+    path: Path | None
+    name: str
+    seed: int
+    text: str
+    hash: str
+    scene: dict  # the scene tables ([left], [right], [contact], [integrator]) as read
+    records: list[dict]  # one [record] table per record
+    grid: dict[str, np.ndarray]
+    n: int
+    method: str
+    sampling_seed: int
+    variables: list[sampling.RandomVariable]
+    chunk_size: int | None = None
+    description: str = ""
+    record_names: list[str] = field(default_factory=list)
+    #: ``(dt_s, acceleration)`` of every record, read and preprocessed while validating.
+    record_arrays: list = field(default_factory=list, repr=False)
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        """Shape of the per-simulation arrays: (record, *grid axes, sample)."""
+        return (len(self.records), *(v.size for v in self.grid.values()), self.n)
+
+    @property
+    def n_simulations(self) -> int:
+        """Total number of simulations."""
+        return int(np.prod(self.shape))
+
+    def scene_dict(self, record: int = 0, overrides: dict | None = None) -> dict:
+        """The scene tables for one record with ``{"table.key": value}`` overrides applied."""
+        data = copy.deepcopy(self.scene)
+        data["record"] = copy.deepcopy(self.records[record])
+        for key, value in (overrides or {}).items():
+            set_key(data, key, value)
+        return data
+
+    def draw(self) -> dict[str, np.ndarray]:
+        """Sampled values ``{key: (n,)}``; the same at every grid point and record."""
+        return sampling.draw(self.variables, self.n, self.sampling_seed, self.method)
+
+
+def set_key(data: dict, key: str, value) -> None:
+    """Set ``"table.key"`` in a scene dict, dropping the key it replaces (``e`` <-> ``xi``)."""
+    table, name = key.split(".", 1)
+    data.setdefault(table, {})[name] = value
+    other = _EXCLUSIVE.get(key)
+    if other is not None:
+        t2, n2 = other.split(".", 1)
+        data.get(t2, {}).pop(n2, None)
+
+
+def _is_int(value) -> bool:
+    return isinstance(value, int) and not isinstance(value, bool)
+
+
+def _is_number(value) -> bool:
+    return isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
+
+
+def _parse_grid_axis(key, spec, file, errors) -> np.ndarray | None:
+    where = f"grid.{key}"
+    if isinstance(spec, list):
+        if not spec:
+            errors.append(InputError("needs at least one value", file=file, key=where))
+            return None
+        if not all(_is_number(v) for v in spec):
+            errors.append(InputError("values must be finite numbers", file=file, key=where))
+            return None
+        values = np.asarray(spec, dtype=float)
+        if np.unique(values).size != values.size:
+            errors.append(InputError("values must be distinct", file=file, key=where))
+            return None
+        return values
+    if isinstance(spec, dict):
+        extra = set(spec) - {"start", "stop", "num"}
+        missing = {"start", "stop", "num"} - set(spec)
+        if extra or missing:
+            errors.append(
+                InputError(
+                    "needs exactly start, stop and num"
+                    + (f" (unknown {sorted(extra)})" if extra else "")
+                    + (f" (missing {sorted(missing)})" if missing else ""),
+                    file=file,
+                    key=where,
+                )
+            )
+            return None
+        ok = True
+        for name in ("start", "stop"):
+            if not _is_number(spec[name]):
+                errors.append(
+                    InputError("must be a finite number", file=file, key=f"{where}.{name}")
+                )
+                ok = False
+        if not _is_int(spec["num"]) or spec["num"] < 1:
+            errors.append(InputError("must be an integer >= 1", file=file, key=f"{where}.num"))
+            ok = False
+        if not ok:
+            return None
+        if spec["num"] > 1 and spec["start"] == spec["stop"]:
+            errors.append(InputError("start and stop must differ", file=file, key=where))
+            return None
+        return np.linspace(float(spec["start"]), float(spec["stop"]), spec["num"])
+    errors.append(
+        InputError("must be a list of numbers or { start, stop, num }", file=file, key=where)
+    )
+    return None
+
+
+def scene_model(data: dict, side: str) -> str:
+    """The building model of ``[left]`` or ``[right]`` (default ``"sdof"``)."""
+    table = data.get(side)
+    return table.get("model", "sdof") if isinstance(table, dict) else "sdof"
+
+
+def _validate_scene(data: dict, file, prefix: str, errors: list) -> None:
+    """Validate scene tables with the scene module, re-labelling keys with ``prefix``."""
+    from pound_mc.scene import scene_from_dict
+
+    try:
+        scene_from_dict(data, file=file)
+    except InputErrors as exc:
+        for err in exc.errors:
+            key = f"{prefix}{err.key}" if (prefix and err.key) else (err.key or prefix or None)
+            errors.append(InputError(err.message, file=file, key=key))
+    except InputError as exc:
+        key = f"{prefix}{exc.key}" if (prefix and exc.key) else (exc.key or prefix or None)
+        errors.append(InputError(exc.message, file=file, key=key))
+
+
+def _load_records(records: list[dict], prefixes: list[str], file, errors: list) -> list:
+    """Read and preprocess every record; problems go to ``errors`` keyed in the study file."""
+    from pound_mc.records import load_record, record_arrays
+
+    fname = None if file is None else str(file)
+    base_dir = None if file is None else Path(file).parent
+    out = []
+    for i, record in enumerate(records):
+        spec = dict(record)
+        spec.pop("name", None)
+        source = spec.pop("source")
+        where = prefixes[i] or "record."
+        try:
+            trace = load_record(source, base_dir=base_dir, **spec)
+        except InputError as exc:
+            key = exc.key or "record.source"
+            key = where + key.split(".", 1)[-1] if key.startswith("record") else key
+            detail = exc.message
+            if exc.file and exc.file != fname:
+                detail = f"{exc.file}: {detail}"
+            errors.append(InputError(detail, file=fname, key=key))
+            continue
+        except (OSError, ValueError, TypeError) as exc:
+            errors.append(
+                InputError(f"cannot read {source!r}: {exc}", file=fname, key=where + "source")
+            )
+            continue
+        out.append(record_arrays(trace))
+    return out
+
+
+def study_from_text(text: str, *, file: str | Path | None = None) -> Study:
+    """Parse and validate a study from TOML text.
+
+    Parameters
+    ----------
+    text : str
+        The study file's contents.
+    file : str or Path, optional
+        Where it came from (used in messages and to resolve relative record paths).
+
+    Raises
+    ------
+    InputErrors
+        Listing every problem found, each with the file and key.
+    """
+    fname = None if file is None else str(file)
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError(f"not valid TOML: {exc}", file=fname) from None
+    errors: list[InputError] = []
+
+    for key in sorted(set(data) - _TOP_LEVEL):
+        errors.append(
+            InputError(f"unknown table; allowed {sorted(_TOP_LEVEL)}", file=fname, key=key)
+        )
+
+    # [study]
+    head = data.get("study")
+    name, seed, chunk_size, description = "study", 0, None, ""
+    if not isinstance(head, dict):
+        errors.append(
+            InputError("missing table [study] with name and seed", file=fname, key="study")
+        )
+        head = {}
+    for key in sorted(set(head) - _STUDY_KEYS):
+        errors.append(
+            InputError(
+                f"unknown key; allowed {sorted(_STUDY_KEYS)}", file=fname, key=f"study.{key}"
+            )
+        )
+    if "name" in head or isinstance(data.get("study"), dict):
+        name = head.get("name")
+        if not isinstance(name, str) or not _NAME_RE.match(name):
+            errors.append(
+                InputError(
+                    "must be a name of letters, digits, '-' and '_'", file=fname, key="study.name"
+                )
+            )
+            name = "study"
+        seed = head.get("seed")
+        if not _is_int(seed) or seed < 0:
+            errors.append(InputError("must be an integer >= 0", file=fname, key="study.seed"))
+            seed = 0
+    if "chunk_size" in head:
+        chunk_size = head["chunk_size"]
+        if not _is_int(chunk_size) or chunk_size < 1:
+            errors.append(InputError("must be an integer >= 1", file=fname, key="study.chunk_size"))
+            chunk_size = None
+    if "description" in head:
+        description = head["description"]
+        if not isinstance(description, str):
+            errors.append(InputError("must be a string", file=fname, key="study.description"))
+            description = ""
+
+    # records
+    if "record" in data and "records" in data:
+        errors.append(
+            InputError("give either [record] or [[records]], not both", file=fname, key="records")
+        )
+    if "records" in data:
+        records = data["records"]
+        if (
+            not isinstance(records, list)
+            or not records
+            or not all(isinstance(r, dict) for r in records)
+        ):
+            errors.append(
+                InputError("must be one or more [[records]] tables", file=fname, key="records")
+            )
+            records = []
+        prefixes = [f"records[{i}]." for i in range(len(records))]
+    elif "record" in data:
+        records = [data["record"]] if isinstance(data["record"], dict) else []
+        if not records:
+            errors.append(InputError("must be a table", file=fname, key="record"))
+        prefixes = [""]
+    else:
+        errors.append(
+            InputError("missing table [record] (or [[records]])", file=fname, key="record")
+        )
+        records, prefixes = [], []
+
+    scene = {k: data[k] for k in ("left", "right", "contact", "integrator") if k in data}
+
+    # [grid]
+    grid: dict[str, np.ndarray] = {}
+    grid_spec = data.get("grid", {})
+    if not isinstance(grid_spec, dict):
+        errors.append(InputError("must be a table", file=fname, key="grid"))
+        grid_spec = {}
+    for key, spec in grid_spec.items():
+        if key not in NUMERIC_SCENE_KEYS:
+            errors.append(
+                InputError(
+                    f"not a numeric scene key; a grid axis is one of {sorted(NUMERIC_SCENE_KEYS)}",
+                    file=fname,
+                    key=f"grid.{key}",
+                )
+            )
+            continue
+        values = _parse_grid_axis(key, spec, fname, errors)
+        if values is None:
+            continue
+        grid[key] = values
+
+    # [sampling]
+    spec = data.get("sampling", {})
+    n, method, sampling_seed, variables = 1, "sobol", seed, []
+    if not isinstance(spec, dict):
+        errors.append(InputError("must be a table", file=fname, key="sampling"))
+        spec = {}
+    for key in sorted(set(spec) - _SAMPLING_KEYS):
+        errors.append(
+            InputError(
+                f"unknown key; allowed {sorted(_SAMPLING_KEYS)}", file=fname, key=f"sampling.{key}"
+            )
+        )
+    if "n" in spec:
+        n = spec["n"]
+        if not _is_int(n) or n < 1:
+            errors.append(InputError("must be an integer >= 1", file=fname, key="sampling.n"))
+            n = 1
+    if "method" in spec:
+        method = spec["method"]
+        if method not in sampling.DESIGNS:
+            errors.append(
+                InputError(
+                    f"unknown method {method!r}; choose one of {sorted(sampling.DESIGNS)}",
+                    file=fname,
+                    key="sampling.method",
+                )
+            )
+            method = "sobol"
+    if "seed" in spec:
+        sampling_seed = spec["seed"]
+        if not _is_int(sampling_seed) or sampling_seed < 0:
+            errors.append(InputError("must be an integer >= 0", file=fname, key="sampling.seed"))
+            sampling_seed = 0
+    vary = spec.get("vary", {})
+    if not isinstance(vary, dict):
+        errors.append(InputError("must be a table", file=fname, key="sampling.vary"))
+        vary = {}
+    for key, vspec in vary.items():
+        if key not in NUMERIC_SCENE_KEYS:
+            errors.append(
+                InputError(
+                    f"not a numeric scene key; choose from {sorted(NUMERIC_SCENE_KEYS)}",
+                    file=fname,
+                    key=f"sampling.vary.{key}",
+                )
+            )
+            continue
+        if key in grid:
+            errors.append(
+                InputError(
+                    "is also a grid axis; vary it in one place",
+                    file=fname,
+                    key=f"sampling.vary.{key}",
+                )
+            )
+            continue
+        variable, errs = sampling.parse_variable(key, vspec, file=fname)
+        errors.extend(errs)
+        if variable is not None:
+            variables.append(variable)
+    if "contact.e" in vary and "contact.xi" in vary:
+        errors.append(
+            InputError(
+                "vary either contact.e or contact.xi, not both", file=fname, key="sampling.vary"
+            )
+        )
+
+    # the scene as written, once per record; a key that only a grid axis or a sampled
+    # variable gives takes its first value (the other values are checked below)
+    draws = sampling.draw(variables, n, sampling_seed, method) if variables else {}
+    first = {key: float(values[0]) for key, values in grid.items()}
+    first.update({key: float(values[0]) for key, values in draws.items()})
+    shear = [side for side in ("left", "right") if scene_model(scene, side) == "shear"]
+    for side in shear:
+        errors.append(
+            InputError(
+                "studies of shear buildings are not batched yet: run their scenes one at a "
+                "time with `pound-mc simulate SCENE.toml`; a study takes model = 'sdof'",
+                file=fname,
+                key=f"{side}.model",
+            )
+        )
+    scene_ok = not shear
+    for i, record in enumerate(records if not shear else []):
+        probe = copy.deepcopy(scene)
+        probe["record"] = record
+        for key, value in first.items():
+            table, leaf = key.split(".", 1)
+            partner = _EXCLUSIVE.get(key, "").partition(".")[2]
+            present = probe.get(table, {})
+            if leaf not in present and partner not in present:
+                probe.setdefault(table, {})[leaf] = value
+        local: list[InputError] = []
+        _validate_scene(probe, fname, "", local)
+        for err in local:
+            key = err.key or ""
+            if key.startswith("record") and prefixes[i]:
+                key = prefixes[i] + key.split(".", 1)[-1] if "." in key else prefixes[i][:-1]
+            elif i > 0:
+                continue  # scene problems are reported once, with the first record
+            scene_ok = False
+            errors.append(InputError(err.message, file=fname, key=key or None))
+
+    # every grid value and every sampled value must make a valid scene: check the extremes
+    if records and scene_ok:
+        ranges = [(f"grid.{k}", k, v) for k, v in grid.items()]
+        ranges += [(f"sampling.vary.{k}", k, v) for k, v in draws.items()]
+        for where, key, values in ranges:
+            for value in dict.fromkeys((float(values.min()), float(values.max()))):
+                probe = copy.deepcopy(scene)
+                probe["record"] = copy.deepcopy(records[0])
+                for k2, v2 in first.items():
+                    set_key(probe, k2, v2)
+                set_key(probe, key, value)
+                local = []
+                _validate_scene(probe, fname, "", local)
+                for err in local[:1]:
+                    errors.append(
+                        InputError(f"value {value:g}: {err.message}", file=fname, key=where)
+                    )
+
+    # records: read and preprocess each one now, so a missing file is reported here
+    loaded: list[tuple[float, np.ndarray]] = []
+    if not errors:
+        loaded = _load_records(records, prefixes, file, errors)
+
+    if errors:
+        raise InputErrors(errors)
+
+    digest = hashlib.sha256(text.encode()).hexdigest()
+    names = []
+    for i, record in enumerate(records):
+        label = str(record.get("name") or record.get("source", f"record{i}"))
+        names.append(label if label not in names else f"{label}#{i}")
+    return Study(
+        path=None if file is None else Path(file),
+        name=name,
+        seed=seed,
+        text=text,
+        hash=digest,
+        scene=scene,
+        records=records,
+        grid=grid,
+        n=n,
+        method=method,
+        sampling_seed=sampling_seed,
+        variables=variables,
+        chunk_size=chunk_size,
+        description=description,
+        record_names=names,
+        record_arrays=loaded,
+    )
+
+
+def load_study(path: str | Path) -> Study:
+    """Read and validate a study file (see the module docstring for the schema)."""
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise InputError("study file not found", file=str(path)) from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(f"cannot read study file: {exc}", file=str(path)) from None
+    return study_from_text(text, file=path)

@@ -1,0 +1,288 @@
+"""Study runner: reproducibility, resume, change detection, Ctrl-C, ``check``."""
+
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from pound_mc.cli import main
+from pound_mc.dataset import RESULT_VARIABLES
+from pound_mc.engine import StudyEngine
+from pound_mc.errors import InputError, InputErrors
+from pound_mc.runner import chunk_ranges, default_chunk_size, run_study
+from pound_mc.study import load_study, study_from_text
+
+STUDY = """
+[study]
+name = "small"
+seed = 11
+
+[record]
+source = "builtin:knet-akt013"
+duration_s = 4.0
+pga_g = 0.3
+
+[left]
+model = "sdof"
+period_s = 0.5
+damping_ratio = 0.05
+mass_kg = 1.0e6
+
+[right]
+model = "sdof"
+period_s = 1.0
+damping_ratio = 0.05
+mass_kg = 1.0e6
+
+[contact]
+model = "jankowski"
+gap_m = 0.002
+beta = 2.75e9
+e = 0.65
+
+[integrator]
+method = "adaptive"
+dt_s = 0.01
+
+[grid]
+"left.period_s" = [0.3, 0.5, 0.7]
+"contact.gap_m" = [0.0, 0.002]
+
+[sampling]
+n = 8
+method = "sobol"
+[sampling.vary]
+"contact.e" = { material = "concrete" }
+"contact.beta" = { material = "concrete" }
+"""
+N = 3 * 2 * 8
+
+
+@pytest.fixture
+def study_file(tmp_path):
+    path = tmp_path / "small.toml"
+    path.write_text(STUDY)
+    return path
+
+
+def _data(path) -> dict[str, bytes]:
+    """Bytes of every data variable of a dataset file."""
+    with xr.open_dataset(path) as ds:
+        return {name: ds[name].values.tobytes() for name in ds.data_vars}
+
+
+def _assert_identical(a, b):
+    da, db = _data(a), _data(b)
+    assert da.keys() == db.keys()
+    for name in da:
+        assert da[name] == db[name], name
+
+
+@pytest.fixture
+def reference(study_file, tmp_path):
+    """The study run once in one chunk with one thread: the dataset every variant must equal."""
+    report = run_study(
+        load_study(study_file), tmp_path / "ref", workers=1, chunk_size=N, progress=False
+    )
+    assert report.complete and report.chunks_total == 1
+    return report.path
+
+
+def test_dataset_layout(reference):
+    with xr.open_dataset(reference) as ds:
+        assert ds.attrs["Conventions"] == "CF-1.13"
+        assert ds.attrs["study_text"] == STUDY
+        assert ds["peak_force"].dims == ("record", "left_period_s", "contact_gap_m", "sample")
+        assert ds["peak_force"].shape == (1, 3, 2, 8)
+        for name in [*RESULT_VARIABLES, "e", "beta", "xi", "e_effective"]:
+            assert "units" in ds[name].attrs and "long_name" in ds[name].attrs, name
+        for name in ("peak_force_mean", "peak_force_quantile", "pounding_probability"):
+            assert ds[name].attrs["units"] in ("N", "1")
+        assert ds["e"].dims == ("sample",) and ds["beta"].dims == ("sample",)
+        assert np.all(ds["status"].values == 0)
+        # gap 0 at T = 0.3 s against 1.0 s pounds for every sample
+        assert np.all(ds["impacts"].sel(contact_gap_m=0.0).values > 0)
+        assert np.all(ds["peak_force"].values >= 0)
+
+
+def test_one_vs_two_threads_identical(study_file, reference, tmp_path):
+    report = run_study(load_study(study_file), tmp_path / "w2", workers=2, progress=False)
+    _assert_identical(reference, report.path)
+
+
+@pytest.mark.parametrize("chunk_size", [5, 17])
+def test_chunk_size_does_not_change_results(study_file, reference, tmp_path, chunk_size):
+    report = run_study(
+        load_study(study_file), tmp_path / "c", workers=2, chunk_size=chunk_size, progress=False
+    )
+    assert report.chunks_total == len(chunk_ranges(N, chunk_size))
+    _assert_identical(reference, report.path)
+
+
+def test_interrupted_run_resumes_identically(study_file, reference, tmp_path):
+    study = load_study(study_file)
+    out = tmp_path / "resume"
+    first = run_study(study, out, chunk_size=7, max_chunks=3, progress=False)
+    assert not first.complete and first.path is None and first.chunks_run == 3
+    assert not (out / "small.nc").exists()
+    assert len(list((out / "small").glob("chunk_*.npz"))) == 3
+    second = run_study(load_study(study_file), out, chunk_size=7, progress=False)
+    assert second.complete and second.chunks_run == second.chunks_total - 3
+    _assert_identical(reference, second.path)
+    third = run_study(load_study(study_file), out, chunk_size=7, progress=False)
+    assert third.chunks_run == 0  # every chunk already done
+    _assert_identical(reference, third.path)
+
+
+_KILLED_RUN = """
+import sys, time
+from pound_mc.engine import StudyEngine
+from pound_mc.runner import run_study
+from pound_mc.study import load_study
+
+study = load_study(sys.argv[1])
+engine = StudyEngine(study)
+run_range = engine.run_range
+
+def slow(start, stop):  # slow the chunks down so the process is killed mid-way
+    out = run_range(start, stop)
+    time.sleep(0.15)
+    return out
+
+engine.run_range = slow
+run_study(study, sys.argv[2], chunk_size=4, engine=engine, progress=False)
+"""
+
+
+def test_killed_process_resumes_identically(study_file, reference, tmp_path):
+    out = tmp_path / "killed"
+    log = open(tmp_path / "killed.log", "wb")  # noqa: SIM115
+    proc = subprocess.Popen(
+        [sys.executable, "-c", _KILLED_RUN, str(study_file), str(out)],
+        stdout=subprocess.DEVNULL,
+        stderr=log,
+    )
+    try:
+        deadline = time.monotonic() + 120
+        chunks = []
+        while time.monotonic() < deadline and proc.poll() is None:
+            chunks = list((out / "small").glob("chunk_*.npz"))
+            if len(chunks) >= 2:
+                break
+            time.sleep(0.02)
+        assert proc.poll() is None, (tmp_path / "killed.log").read_text()
+        proc.kill()  # SIGKILL: no chance to clean up
+        proc.wait(30)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait(30)
+        log.close()
+    done = list((out / "small").glob("chunk_*.npz"))
+    assert 2 <= len(done) < N // 4
+    assert not (out / "small.nc").exists()
+    report = run_study(load_study(study_file), out, chunk_size=4, progress=False)
+    assert report.complete and report.chunks_run <= report.chunks_total - len(done)
+    _assert_identical(reference, report.path)
+
+
+def test_ctrl_c_stops_between_chunks(study_file, reference, tmp_path):
+    study = load_study(study_file)
+    engine = StudyEngine(study)
+    run_range = engine.run_range
+    calls = []
+
+    def interrupting(start, stop):
+        calls.append(start)
+        if len(calls) == 2:
+            os.kill(os.getpid(), signal.SIGINT)  # Ctrl-C while the second chunk runs
+        return run_range(start, stop)
+
+    engine.run_range = interrupting
+    out = tmp_path / "ctrlc"
+    report = run_study(study, out, chunk_size=6, engine=engine, progress=False)
+    assert report.interrupted and not report.complete
+    assert report.chunks_run == 2  # the chunk in flight was finished and kept
+    assert len(list((out / "small").glob("chunk_*.npz"))) == 2
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+    resumed = run_study(load_study(study_file), out, chunk_size=6, progress=False)
+    assert resumed.chunks_run == resumed.chunks_total - 2
+    _assert_identical(reference, resumed.path)
+
+
+def test_changed_study_refused_unless_fresh(study_file, tmp_path):
+    out = tmp_path / "changed"
+    run_study(load_study(study_file), out, chunk_size=16, max_chunks=1, progress=False)
+    study_file.write_text(STUDY.replace("seed = 11", "seed = 12"))
+    with pytest.raises(InputError, match="--fresh"):
+        run_study(load_study(study_file), out, chunk_size=16, progress=False)
+    rc = main(["run", str(study_file), "--out", str(out), "--no-progress", "--no-plot"])
+    assert rc == 2
+    report = run_study(load_study(study_file), out, chunk_size=16, fresh=True, progress=False)
+    assert report.complete and report.chunks_run == report.chunks_total
+    with xr.open_dataset(report.path) as ds:
+        assert ds.attrs["seed"] == 12
+
+
+def test_cli_run_writes_dataset_and_chart(study_file, tmp_path, capsys):
+    out = tmp_path / "cli"
+    assert main(["run", str(study_file), "--out", str(out), "--workers", "2"]) == 0
+    text = capsys.readouterr()
+    assert "simulations/s" in text.out
+    assert (out / "small.nc").is_file() and (out / "small_spectrum.png").is_file()
+    assert "sim/s" in text.err or "it/s" in text.err  # tqdm's rate
+
+
+def test_check_prints_plan_and_writes_nothing(study_file, tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    before = sorted(p.name for p in tmp_path.iterdir())
+    assert main(["check", str(study_file), "--calibrate", "8"]) == 0
+    text = capsys.readouterr().out
+    assert f"simulations: {N}" in text and "chunks of" in text and "estimated" in text
+    assert sorted(p.name for p in tmp_path.iterdir()) == before
+
+
+def test_default_chunk_size():
+    assert default_chunk_size(10) == 256
+    assert default_chunk_size(100_000) == 2000
+    assert default_chunk_size(10**8) == 8192
+
+
+def test_shear_study_refused_with_pointer_to_simulate():
+    text = STUDY.replace(
+        'model = "sdof"\nperiod_s = 0.5\ndamping_ratio = 0.05\nmass_kg = 1.0e6',
+        'model = "shear"\nstorey_mass_kg = [1.0e6, 1.0e6]\n'
+        "storey_stiffness_N_per_m = [1.0e8, 1.0e8]\nstorey_height_m = [3.0, 3.0]",
+        1,
+    )
+    with pytest.raises(InputErrors) as info:
+        study_from_text(text, file="shear.toml")
+    [err] = info.value.errors
+    assert err.key == "left.model" and "pound-mc simulate" in err.message
+
+
+def test_grid_study_without_base_value(tmp_path):
+    # the grid axis supplies a value the scene does not give itself
+    text = STUDY.replace("period_s = 0.5\n", "", 1)
+    study = study_from_text(text, file=tmp_path / "nobase.toml")
+    result = StudyEngine(study).run_range(0, 4)
+    assert np.all(result["status"] == 0)
+
+
+def test_linear_law_study(tmp_path):
+    text = textwrap.dedent(STUDY).replace('model = "jankowski"', 'model = "kelvin"')
+    text = text.replace("beta = 2.75e9", "k_N_per_m = 1.0e9").replace(
+        '"contact.beta" = { material = "concrete" }', ""
+    )
+    path = tmp_path / "kelvin.toml"
+    path.write_text(text)
+    report = run_study(load_study(path), tmp_path / "k", progress=False)
+    with xr.open_dataset(report.path) as ds:
+        assert float(ds["k_N_per_m"]) == 1.0e9
+        assert np.all(ds["status"].values == 0)

@@ -1,0 +1,175 @@
+import re
+
+import numpy as np
+import pytest
+
+from pound_mc.cli import main
+from pound_mc.errors import InputErrors
+from pound_mc.study import study_from_text
+
+GOOD = """
+[study]
+name = "tiny"
+seed = 7
+
+[record]
+source = "builtin:knet-akt013"
+duration_s = 5.0
+pga_g = 0.3
+
+[left]
+model = "sdof"
+period_s = 0.5
+damping_ratio = 0.05
+mass_kg = 1.0e6
+
+[right]
+model = "sdof"
+period_s = 1.0
+damping_ratio = 0.05
+mass_kg = 1.0e6
+
+[contact]
+model = "jankowski"
+gap_m = 0.002
+beta = 2.75e9
+e = 0.65
+
+[integrator]
+method = "adaptive"
+dt_s = 0.01
+
+[grid]
+"left.period_s" = { start = 0.3, stop = 0.6, num = 2 }
+"contact.gap_m" = [0.0, 0.002]
+
+[sampling]
+n = 4
+method = "sobol"
+[sampling.vary]
+"contact.e" = { material = "concrete" }
+"contact.beta" = { material = "concrete" }
+"""
+
+
+def test_good_study_parses():
+    study = study_from_text(GOOD, file="good.toml")
+    assert study.shape == (1, 2, 2, 4)
+    assert study.n_simulations == 16
+    assert np.allclose(study.grid["left.period_s"], [0.3, 0.6])
+    draws = study.draw()
+    assert draws["contact.e"].min() >= 0.4278 and draws["contact.e"].max() <= 0.7840
+
+
+def _replace(old, new):
+    assert old in GOOD, old
+    return GOOD.replace(old, new, 1)
+
+
+# (case id, study text, key the message must name)
+MALFORMED = [
+    ("unknown-table", GOOD + "\n[colour]\nred = 1\n", "colour"),
+    ("unknown-study-key", _replace('seed = 7', 'seed = 7\ncolour = "red"'), "study.colour"),
+    ("name-with-space", _replace('name = "tiny"', 'name = "my study"'), "study.name"),
+    ("seed-negative", _replace("seed = 7", "seed = -1"), "study.seed"),
+    ("seed-string", _replace("seed = 7", 'seed = "seven"'), "study.seed"),
+    ("chunk-size-zero", _replace("seed = 7", "seed = 7\nchunk_size = 0"), "study.chunk_size"),
+    ("n-zero", _replace("n = 4", "n = 0"), "sampling.n"),
+    ("n-negative", _replace("n = 4", "n = -5"), "sampling.n"),
+    ("n-float", _replace("n = 4", "n = 2.5"), "sampling.n"),
+    ("method-unknown", _replace('method = "sobol"', 'method = "halton"'), "sampling.method"),
+    ("sampling-unknown-key", _replace("n = 4", "n = 4\nsize = 3"), "sampling.size"),
+    ("vary-bad-material", _replace('"contact.e" = { material = "concrete" }',
+                                   '"contact.e" = { material = "glass" }'), "material"),
+    ("vary-non-numeric", _replace('"contact.beta" = { material = "concrete" }',
+                                  '"contact.beta" = { material = "concrete" }\n'
+                                  '"contact.model" = {distribution = "uniform", low = 0, high = 1}'
+                                  ),
+     "sampling.vary.contact.model"),
+    ("vary-also-grid", _replace('"contact.beta" = { material = "concrete" }',
+                                '"contact.beta" = { material = "concrete" }\n'
+                                '"contact.gap_m" = { distribution = "uniform", low = 0, high = 1 }'
+                                ),
+     "sampling.vary.contact.gap_m"),
+    ("grid-non-numeric", GOOD.replace("[grid]", '[grid]\n"contact.model" = ["hertz"]'),
+     "grid.contact.model"),
+    ("grid-num-zero", _replace("num = 2", "num = 0"), "grid.left.period_s.num"),
+    ("grid-empty", _replace('"contact.gap_m" = [0.0, 0.002]', '"contact.gap_m" = []'),
+     "grid.contact.gap_m"),
+    ("grid-strings", _replace('"contact.gap_m" = [0.0, 0.002]', '"contact.gap_m" = ["a", "b"]'),
+     "grid.contact.gap_m"),
+    ("grid-negative-period", _replace("start = 0.3", "start = -0.3"), "grid.left.period_s"),
+    ("period-negative", _replace("period_s = 1.0", "period_s = -1.0"), "right.period_s"),
+    ("damping-string", _replace("damping_ratio = 0.05\nmass_kg = 1.0e6\n\n[right]",
+                                'damping_ratio = "low"\nmass_kg = 1.0e6\n\n[right]'),
+     "left.damping_ratio"),
+    ("mass-zero", _replace("mass_kg = 1.0e6\n\n[contact]", "mass_kg = 0.0\n\n[contact]"),
+     "right.mass_kg"),
+    ("e-above-one", _replace("e = 0.65", "e = 1.5"), "contact.e"),
+    ("e-zero", _replace("e = 0.65", "e = 0.0"), "contact.e"),
+    ("gap-negative", _replace("gap_m = 0.002", "gap_m = -0.01"), "contact.gap_m"),
+    ("beta-string", _replace("beta = 2.75e9", 'beta = "stiff"'), "contact.beta"),
+    ("contact-model", _replace('model = "jankowski"', 'model = "glue"'), "contact.model"),
+    ("integrator-method", _replace('method = "adaptive"', 'method = "euler"'),
+     "integrator.method"),
+    ("dt-zero", _replace("dt_s = 0.01", "dt_s = 0.0"), "integrator.dt_s"),
+    ("record-missing-file", _replace('source = "builtin:knet-akt013"',
+                                     'source = "records/nope.AT2"'), "record.source"),
+    ("record-unknown-builtin", _replace('source = "builtin:knet-akt013"',
+                                        'source = "builtin:atlantis"'), "record.source"),
+    ("pga-negative", _replace("pga_g = 0.3", "pga_g = -0.3"), "record.pga_g"),
+    ("left-unknown-key", _replace("period_s = 0.5", "period_s = 0.5\nwidth_m = 3.0"),
+     "left.width_m"),
+    ("no-record", GOOD.replace('[record]\nsource = "builtin:knet-akt013"\nduration_s = 5.0\n'
+                               'pga_g = 0.3\n', ""), "record"),
+    ("bad-toml", GOOD.replace("[grid]", "[grid"), None),
+    ("shear-model", _replace('model = "sdof"\nperiod_s = 0.5\ndamping_ratio = 0.05\n'
+                             'mass_kg = 1.0e6', 'model = "shear"\nstorey_mass_kg = [1.0e6]\n'
+                             'storey_stiffness_N_per_m = [1.0e8]\nstorey_height_m = [3.0]'),
+     "left.model"),
+    ("building-model-unknown", _replace('model = "sdof"', 'model = "frame"'), "left.model"),
+    ("vary-e-normal-outside", _replace('"contact.e" = { material = "concrete" }',
+                                       '"contact.e" = {distribution = "normal", mean = 0.9, '
+                                       'std = 0.5}'), "sampling.vary.contact.e"),
+    ("vary-bad-distribution", _replace('"contact.e" = { material = "concrete" }',
+                                       '"contact.e" = { distribution = "weibull" }'),
+     "sampling.vary.contact.e.distribution"),
+    ("grid-e-above-one", GOOD.replace("[grid]", '[grid]\n"contact.e" = [0.5, 1.2]').replace(
+        '"contact.e" = { material = "concrete" }', ""), "grid.contact.e"),
+    ("grid-spec-extra-key", _replace("num = 2", "num = 2, step = 0.1"), "grid.left.period_s"),
+    ("grid-not-table", _replace("[grid]\n", 'grid = 3\n[nogrid]\n'), "grid"),
+    ("record-and-records", GOOD + '\n[[records]]\nsource = "builtin:elcentro"\n', "records"),
+    ("records-missing-file", GOOD.replace('[record]', '[[records]]').replace(
+        '"builtin:knet-akt013"', '"missing.at2"'), "records[0].source"),
+    ("description-number", _replace("seed = 7", "seed = 7\ndescription = 3"),
+     "study.description"),
+    ("sampling-seed-negative", _replace("n = 4", "n = 4\nseed = -3"), "sampling.seed"),
+    ("substeps-too-few", _replace("dt_s = 0.01", "dt_s = 0.01\nsubsteps = 1"),
+     "integrator.substeps"),
+    ("relation-unknown", _replace("e = 0.65", 'e = 0.65\nrelation = "newton"'),
+     "contact.relation"),
+    ("xi-and-e", _replace("e = 0.65", "e = 0.65\nxi = 0.3"), "contact.xi"),
+    ("duration-negative", _replace("duration_s = 5.0", "duration_s = -5.0"), "record.duration_s"),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize(("case", "text", "key"), MALFORMED, ids=[m[0] for m in MALFORMED])
+def test_malformed_study_exit_2_names_file_and_key(case, text, key, tmp_path, capsys):
+    path = tmp_path / f"{case}.toml"
+    path.write_text(text)
+    out = tmp_path / "outputs"
+    assert main(["run", str(path), "--out", str(out), "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert str(path) in err
+    if key is not None:
+        assert re.search(re.escape(key), err), err
+    assert "Traceback" not in err
+    assert not out.exists()  # nothing written
+
+
+def test_all_problems_reported_at_once():
+    text = _replace("n = 4", "n = 0").replace("seed = 7", "seed = -1").replace("e = 0.65", "e = 2")
+    with pytest.raises(InputErrors) as info:
+        study_from_text(text, file="multi.toml")
+    keys = {e.key for e in info.value.errors}
+    assert {"sampling.n", "study.seed", "contact.e"} <= keys
