@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 from matplotlib.figure import Figure
+from matplotlib.ticker import NullFormatter
 
 from pound_mc.plot import save
 
@@ -39,7 +40,9 @@ def work_precision_chart(table, path=None, *, quantity: str = "err_peak_force") 
         ax.axhline(1e-4, color="0.5", lw=0.8, ls="--")
         ax.set_xlabel("time per simulation [ms] (one core, median)")
         ax.set_ylabel("relative error of peak force [-]")
-        ax.set_title(f"{label}: work-precision")
+        ref = part["reference"].iloc[0] if "reference" in part else "reference"
+        ax.set_title(f"{label}: work-precision (against {ref})", fontsize=10)
+        ax.xaxis.set_minor_formatter(NullFormatter())
         ax.grid(True, which="both", alpha=0.3)
         ax.legend(fontsize=8)
     return save(fig, path)
