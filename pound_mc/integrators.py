@@ -311,6 +311,14 @@ def _hermite_root(y0, yp0, y1, yp1, h):
 
 
 @jit(inline=True)
+def _rowdot(mat, r, x):
+    acc = 0.0
+    for j in range(x.size):
+        acc += mat[r, j] * x[j]
+    return acc
+
+
+@jit(inline=True)
 def _dot(row, x):
     acc = 0.0
     for j in range(x.size):
@@ -346,13 +354,13 @@ def _track_floors(phi, side, q0, v0, q1, v1, h, peaks):
     """Update the continuous-time peak |x| of every floor over a step (Hermite)."""
     nf = phi.shape[0]
     for f in range(nf):
-        x0 = _dot(phi[f], q0)
-        x1 = _dot(phi[f], q1)
+        x0 = _rowdot(phi, f, q0)
+        x1 = _rowdot(phi, f, q1)
         m = abs(x1)
         if m > peaks[f]:
             peaks[f] = m
-        xd0 = _dot(phi[f], v0)
-        xd1 = _dot(phi[f], v1)
+        xd0 = _rowdot(phi, f, v0)
+        xd1 = _rowdot(phi, f, v1)
         if (xd0 > 0.0) != (xd1 > 0.0):
             hm, _ = _hermite_max(x0, xd0, x1, xd1, h)
             if hm > peaks[f]:
@@ -393,17 +401,20 @@ def _end_values(q, v, ag, omega, zeta, gamma, en):
 def _refresh(q, v, ag, omega, zeta, gamma, phi, psi, gap, dc, ddc, xf, xfd, en):
     """Values at the current state that linear steps carry from one step to the next."""
     for c in range(gap.size):
-        dc[c] = _dot(psi[c], q) - gap[c]
-        ddc[c] = _dot(psi[c], v)
+        dc[c] = _rowdot(psi, c, q) - gap[c]
+        ddc[c] = _rowdot(psi, c, v)
     for f in range(phi.shape[0]):
-        xf[f] = _dot(phi[f], q)
-        xfd[f] = _dot(phi[f], v)
+        xf[f] = _rowdot(phi, f, q)
+        xfd[f] = _rowdot(phi, f, v)
     _end_values(q, v, ag, omega, zeta, gamma, en)
 
 
 @jit
 def _exact_delta(q, v, p0s, slope, s, tau, c, omega, zeta, gamma, psi, gap):
-    """Penetration of contact ``c``, its rate and acceleration at ``tau`` into a linear step."""
+    """Penetration of contact ``c``, its rate and acceleration at ``tau`` into a linear step.
+
+    Any row of modal weights works: ``psi = phi, gap = 0`` gives a floor's displacement.
+    """
     d = -gap[c]
     dd = 0.0
     ddd = 0.0
@@ -451,8 +462,8 @@ def _exact_root(q, v, p0s, slope, s, guess, lo, hi, which, c, omega, zeta, gamma
 @jit(inline=True)
 def _contact_forces(q, v, psi, gap, meff, beta, xi, zhd, phase, model, fc):
     for c in range(fc.size):
-        d = _dot(psi[c], q) - gap[c]
-        dd = _dot(psi[c], v)
+        d = _rowdot(psi, c, q) - gap[c]
+        dd = _rowdot(psi, c, v)
         fc[c] = _force(model, d, dd, beta[c], xi[c], meff[c], zhd[c], phase[c])
 
 
@@ -498,7 +509,7 @@ def _rk4(
         pin, pd = _powers(wk[9], ag, omega, zeta, gamma)
         pc = 0.0
         for c in range(nc):
-            pc += fc[c] * _dot(psi[c], wk[9])
+            pc += fc[c] * _rowdot(psi, c, wk[9])
         wgt = (1.0 if stage == 0 or stage == 3 else 2.0) * hs / 6.0
         e_in += wgt * pin
         e_d += wgt * pd
@@ -553,6 +564,8 @@ def _adaptive(
     xfd0 = np.empty(nf)
     en0 = np.empty(4)
     en1 = np.empty(4)
+    nphi = -phi
+    zf = np.zeros(nf)
     t_onset = 0.0
     in_contact = False
     status = 0
@@ -565,10 +578,10 @@ def _adaptive(
     for i in range(npts - 1):
         if store:
             for f in range(nf):
-                hx[i, f] = _dot(phi[f], q)
+                hx[i, f] = _rowdot(phi, f, q)
             for c in range(nc):
-                hd[i, c] = _dot(psi[c], q) - gap[c]
-                hf[i, c] = _force(model, hd[i, c], _dot(psi[c], v), beta[c], xi[c], meff[c],
+                hd[i, c] = _rowdot(psi, c, q) - gap[c]
+                hf[i, c] = _force(model, hd[i, c], _rowdot(psi, c, v), beta[c], xi[c], meff[c],
                                   zhd[c], phase[c])  # fmt: skip
         ag0 = ag[i]
         slope = (ag[i + 1] - ag[i]) / dt_rec
@@ -605,8 +618,8 @@ def _adaptive(
                 for c in range(nc):
                     d0 = dc0[c]
                     dd0 = ddc0[c]
-                    d1 = _dot(psi[c], q1) - gap[c]
-                    dd1 = _dot(psi[c], v1)
+                    d1 = _rowdot(psi, c, q1) - gap[c]
+                    dd1 = _rowdot(psi, c, v1)
                     dc1[c] = d1
                     ddc1[c] = dd1
                     crossing = d1 > 0.0
@@ -643,8 +656,8 @@ def _adaptive(
                 # energies by the corrected trapezoidal rule (exact to O(h^5) per step)
                 if c_on >= 0:
                     for c in range(nc):
-                        dc1[c] = _dot(psi[c], q1) - gap[c]
-                        ddc1[c] = _dot(psi[c], v1)
+                        dc1[c] = _rowdot(psi, c, q1) - gap[c]
+                        ddc1[c] = _rowdot(psi, c, v1)
                 _end_values(q1, v1, p1s, omega, zeta, gamma, en1)
                 # en: 0 sum gamma v, 1 sum gamma a, 2 damping power, 3 its rate
                 pin0 = -p0s * en0[0]
@@ -654,18 +667,26 @@ def _adaptive(
                 e_in += 0.5 * hh * (pin0 + pin1) + hh * hh / 12.0 * (dpin0 - dpin1)
                 e_d += 0.5 * hh * (en0[2] + en1[2]) + hh * hh / 12.0 * (en0[3] - en1[3])
                 for f in range(nf):
-                    x1 = _dot(phi[f], q1)
-                    xd1 = _dot(phi[f], v1)
+                    x1 = _rowdot(phi, f, q1)
+                    xd1 = _rowdot(phi, f, v1)
                     m = abs(x1)
                     if m > peaks[f]:
                         peaks[f] = m
                     if (xfd0[f] > 0.0) != (xd1 > 0.0):
-                        hm, _ = _hermite_max(xf0[f], xfd0[f], x1, xd1, hh)
-                        if hm > peaks[f]:
-                            peaks[f] = hm
-                        hm, _ = _hermite_max(-xf0[f], -xfd0[f], -x1, -xd1, hh)
-                        if hm > peaks[f]:
-                            peaks[f] = hm
+                        # an extremum inside the step: where the cubic Hermite bound says it
+                        # may be a new peak, find it on the exact solution
+                        for sg in range(2):
+                            mat = phi if sg == 0 else nphi
+                            sign = 1.0 if sg == 0 else -1.0
+                            hm, tg = _hermite_max(sign * xf0[f], sign * xfd0[f], sign * x1,
+                                                  sign * xd1, hh)  # fmt: skip
+                            if hm > peaks[f] - 1e-3 * abs(hm):
+                                tm = _exact_root(q, v, p0s, slope, s, tg, 0.0, hh, 1, f, omega,
+                                                 zeta, gamma, mat, zf)  # fmt: skip
+                                xm, _, _ = _exact_delta(q, v, p0s, slope, s, tm, f, omega, zeta,
+                                                        gamma, mat, zf)  # fmt: skip
+                                if xm > peaks[f]:
+                                    peaks[f] = xm
                     xf0[f] = x1
                     xfd0[f] = xd1
                 for c in range(nc):
@@ -678,7 +699,7 @@ def _adaptive(
                     v[j] = v1[j]
                 s += hh
                 if c_on >= 0:
-                    v0c = _dot(psi[c_on], v)
+                    v0c = _rowdot(psi, c_on, v)
                     phase[c_on] = 1
                     cout[c_on, 1] += 1.0
                     if model == 4:
@@ -697,9 +718,9 @@ def _adaptive(
                 hs = min(hc, max(1.0 * (i * dt_rec + s - t_onset), hc * 1e-5))
                 for c in range(nc):
                     if phase[c] == 2:
-                        ddc = _dot(psi[c], v)
+                        ddc = _rowdot(psi, c, v)
                         if ddc < 0.0:
-                            dc = _dot(psi[c], q) - gap[c]
+                            dc = _rowdot(psi, c, q) - gap[c]
                             hs = min(hs, max(-0.5 * dc / ddc, hc * 1e-2))
                 if hs >= dt_rec - s or dt_rec - s - hs < 1e-9 * hc:
                     hs = dt_rec - s
@@ -715,12 +736,12 @@ def _adaptive(
                 c_ev = -1
                 kind = 0
                 for c in range(nc):
-                    d0 = _dot(psi[c], q) - gap[c]
-                    d1 = _dot(psi[c], q1) - gap[c]
-                    dd0 = _dot(psi[c], v)
-                    dd1 = _dot(psi[c], v1)
-                    ddd0 = _dot(psi[c], a0)
-                    ddd1 = _dot(psi[c], a1)
+                    d0 = _rowdot(psi, c, q) - gap[c]
+                    d1 = _rowdot(psi, c, q1) - gap[c]
+                    dd0 = _rowdot(psi, c, v)
+                    dd1 = _rowdot(psi, c, v1)
+                    ddd0 = _rowdot(psi, c, a0)
+                    ddd1 = _rowdot(psi, c, a1)
                     te = _INF
                     kd = 0
                     if phase[c] == 0:
@@ -759,15 +780,15 @@ def _adaptive(
                     cout[c, 3] += cimp[c]
                     if phase[c] == 0:
                         continue
-                    d0 = _dot(psi[c], q) - gap[c]
-                    d1 = _dot(psi[c], q1) - gap[c]
-                    dd0 = _dot(psi[c], v)
-                    dd1 = _dot(psi[c], v1)
+                    d0 = _rowdot(psi, c, q) - gap[c]
+                    d1 = _rowdot(psi, c, q1) - gap[c]
+                    dd0 = _rowdot(psi, c, v)
+                    dd1 = _rowdot(psi, c, v1)
                     f0 = fc0[c]
                     f1 = _force(model, d1, dd1, beta[c], xi[c], meff[c], zhd[c], phase[c])
-                    r0 = _force_rate(model, d0, dd0, _dot(psi[c], a0), beta[c], xi[c], meff[c],
+                    r0 = _force_rate(model, d0, dd0, _rowdot(psi, c, a0), beta[c], xi[c], meff[c],
                                      zhd[c], phase[c])  # fmt: skip
-                    r1 = _force_rate(model, d1, dd1, _dot(psi[c], a1), beta[c], xi[c], meff[c],
+                    r1 = _force_rate(model, d1, dd1, _rowdot(psi, c, a1), beta[c], xi[c], meff[c],
                                      zhd[c], phase[c])  # fmt: skip
                     fm = f1
                     tm = hs
@@ -800,7 +821,7 @@ def _adaptive(
                     if kind == 1:
                         phase[c_ev] = 1
                         cout[c_ev, 1] += 1.0
-                        v0c = _dot(psi[c_ev], v)
+                        v0c = _rowdot(psi, c_ev, v)
                         if model == 4:
                             zhd[c_ev] = 8.0 * (1.0 - xi[c_ev]) / (5.0 * xi[c_ev] * max(v0c, 1e-12))
                         hc = min(hc, _duration(model, v0c, beta[c_ev], meff[c_ev]) / substeps)
@@ -840,15 +861,15 @@ def _adaptive(
     if store and status == 0:
         i = npts - 1
         for f in range(nf):
-            hx[i, f] = _dot(phi[f], q)
+            hx[i, f] = _rowdot(phi, f, q)
         for c in range(nc):
-            hd[i, c] = _dot(psi[c], q) - gap[c]
-            hf[i, c] = _force(model, hd[i, c], _dot(psi[c], v), beta[c], xi[c], meff[c], zhd[c],
+            hd[i, c] = _rowdot(psi, c, q) - gap[c]
+            hf[i, c] = _force(model, hd[i, c], _rowdot(psi, c, v), beta[c], xi[c], meff[c], zhd[c],
                               phase[c])  # fmt: skip
     stored = 0.0
     for c in range(nc):
         if phase[c] != 0:
-            stored += _stored(model, _dot(psi[c], q) - gap[c], beta[c])
+            stored += _stored(model, _rowdot(psi, c, q) - gap[c], beta[c])
     _finish(out, cout, peaks, side, phase, q, v, omega, e0, e_in, e_d, w_c, stored, peak_f,
             peak_t, steps, status)  # fmt: skip
 
@@ -904,6 +925,72 @@ def _finish(out, cout, peaks, side, phase, q, v, omega, e0, e_in, e_d, w_c, stor
         for c in range(nc):
             if cout[c, 1] == 0.0:
                 cout[c, 2] = 0.0
+
+
+@jit(inline=True)
+def _force_grad(model, d, dd, beta, xi, meff, zhd, phase):
+    """Force [N] and its partial derivatives by penetration [N/m] and by its rate [N s/m]."""
+    if phase == 0 or d <= 0.0:
+        return 0.0, 0.0, 0.0
+    sd = math.sqrt(d)
+    if model == 0:
+        f = beta * d * sd
+        fd = 1.5 * beta * sd
+        fdd = 0.0
+        if phase == 1:
+            q = math.sqrt(sd)  # d^0.25
+            c0 = 2.0 * xi * math.sqrt(beta * meff)
+            f += c0 * q * dd
+            fd += 0.25 * c0 * dd / (q * q * q)
+            fdd = c0 * q
+        return f, fd, fdd
+    if model == 1:
+        return beta * d, beta, 0.0
+    if model == 2:
+        c = 2.0 * xi * math.sqrt(beta * meff)
+        return beta * d + c * dd, beta, c
+    if model == 3:
+        return beta * d * sd, 1.5 * beta * sd, 0.0
+    f = beta * d * sd * (1.0 + zhd * dd)
+    if f <= 0.0:
+        return 0.0, 0.0, 0.0
+    return f, 1.5 * beta * sd * (1.0 + zhd * dd), beta * d * sd * zhd
+
+
+@jit
+def _newton_scalar(model, dstar, dn, ddn, g, c2h, h, beta, xi, meff, zhd):
+    """Contact force of one contact at the end of a Newmark step.
+
+    Solves ``d - d* + g F(d, c2h (d - dn) - ddn) = 0`` for ``d`` in ``(0, d*)`` (the residual is
+    ``-d*`` at 0 and ``g F > 0`` at ``d*``); Newton from the extrapolated penetration, kept in
+    the bracket by bisection.  Returns ``(F, converged)``.
+    """
+    lo = 0.0
+    hi = dstar
+    d = dn + h * ddn if dn > 0.0 else 0.5 * dstar
+    if not (lo < d < hi):
+        d = 0.5 * (lo + hi)
+    f = 0.0
+    for _ in range(100):
+        ddt = c2h * (d - dn) - ddn
+        f, fd, fdd = _force_grad(model, d, ddt, beta, xi, meff, zhd, _phase_of(d, ddt))
+        r = d - dstar + g * f
+        if abs(r) <= 1e-14 * dstar:
+            return f, True
+        if r > 0.0:
+            hi = d
+        else:
+            lo = d
+        slope = 1.0 + g * (fd + fdd * c2h)
+        d_new = d - r / slope
+        if not (lo < d_new < hi):
+            d_new = 0.5 * (lo + hi)
+        if abs(d_new - d) <= 1e-14 * dstar or hi - lo <= 1e-14 * dstar:
+            ddt = c2h * (d_new - dn) - ddn
+            f = _force(model, d_new, ddt, beta, xi, meff, zhd, _phase_of(d_new, ddt))
+            return f, True
+        d = d_new
+    return f, False
 
 
 # --------------------------------------------------------------------------- fixed step
@@ -986,8 +1073,15 @@ def _fixed(
         cout[c, 1] = 0.0
         cout[c, 2] = -_INF
         cout[c, 3] = 0.0
+    c2h = 2.0 / h
+    c4h = 4.0 / h
+    c4h2 = 4.0 / (h * h)
+    ikhat = np.empty(n)
+    zw2 = np.empty(n)
     for j in range(n):
         khat[j] = omega[j] * omega[j] + 4.0 * zeta[j] * omega[j] / h + 4.0 / (h * h)
+        ikhat[j] = 1.0 / khat[j]
+        zw2[j] = 2.0 * zeta[j] * omega[j]
     for c1 in range(nc):
         for c2 in range(nc):
             acc = 0.0
@@ -996,8 +1090,8 @@ def _fixed(
             g[c1, c2] = acc
     # initial contact state and accelerations
     for c in range(nc):
-        dpen[c] = _dot(psi[c], q) - gap[c]
-        ddpen[c] = _dot(psi[c], v)
+        dpen[c] = _rowdot(psi, c, q) - gap[c]
+        ddpen[c] = _rowdot(psi, c, v)
         fc[c] = _force(model, dpen[c], ddpen[c], beta[c], xi[c], meff[c], zhd[c],
                        _phase_of(dpen[c], ddpen[c]))  # fmt: skip
         was_in[c] = dpen[c] > 0.0
@@ -1016,24 +1110,28 @@ def _fixed(
     for c in range(nc):
         pc_prev += fc[c] * ddpen[c]
     steps = 0
+    inv_m = 1.0 / m_sub
+    i = 0
+    k = -1
     for step in range(n_steps):
-        i = step // m_sub
-        k = step - i * m_sub
+        k += 1
+        if k == m_sub:
+            k = 0
+            i += 1
         if store and k == 0:
             for f in range(nf):
-                hx[i, f] = _dot(phi[f], q)
+                hx[i, f] = _rowdot(phi, f, q)
             for c in range(nc):
                 hd[i, c] = dpen[c]
                 hf[i, c] = fc[c]
         t1 = (step + 1) * h
-        frac = (k + 1) / m_sub
-        ag1 = ag[i] + (ag[i + 1] - ag[i]) * frac
+        ag1 = ag[i] + (ag[i + 1] - ag[i]) * ((k + 1) * inv_m)
         steps += 1
         if method == 3:
             # central difference: q_{n+1} from q_n, q_{n-1}; force at n from backward velocity
-            ag_n = ag[i] + (ag[i + 1] - ag[i]) * (k / m_sub)
+            ag_n = ag[i] + (ag[i + 1] - ag[i]) * (k * inv_m)
             for c in range(nc):
-                dprev = _dot(psi[c], qprev) - gap[c]
+                dprev = _rowdot(psi, c, qprev) - gap[c]
                 vb = (dpen[c] - dprev) / h
                 fc[c] = _force(model, dpen[c], vb, beta[c], xi[c], meff[c], zhd[c],
                                _phase_of(dpen[c], vb))  # fmt: skip
@@ -1052,7 +1150,7 @@ def _fixed(
             pin1, pd1 = _powers(v, ag_n, omega, zeta, gamma)
             pc1 = 0.0
             for c in range(nc):
-                pc1 += fc[c] * _dot(psi[c], v)
+                pc1 += fc[c] * _rowdot(psi, c, v)
             if step > 0:
                 e_in += 0.5 * h * (pin_prev + pin1)
                 e_d += 0.5 * h * (pd_prev + pd1)
@@ -1079,11 +1177,11 @@ def _fixed(
         else:
             # Newmark average acceleration, modal predictor without contact at n+1
             for j in range(n):
-                phat = -gamma[j] * ag1 + (4.0 / (h * h) * q[j] + 4.0 / h * v[j] + a[j])
-                phat += 2.0 * zeta[j] * omega[j] * (2.0 / h * q[j] + v[j])
-                qs[j] = phat / khat[j]
+                phat = -gamma[j] * ag1 + (c4h2 * q[j] + c4h * v[j] + a[j])
+                phat += zw2[j] * (c2h * q[j] + v[j])
+                qs[j] = phat * ikhat[j]
             for c in range(nc):
-                dstar[c] = _dot(psi[c], qs) - gap[c]
+                dstar[c] = _rowdot(psi, c, qs) - gap[c]
             if method == 2:
                 for c in range(nc):
                     fn[c] = fc[c]  # lagged one step
@@ -1097,49 +1195,45 @@ def _fixed(
                 if not any_pos:
                     for c in range(nc):
                         fn[c] = 0.0
+                elif nc == 1:
+                    # scalar safeguarded Newton with the analytic slope, root in (0, d*)
+                    fn[0], conv = _newton_scalar(
+                        model, dstar[0], dpen[0], ddpen[0], g[0, 0], c2h, h, beta[0], xi[0],
+                        meff[0], zhd[0],
+                    )  # fmt: skip
+                    if not conv:
+                        status = 2
                 else:
                     conv = False
                     for _it in range(60):
                         for c in range(nc):
-                            ddt = 2.0 / h * (dtry[c] - dpen[c]) - ddpen[c]
+                            ddt = c2h * (dtry[c] - dpen[c]) - ddpen[c]
                             ph = _phase_of(dtry[c], ddt)
-                            fn[c] = _force(model, dtry[c], ddt, beta[c], xi[c], meff[c], zhd[c], ph)
-                            # dF/dd along the Newmark velocity: dF/dd + dF/ddt * 2/h
-                            eps = 1e-7 * max(abs(dtry[c]), 1e-9)
-                            dp = dtry[c] + eps
-                            ddp = 2.0 / h * (dp - dpen[c]) - ddpen[c]
-                            fp = _force(model, dp, ddp, beta[c], xi[c], meff[c], zhd[c],
-                                        _phase_of(dp, ddp))  # fmt: skip
-                            rhs[c] = (fp - fn[c]) / eps  # slope, reused below
+                            f, fd, fdd = _force_grad(model, dtry[c], ddt, beta[c], xi[c], meff[c],
+                                                     zhd[c], ph)  # fmt: skip
+                            fn[c] = f
+                            rhs[c] = fd + fdd * c2h  # slope along the Newmark velocity
                         for c1 in range(nc):
                             for c2 in range(nc):
                                 jac[c1, c2] = g[c1, c2] * rhs[c2] + (1.0 if c1 == c2 else 0.0)
-                        res_max = 0.0
                         for c1 in range(nc):
                             r = dtry[c1] - dstar[c1]
                             for c2 in range(nc):
                                 r += g[c1, c2] * fn[c2]
                             rhs[c1] = -r
-                            res_max = max(res_max, abs(r))
                         if not _solve_small(jac, rhs, nc):
                             break
                         step_max = 0.0
-                        for c in range(nc):
-                            new = dtry[c] + rhs[c]
-                            if nc == 1 and dstar[c] > 0.0:
-                                # safeguard: the root lies in (d* - G F(d*), d*]
-                                if new > dstar[c]:
-                                    new = 0.5 * (dtry[c] + dstar[c])
-                            step_max = max(step_max, abs(new - dtry[c]))
-                            dtry[c] = new
                         scale = 0.0
                         for c in range(nc):
+                            step_max = max(step_max, abs(rhs[c]))
+                            dtry[c] += rhs[c]
                             scale = max(scale, abs(dtry[c]), abs(dstar[c]))
                         if step_max <= 1e-12 * scale + 1e-15:
                             conv = True
                             break
                     for c in range(nc):
-                        ddt = 2.0 / h * (dtry[c] - dpen[c]) - ddpen[c]
+                        ddt = c2h * (dtry[c] - dpen[c]) - ddpen[c]
                         fn[c] = _force(model, dtry[c], ddt, beta[c], xi[c], meff[c], zhd[c],
                                        _phase_of(dtry[c], ddt))  # fmt: skip
                     if not conv:
@@ -1148,13 +1242,14 @@ def _fixed(
                 corr = 0.0
                 for c in range(nc):
                     corr += fn[c] * psi[c, j]
-                qn[j] = qs[j] - corr / khat[j]
-                vn[j] = 2.0 / h * (qn[j] - q[j]) - v[j]
-                an[j] = 4.0 / (h * h) * (qn[j] - q[j]) - 4.0 / h * v[j] - a[j]
+                qn[j] = qs[j] - corr * ikhat[j]
+                dq = qn[j] - q[j]
+                vn[j] = c2h * dq - v[j]
+                an[j] = c4h2 * dq - c4h * v[j] - a[j]
         # contact bookkeeping at n+1
         for c in range(nc):
-            d1 = _dot(psi[c], qn if method != 3 else q) - gap[c]
-            dd1 = _dot(psi[c], vn)
+            d1 = _rowdot(psi, c, qn if method != 3 else q) - gap[c]
+            dd1 = _rowdot(psi, c, vn)
             if d1 > 0.0 and not was_in[c]:
                 cout[c, 1] += 1.0
                 if model == 4:
@@ -1195,7 +1290,7 @@ def _fixed(
             fc[c] = fn[c]
         bad = False
         for f in range(nf):
-            x = abs(_dot(phi[f], q))
+            x = abs(_rowdot(phi, f, q))
             if not math.isfinite(x) or x > DIVERGENCE_LIMIT_M:
                 bad = True
             elif x > peaks[f]:
@@ -1206,7 +1301,7 @@ def _fixed(
     if store and status != 1:
         i = npts - 1
         for f in range(nf):
-            hx[i, f] = _dot(phi[f], q)
+            hx[i, f] = _rowdot(phi, f, q)
         for c in range(nc):
             hd[i, c] = dpen[c]
             hf[i, c] = fc[c]
@@ -1217,7 +1312,7 @@ def _fixed(
         for j in range(n):
             q[j] = qprev[j]
         for c in range(nc):
-            dpen[c] = _dot(psi[c], q) - gap[c]
+            dpen[c] = _rowdot(psi, c, q) - gap[c]
     for c in range(nc):
         if dpen[c] > 0.0:
             stored += _stored(model, dpen[c], beta[c])
