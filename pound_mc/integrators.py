@@ -525,8 +525,12 @@ def _rk4(
 @jit
 def _adaptive(
     ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi, model, dt_s,
-    substeps, q, v, out, cout, hx, hd, hf,
+    substeps, q, v, out, cout, hx, hd, hf, pre,
 ):  # fmt: skip
+    # pre: shared linear response before the first contact (see _sdof_batch).  Empty: plain
+    # run.  pre[0] = 1: run linearly to the first contact onset and leave in pre the state at
+    # the start of that record interval; pre[0] = 2: resume from such a state.  Layout:
+    # [mode, interval, e_in, e_d, steps, e0, q (n), v (n), peaks (nf)].
     n = q.size
     nc = gap.size
     nf = phi.shape[0]
@@ -575,7 +579,22 @@ def _adaptive(
         cout[c, 1] = 0.0
         cout[c, 2] = -_INF
         cout[c, 3] = 0.0
-    for i in range(npts - 1):
+    mode = int(pre[0]) if pre.size > 0 else 0
+    i_first = 0
+    if mode == 2:
+        i_first = int(pre[1])
+        e_in = pre[2]
+        e_d = pre[3]
+        steps = int(pre[4])
+        e0 = pre[5]
+        for j in range(n):
+            q[j] = pre[6 + j]
+            v[j] = pre[6 + n + j]
+        for f in range(nf):
+            peaks[f] = pre[6 + 2 * n + f]
+    for i in range(i_first, npts - 1):
+        if mode == 1:
+            _snapshot(pre, i, e_in, e_d, steps, e0, q, v, peaks)
         if store:
             for f in range(nf):
                 hx[i, f] = _rowdot(phi, f, q)
@@ -647,6 +666,8 @@ def _adaptive(
                         if hi < tau_on:
                             tau_on = hi
                             c_on = c
+                if c_on >= 0 and mode == 1:
+                    return
                 if c_on >= 0:
                     hh = tau_on
                     p1s = ag0 + slope * (s + hh)
@@ -858,6 +879,10 @@ def _adaptive(
                 break
         if status != 0:
             break
+    if mode == 1:
+        # no contact in the whole record: the end state is shared
+        _snapshot(pre, npts - 1, e_in, e_d, steps, e0, q, v, peaks)
+        return
     if store and status == 0:
         i = npts - 1
         for f in range(nf):
@@ -872,6 +897,21 @@ def _adaptive(
             stored += _stored(model, _rowdot(psi, c, q) - gap[c], beta[c])
     _finish(out, cout, peaks, side, phase, q, v, omega, e0, e_in, e_d, w_c, stored, peak_f,
             peak_t, steps, status)  # fmt: skip
+
+
+@jit
+def _snapshot(pre, i, e_in, e_d, steps, e0, q, v, peaks):
+    n = q.size
+    pre[1] = i
+    pre[2] = e_in
+    pre[3] = e_d
+    pre[4] = steps
+    pre[5] = e0
+    for j in range(n):
+        pre[6 + j] = q[j]
+        pre[6 + n + j] = v[j]
+    for f in range(peaks.size):
+        pre[6 + 2 * n + f] = peaks[f]
 
 
 @jit
@@ -1327,11 +1367,11 @@ def _fixed(
 @jit
 def _run(
     ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi, model, method, dt_s,
-    substeps, q, v, out, cout, hx, hd, hf,
+    substeps, q, v, out, cout, hx, hd, hf, pre,
 ):  # fmt: skip
     if method == 0:
         _adaptive(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi, model,
-                  dt_s, substeps, q, v, out, cout, hx, hd, hf)  # fmt: skip
+                  dt_s, substeps, q, v, out, cout, hx, hd, hf, pre)  # fmt: skip
     else:
         _fixed(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi, model,
                method, dt_s, q, v, out, cout, hx, hd, hf)  # fmt: skip
@@ -1384,49 +1424,70 @@ def run_kernel(
         np.ascontiguousarray(gap, dtype=f8), np.ascontiguousarray(meff, dtype=f8),
         np.ascontiguousarray(beta, dtype=f8), np.ascontiguousarray(xi, dtype=f8),
         int(model), int(method), f8(dt_s), f8(substeps), q, v, out, cout, hx, hd, hf,
+        np.zeros(0),
     )  # fmt: skip
     hist = (hx, hd, hf) if history else None
     return out, cout, hist
 
 
+@jit(inline=True)
+def _sdof_arrays(k, tl, zl, ml, tr, zr, mr, gap, beta, xi):
+    """Modal arrays of SDOF pair ``k`` (mass-normalised: q = sqrt(m) x)."""
+    omega = np.empty(2)
+    zeta = np.empty(2)
+    gamma = np.empty(2)
+    phi = np.zeros((2, 2))
+    side = np.zeros(2, dtype=np.int64)
+    side[1] = 1
+    psi = np.empty((1, 2))
+    omega[0] = 2.0 * math.pi / tl[k]
+    omega[1] = 2.0 * math.pi / tr[k]
+    zeta[0] = zl[k]
+    zeta[1] = zr[k]
+    gamma[0] = math.sqrt(ml[k])
+    gamma[1] = math.sqrt(mr[k])
+    phi[0, 0] = 1.0 / gamma[0]
+    phi[1, 1] = 1.0 / gamma[1]
+    psi[0, 0] = phi[0, 0]
+    psi[0, 1] = -phi[1, 1]
+    g = np.full(1, gap[k])
+    me = np.full(1, ml[k] * mr[k] / (ml[k] + mr[k]))
+    be = np.full(1, beta[k])
+    x = np.full(1, xi[k])
+    return omega, zeta, gamma, phi, side, psi, g, me, be, x
+
+
 @jit(parallel=True)
 def _sdof_batch(
-    ag, dt_rec, tl, zl, ml, tr, zr, mr, gap, beta, xi, dt_s, model, method, substeps, out
+    ag, dt_rec, tl, zl, ml, tr, zr, mr, gap, beta, xi, dt_s, model, method, substeps, out,
+    first, group, shared,
 ):  # fmt: skip
+    # 1. adaptive: the linear response up to the first contact of each group of simulations
+    #    that differ only in contact parameters, once per group (``first`` = a member of it)
+    ngroup = first.size
+    empty = np.zeros((0, 2))
+    empty1 = np.zeros((0, 1))
+    if method == 0:
+        for gi in numba.prange(ngroup):
+            k = first[gi]
+            omega, zeta, gamma, phi, side, psi, g, me, be, x = _sdof_arrays(
+                k, tl, zl, ml, tr, zr, mr, gap, beta, xi
+            )
+            shared[gi, 0] = 1.0
+            _run(ag, dt_rec, omega, zeta, gamma, phi, side, psi, g, me, be, x, model, method,
+                 dt_s[k], substeps, np.zeros(2), np.zeros(2), np.empty(_N_OUT),
+                 np.empty((1, 4)), empty, empty1, empty1, shared[gi])  # fmt: skip
+            shared[gi, 0] = 2.0
+    # 2. every simulation, resumed from its group's shared state
     nsim = tl.size
     for k in numba.prange(nsim):
-        omega = np.empty(2)
-        zeta = np.empty(2)
-        gamma = np.empty(2)
-        phi = np.zeros((2, 2))
-        side = np.zeros(2, dtype=np.int64)
-        side[1] = 1
-        psi = np.empty((1, 2))
-        g = np.empty(1)
-        me = np.empty(1)
-        be = np.empty(1)
-        x = np.empty(1)
-        omega[0] = 2.0 * math.pi / tl[k]
-        omega[1] = 2.0 * math.pi / tr[k]
-        zeta[0] = zl[k]
-        zeta[1] = zr[k]
-        gamma[0] = math.sqrt(ml[k])
-        gamma[1] = math.sqrt(mr[k])
-        phi[0, 0] = 1.0 / gamma[0]
-        phi[1, 1] = 1.0 / gamma[1]
-        psi[0, 0] = phi[0, 0]
-        psi[0, 1] = -phi[1, 1]
-        g[0] = gap[k]
-        me[0] = ml[k] * mr[k] / (ml[k] + mr[k])
-        be[0] = beta[k]
-        x[0] = xi[k]
-        q = np.zeros(2)
-        v = np.zeros(2)
-        cout = np.empty((1, 4))
-        empty = np.zeros((0, 2))
-        empty1 = np.zeros((0, 1))
+        omega, zeta, gamma, phi, side, psi, g, me, be, x = _sdof_arrays(
+            k, tl, zl, ml, tr, zr, mr, gap, beta, xi
+        )
+        pre = shared[group[k]] if method == 0 else np.zeros(0)
         _run(ag, dt_rec, omega, zeta, gamma, phi, side, psi, g, me, be, x, model, method,
-             dt_s[k], substeps, q, v, out[k], cout, empty, empty1, empty1)  # fmt: skip
+             dt_s[k], substeps, np.zeros(2), np.zeros(2), out[k], np.empty((1, 4)), empty,
+             empty1, empty1, pre.copy())  # fmt: skip
 
 
 def simulate_sdof_pairs(
@@ -1463,9 +1524,15 @@ def simulate_sdof_pairs(
     arrays = [np.ascontiguousarray(a.ravel()) for a in arrays]
     nsim = arrays[0].size
     out = np.empty((nsim, _N_OUT))
+    # simulations that differ only in contact parameters share their linear response up to
+    # the first contact (periods, damping ratios, masses, gap and step define a group)
+    linear = np.stack([arrays[k] for k in (0, 1, 2, 3, 4, 5, 6, 9)], axis=1)
+    _, first, group = np.unique(linear, axis=0, return_index=True, return_inverse=True)
+    shared = np.zeros((first.size, 6 + 2 * 2 + 2))
     _sdof_batch(
         np.ascontiguousarray(acc, dtype=np.float64), float(dt_rec), *arrays[:9],
         arrays[9], CONTACT_MODELS[contact_model]["code"], METHODS[method], float(substeps), out,
+        first.astype(np.int64), group.ravel().astype(np.int64), shared,
     )  # fmt: skip
     result = {name: out[:, k] for k, name in enumerate(OUTPUTS)}
     result["impacts"] = result["impacts"].astype(np.int32)
