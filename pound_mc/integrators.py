@@ -470,13 +470,19 @@ def _contact_forces(q, v, psi, gap, meff, beta, xi, zhd, phase, model, fc):
 @jit
 def _rk4(
     q, v, s, hs, ag0, slope, omega, zeta, gamma, psi, gap, meff, beta, xi, zhd, phase, model,
-    qn, vn, wk, fc, cimp, fc0,
+    qn, vn, wk, fc, cimp, fc0, sig0, quartic,
 ):  # fmt: skip
     """One classical Runge-Kutta step of length ``hs`` from local time ``s``.
 
+    With ``quartic`` the independent variable is ``sigma = (t - s)^(1/4)`` and the step goes
+    from ``sigma = sig0`` to ``sig0 + hs``: right after a contact onset the damping term
+    ``delta^0.25 ~ (t - s)^0.25`` is smooth in ``sigma``, so classical Runge-Kutta keeps its
+    order there (equal steps in sigma grade the time steps like k^4).
+
     Writes the new state into ``qn, vn``, the contact impulses of the step into ``cimp`` and
-    the forces at the start into ``fc0`` (the accelerations at the start are ``wk[4]``);
-    returns the increments of input energy, damping energy and contact work.
+    the forces at the start into ``fc0`` (the accelerations at the start are ``wk[4]`` divided
+    by the sigma factor); returns the increments of input energy, damping energy and contact
+    work.
     """
     n = q.size
     nc = fc.size
@@ -498,19 +504,27 @@ def _rk4(
             for j in range(n):
                 wk[8, j] = q[j] + fac * wk[stage - 1, j]
                 wk[9, j] = v[j] + fac * wk[4 + stage - 1, j]
-        ag = ag0 + slope * (s + tau)
+        if quartic:
+            sg = sig0 + tau
+            tloc = s + sg * sg * sg * sg
+            jac = 4.0 * sg * sg * sg
+        else:
+            tloc = s + tau
+            jac = 1.0
+        ag = ag0 + slope * tloc
         _contact_forces(wk[8], wk[9], psi, gap, meff, beta, xi, zhd, phase, model, fc)
         _accel(wk[8], wk[9], ag, omega, zeta, gamma, psi, fc, wk[4 + stage])
         if stage == 0:
             for c in range(nc):
                 fc0[c] = fc[c]
         for j in range(n):
-            wk[stage, j] = wk[9, j]
+            wk[stage, j] = jac * wk[9, j]
+            wk[4 + stage, j] *= jac
         pin, pd = _powers(wk[9], ag, omega, zeta, gamma)
         pc = 0.0
         for c in range(nc):
             pc += fc[c] * _rowdot(psi, c, wk[9])
-        wgt = (1.0 if stage == 0 or stage == 3 else 2.0) * hs / 6.0
+        wgt = (1.0 if stage == 0 or stage == 3 else 2.0) * hs / 6.0 * jac
         e_in += wgt * pin
         e_d += wgt * pd
         w_c += wgt * pc
@@ -519,6 +533,52 @@ def _rk4(
     for j in range(n):
         qn[j] = q[j] + hs / 6.0 * (wk[0, j] + 2.0 * wk[1, j] + 2.0 * wk[2, j] + wk[3, j])
         vn[j] = v[j] + hs / 6.0 * (wk[4, j] + 2.0 * wk[5, j] + 2.0 * wk[6, j] + wk[7, j])
+    return e_in, e_d, w_c
+
+
+@jit
+def _contact_step(
+    q, v, s, hs, ag0, slope, omega, zeta, gamma, psi, gap, meff, beta, xi, zhd, phase, model,
+    qn, vn, wk, fc, cimp, fc0, onset, nsig, qa, va, ctot, fsc,
+):  # fmt: skip
+    """Advance a contact phase by ``hs`` from local time ``s``.
+
+    One RK4 step, or right after an onset (``onset``) ``nsig`` RK4 steps in
+    ``sigma = (t - s)^(1/4)``.
+    """
+    if not onset:
+        return _rk4(q, v, s, hs, ag0, slope, omega, zeta, gamma, psi, gap, meff, beta, xi, zhd,
+                    phase, model, qn, vn, wk, fc, cimp, fc0, 0.0, False)  # fmt: skip
+    n = q.size
+    nc = fc.size
+    dsig = hs**0.25 / nsig
+    for j in range(n):
+        qa[j] = q[j]
+        va[j] = v[j]
+    for c in range(nc):
+        ctot[c] = 0.0
+    e_in = 0.0
+    e_d = 0.0
+    w_c = 0.0
+    for k in range(nsig):
+        if k == 0:
+            d_in, d_d, d_c = _rk4(qa, va, s, dsig, ag0, slope, omega, zeta, gamma, psi, gap,
+                                  meff, beta, xi, zhd, phase, model, qn, vn, wk, fc, cimp, fc0,
+                                  0.0, True)  # fmt: skip
+        else:
+            d_in, d_d, d_c = _rk4(qa, va, s, dsig, ag0, slope, omega, zeta, gamma, psi, gap,
+                                  meff, beta, xi, zhd, phase, model, qn, vn, wk, fc, cimp, fsc,
+                                  k * dsig, True)  # fmt: skip
+        e_in += d_in
+        e_d += d_d
+        w_c += d_c
+        for c in range(nc):
+            ctot[c] += cimp[c]
+        for j in range(n):
+            qa[j] = qn[j]
+            va[j] = vn[j]
+    for c in range(nc):
+        cimp[c] = ctot[c]
     return e_in, e_d, w_c
 
 
@@ -570,7 +630,13 @@ def _adaptive(
     en1 = np.empty(4)
     nphi = -phi
     zf = np.zeros(nf)
+    onset_pending = False
     t_onset = 0.0
+    nsig = 4  # sigma sub-steps of the first contact sub-step
+    qa = np.empty(n)
+    va = np.empty(n)
+    ctot = np.empty(nc)
+    fsc = np.empty(nc)
     in_contact = False
     status = 0
     store = hx.shape[0] > 0
@@ -727,6 +793,7 @@ def _adaptive(
                         # Ye et al. (2009): zeta = 8 (1 - e) / (5 e v0), xi holds e
                         zhd[c_on] = 8.0 * (1.0 - xi[c_on]) / (5.0 * xi[c_on] * max(v0c, 1e-12))
                     hc = min(h, _duration(model, v0c, beta[c_on], meff[c_on]) / substeps)
+                    onset_pending = True
                     t_onset = i * dt_rec + s
                     in_contact = True
                 else:
@@ -734,9 +801,14 @@ def _adaptive(
             else:
                 # ---------------- contact sub-step (RK4) with located switches
                 fresh = False
-                # sub-steps graded geometrically away from onset and towards separation,
-                # where the force law is not smooth (delta^0.25, delta^0.5 terms)
-                hs = min(hc, max(1.0 * (i * dt_rec + s - t_onset), hc * 1e-5))
+                # the first sub-step after an onset (hc / 64) is taken in sigma = (t -
+                # t_onset)^(1/4) (_contact_step), where delta^0.25 is smooth; then the steps
+                # double up to hc; towards separation, where the delta^0.5 term of the force
+                # rate is singular, sub-steps are graded geometrically
+                if onset_pending:
+                    hs = hc * (1.0 / 64.0)
+                else:
+                    hs = min(hc, max(i * dt_rec + s - t_onset, hc * (1.0 / 64.0)))
                 for c in range(nc):
                     if phase[c] == 2:
                         ddc = _rowdot(psi, c, v)
@@ -745,12 +817,18 @@ def _adaptive(
                             hs = min(hs, max(-0.5 * dc / ddc, hc * 1e-2))
                 if hs >= dt_rec - s or dt_rec - s - hs < 1e-9 * hc:
                     hs = dt_rec - s
-                de_in, de_d, dw_c = _rk4(q, v, s, hs, ag0, slope, omega, zeta, gamma, psi, gap,
-                                         meff, beta, xi, zhd, phase, model, q1, v1, wk, fc,
-                                         cimp, fc0)  # fmt: skip
+                de_in, de_d, dw_c = _contact_step(
+                    q, v, s, hs, ag0, slope, omega, zeta, gamma, psi, gap, meff, beta, xi, zhd,
+                    phase, model, q1, v1, wk, fc, cimp, fc0, onset_pending, nsig, qa, va, ctot,
+                    fsc,
+                )  # fmt: skip
                 # switches: g at both ends with its rate
-                for j in range(n):
-                    a0[j] = wk[4, j]
+                if onset_pending:
+                    _contact_forces(q, v, psi, gap, meff, beta, xi, zhd, phase, model, fsc)
+                    _accel(q, v, ag0 + slope * s, omega, zeta, gamma, psi, fsc, a0)
+                else:
+                    for j in range(n):
+                        a0[j] = wk[4, j]
                 _contact_forces(q1, v1, psi, gap, meff, beta, xi, zhd, phase, model, fc)
                 _accel(q1, v1, ag0 + slope * (s + hs), omega, zeta, gamma, psi, fc, a1)
                 t_ev = _INF
@@ -788,9 +866,11 @@ def _adaptive(
                         kind = kd
                 if c_ev >= 0 and t_ev < hs:
                     hs = t_ev
-                    de_in, de_d, dw_c = _rk4(q, v, s, hs, ag0, slope, omega, zeta, gamma, psi,
-                                             gap, meff, beta, xi, zhd, phase, model, q1, v1, wk,
-                                             fc, cimp, fc0)  # fmt: skip
+                    de_in, de_d, dw_c = _contact_step(
+                        q, v, s, hs, ag0, slope, omega, zeta, gamma, psi, gap, meff, beta, xi,
+                        zhd, phase, model, q1, v1, wk, fc, cimp, fc0, onset_pending, nsig, qa,
+                        va, ctot, fsc,
+                    )  # fmt: skip
                     _contact_forces(q1, v1, psi, gap, meff, beta, xi, zhd, phase, model, fc)
                     _accel(q1, v1, ag0 + slope * (s + hs), omega, zeta, gamma, psi, fc, a1)
                 e_in += de_in
@@ -838,6 +918,7 @@ def _adaptive(
                     q[j] = q1[j]
                     v[j] = v1[j]
                 s += hs
+                onset_pending = False
                 if c_ev >= 0 and hs == t_ev:
                     if kind == 1:
                         phase[c_ev] = 1
@@ -846,6 +927,7 @@ def _adaptive(
                         if model == 4:
                             zhd[c_ev] = 8.0 * (1.0 - xi[c_ev]) / (5.0 * xi[c_ev] * max(v0c, 1e-12))
                         hc = min(hc, _duration(model, v0c, beta[c_ev], meff[c_ev]) / substeps)
+                        onset_pending = True
                         t_onset = i * dt_rec + s
                     elif kind == 2:
                         phase[c_ev] = 2
