@@ -886,7 +886,7 @@ def _adaptive(
                     dd0 = _rowdot(psi, c, v)
                     dd1 = _rowdot(psi, c, v1)
                     f0 = fc0[c]
-                    f1 = _force(model, d1, dd1, beta[c], xi[c], meff[c], zhd[c], phase[c])
+                    f1 = fc[c]  # forces at the end of the (possibly cut) sub-step
                     r0 = _force_rate(model, d0, dd0, _rowdot(psi, c, a0), beta[c], xi[c], meff[c],
                                      zhd[c], phase[c])  # fmt: skip
                     r1 = _force_rate(model, d1, dd1, _rowdot(psi, c, a1), beta[c], xi[c], meff[c],
