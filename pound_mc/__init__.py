@@ -9,6 +9,7 @@ from __future__ import annotations
 
 __version__ = "0.1.0"
 
+from pound_mc import accessor as _accessor  # noqa: E402, F401  (registers ``ds.pound``)
 from pound_mc.contact import (  # noqa: E402
     CONTACT_MODELS,
     contact_duration_hertz,

@@ -20,6 +20,7 @@ _SUBCOMMAND_MODULES = [
     "pound_mc.cli_records",
     "pound_mc.cli_scene",
     "pound_mc.cli_study",
+    "pound_mc.cli_analysis",
 ]
 
 

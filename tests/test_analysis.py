@@ -1,0 +1,402 @@
+"""Charts, the ``ds.pound`` accessor, the analysis notebook and the HTML report (issue 6).
+
+Every chart is drawn from a real study dataset (a small study run here) or a real bench /
+stability table, and checked for the numbers it plots, not only for a file.
+"""
+
+import base64
+import html
+import io
+import json
+import os
+import re
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import xarray as xr
+
+import pound_mc  # noqa: F401  (registers ds.pound)
+from pound_mc.cli import main
+from pound_mc.cli_analysis import draw
+
+ROOT = Path(__file__).resolve().parent.parent
+
+TINY = """
+[study]
+name = "tiny-analysis"
+seed = 11
+description = "Small study for the analysis tests"
+
+[record]
+source = "builtin:knet-akt013"
+duration_s = 4.0
+pga_g = 0.3
+
+[left]
+model = "sdof"
+period_s = 0.5
+damping_ratio = 0.05
+mass_kg = 1.0e6
+
+[right]
+model = "sdof"
+period_s = 1.0
+damping_ratio = 0.05
+mass_kg = 1.0e6
+
+[contact]
+model = "jankowski"
+gap_m = 0.002
+beta = 2.75e9
+e = 0.65
+
+[integrator]
+method = "adaptive"
+dt_s = 0.01
+
+[grid]
+"left.period_s" = [0.3, 0.6, 0.9]
+"contact.gap_m" = [0.0, 0.002, 0.01]
+
+[sampling]
+n = 6
+method = "sobol"
+[sampling.vary]
+"contact.e" = { material = "concrete" }
+"contact.beta" = { material = "concrete" }
+"""
+
+
+@pytest.fixture(scope="module")
+def tiny(tmp_path_factory):
+    """Path of the small study's dataset (run once for the module)."""
+    folder = tmp_path_factory.mktemp("analysis")
+    study = folder / "tiny.toml"
+    study.write_text(TINY)
+    assert main(["run", str(study), "--out", str(folder), "--no-progress", "--no-plot"]) == 0
+    return folder / "tiny-analysis.nc"
+
+
+@pytest.fixture
+def ds(tiny):
+    with xr.open_dataset(tiny) as d:
+        yield d.load()
+
+
+def _band_at(collection, x):
+    """y values of a fill_between polygon's vertices at abscissa ``x``."""
+    v = collection.get_paths()[0].vertices
+    return v[np.isclose(v[:, 0], x), 1]
+
+
+# -- spectrum ----------------------------------------------------------------------------------
+def test_spectrum_chart_plots_the_dataset_quantiles(ds, tiny, tmp_path):
+    fig = draw(tiny, "spectrum")
+    ax = fig.axes[0]
+    q = ds["peak_force_quantile"].isel(record=0)
+    periods = ds["left_period_s"].values
+    assert len(ax.lines) == ds.sizes["contact_gap_m"]  # one line per gap (the other axis)
+    for j, gap in enumerate(ds["contact_gap_m"].values):
+        line = ax.lines[j]
+        np.testing.assert_allclose(line.get_xdata(), periods)
+        median = q.sel(quantile=0.5, contact_gap_m=gap).values / 1e6
+        np.testing.assert_allclose(line.get_ydata(), median, rtol=1e-12)
+        for k, x in enumerate(periods):
+            ys = _band_at(ax.collections[j], x)
+            for level in (0.05, 0.95):
+                value = q.sel(quantile=level, contact_gap_m=gap).values[k] / 1e6
+                assert np.isclose(ys, value, rtol=1e-12).any(), (gap, x, level)
+    assert ax.get_xlabel() == "left natural period [s]"
+    assert ax.get_ylabel() == "peak impact force [MN]"
+    # the accessor's quantiles are the same numbers, computed from peak_force
+    acc = ds.pound.spectrum(quantiles=(0.05, 0.5, 0.95))
+    np.testing.assert_allclose(
+        acc.values, ds["peak_force_quantile"].sel(quantile=[0.05, 0.5, 0.95]).values, rtol=1e-12
+    )
+    assert acc.attrs["units"] == "N"
+    one = ds.pound.spectrum(quantiles=0.5, left_period_s=0.6000001, contact_gap_m=0.002)
+    assert one.item() == pytest.approx(q.sel(quantile=0.5).values[1, 1], rel=1e-12)
+    # the accessor's chart is the same chart
+    assert np.array_equal(
+        ds.pound.plot.spectrum().axes[0].lines[1].get_ydata(), ax.lines[1].get_ydata()
+    )
+
+
+# -- probability -------------------------------------------------------------------------------
+def test_probability_chart_plots_the_pounding_probability_and_rules(ds, tiny):
+    rules = {"ABS": 0.004, "SRSS": np.array([0.001, 0.002, 0.003])}
+    fig = ds.pound.plot.probability(rules=rules)
+    ax = fig.axes[0]
+    prob = ds["pounding_probability"].isel(record=0)
+    data = [ln for ln in ax.lines if len(ln.get_xdata()) == ds.sizes["contact_gap_m"]]
+    assert len(data) == ds.sizes["left_period_s"]
+    for line, period in zip(data, ds["left_period_s"].values, strict=True):
+        np.testing.assert_allclose(line.get_xdata(), ds["contact_gap_m"].values * 1e3)
+        np.testing.assert_allclose(line.get_ydata(), prob.sel(left_period_s=period).values)
+        assert line.get_label().endswith(f"{period:g} s")
+    vertical = [ln for ln in ax.lines if ln not in data]
+    # ABS: one black line at 4 mm; SRSS: one per period, each in its period's colour
+    abs_lines = [ln for ln in vertical if ln.get_linestyle() == "--"]
+    assert [ln.get_xdata()[0] for ln in abs_lines] == [pytest.approx(4.0)]
+    srss = [ln for ln in vertical if ln.get_linestyle() == "-."]
+    assert [ln.get_xdata()[0] for ln in srss] == pytest.approx([1.0, 2.0, 3.0])
+    assert [ln.get_color() for ln in srss] == [ln.get_color() for ln in data]
+    assert ax.get_xlabel() == "initial gap [mm]"
+    assert ax.get_ylabel() == "pounding probability [-]"
+    np.testing.assert_allclose(ds.pound.probability().values, ds["pounding_probability"].values)
+
+
+def test_probability_rules_from_attributes_and_from_separation(ds, tiny):
+    marked = ds.copy()
+    marked.attrs["gap_rule_ddc_m"] = 0.0075
+    ax = marked.pound.plot.probability().axes[0]
+    ddc = [ln for ln in ax.lines if ln.get_linestyle() == ":"]
+    assert [ln.get_xdata()[0] for ln in ddc] == [pytest.approx(7.5)]
+    # by default: ABS, SRSS, DDC of every simulation (pound_mc.separation), median over samples
+    separation = pytest.importorskip("pound_mc.separation")
+    gaps = separation.study_gaps(ds)
+    ax = draw(tiny, "probability").axes[0]
+    for style, name in (("--", "gap_abs"), ("-.", "gap_srss"), (":", "gap_ddc")):
+        drawn = [ln.get_xdata()[0] for ln in ax.lines if ln.get_linestyle() == style]
+        expected = gaps[name].isel(record=0, contact_gap_m=0).median("sample").values * 1e3
+        np.testing.assert_allclose(drawn, expected, rtol=1e-12)
+
+
+# -- distribution ------------------------------------------------------------------------------
+def test_distribution_chart_plots_the_pounding_simulations(ds, tiny):
+    fig = draw(tiny, "distribution")
+    box_ax, hist_ax = fig.axes
+    ok = (ds["status"] == 0) & (ds["impacts"] > 0)
+    groups = [
+        ds["peak_force"].sel(contact_gap_m=g).values[ok.sel(contact_gap_m=g).values]
+        for g in ds["contact_gap_m"].values
+    ]
+    groups = [g for g in groups if g.size]
+    assert groups, "the small study must pound"
+    medians = [ln.get_ydata()[0] for ln in box_ax.lines if ln.get_color() == "C1"]
+    np.testing.assert_allclose(medians, [np.median(g) / 1e6 for g in groups], rtol=1e-12)
+    edges = np.histogram_bin_edges(np.concatenate(groups), bins=30)
+    stairs = hist_ax.patches
+    assert len(stairs) == len(groups)
+    for patch, g in zip(stairs, groups, strict=True):
+        values, drawn_edges, _ = patch.get_data()
+        np.testing.assert_array_equal(values, np.histogram(g, bins=edges)[0])
+        np.testing.assert_allclose(drawn_edges, edges / 1e6)
+    assert hist_ax.get_xlabel() == "peak impact force [MN]"
+    assert box_ax.get_ylabel() == "peak impact force [MN]"
+
+
+# -- restitution -------------------------------------------------------------------------------
+def test_restitution_chart_marks_the_study_samples(ds, tiny):
+    fig = draw(tiny, "restitution")
+    ax = fig.axes[0]
+    (points,) = ax.collections
+    np.testing.assert_allclose(points.get_offsets()[:, 0], ds["e"].values)
+    np.testing.assert_allclose(points.get_offsets()[:, 1], ds["e_effective"].values)
+    from pound_mc.relations import effective_restitution
+
+    curve = next(ln for ln in ax.lines if ln.get_label() == "Jankowski law, jankowski2008")
+    np.testing.assert_allclose(
+        curve.get_ydata(), effective_restitution(curve.get_xdata(), "jankowski2008")
+    )
+
+
+# -- work-precision and stability from their CSV tables -----------------------------------------
+def test_work_precision_and_stability_charts_from_their_csv(tmp_path):
+    from pound_mc.bench import benchmark
+    from pound_mc.stability import stability_map
+
+    bench = benchmark(scenes=("shear-3-5",), methods=["adaptive"], repeats=1, progress=False)
+    bench.to_csv(tmp_path / "bench.csv", index=False)
+    out = tmp_path / "wp.png"
+    assert (
+        main(["plot", str(tmp_path / "bench.csv"), "--kind", "work-precision", "--out", str(out)])
+        == 0
+    )
+    assert out.stat().st_size > 10_000
+    (line,) = draw(tmp_path / "bench.csv", "work-precision").axes[0].lines[:1]
+    np.testing.assert_allclose(line.get_xdata(), bench["seconds"].to_numpy() * 1e3)
+    np.testing.assert_allclose(line.get_ydata(), np.maximum(bench["err_peak_force"], 1e-16))
+
+    table = stability_map(betas=[1e9, 1e11], methods=["central-difference"])
+    table.to_csv(tmp_path / "stability.csv", index=False)
+    fig = draw(tmp_path / "stability.csv", "stability")
+    observed, predicted = fig.axes[0].lines[:2]
+    np.testing.assert_allclose(observed.get_ydata(), table["observed"])
+    np.testing.assert_allclose(predicted.get_ydata(), table["predicted"])
+    assert fig.axes[0].get_xlabel() == "impact stiffness beta [N/m^1.5]"
+
+
+# -- time history ------------------------------------------------------------------------------
+def test_history_from_the_dataset_reproduces_the_stored_simulation(ds, tiny, tmp_path):
+    out = tmp_path / "history.png"
+    args = ["plot", str(tiny), "--kind", "history", "--out", str(out), "--sample", "2"]
+    assert main([*args, "--sel", "left_period_s=0.6", "--sel", "contact_gap_m=0.002"]) == 0
+    assert out.stat().st_size > 10_000
+    result, index = ds.pound.simulate(sample=2, left_period_s=0.6, contact_gap_m=0.002)
+    assert index == {"record": 0, "left_period_s": 1, "contact_gap_m": 1, "sample": 2}
+    # the rerun is the dataset's simulation: same kernel, same parameters, same record
+    for name in ("peak_force", "impacts", "peak_disp_left", "dissipated_energy"):
+        assert result.outputs[name] == pytest.approx(float(ds[name][index]), rel=1e-12), name
+    fig = ds.pound.plot.history(sample=2, left_period_s=0.6, contact_gap_m=0.002)
+    disp, pen, force = fig.axes
+    np.testing.assert_allclose(disp.lines[0].get_xdata(), result.time_s)
+    np.testing.assert_allclose(disp.lines[0].get_ydata(), result.disp_left_m[:, -1] * 1e3)
+    np.testing.assert_allclose(force.lines[0].get_ydata(), result.force_N[:, 0] / 1e6)
+    assert force.get_ylabel() == "contact force [MN]" and force.get_xlabel() == "time [s]"
+
+
+def test_history_from_a_scene_file(tmp_path):
+    from pound_mc.scene import load_scene, simulate
+
+    scene = ROOT / "studies" / "scenes" / "b1.toml"
+    fig = draw(scene, "history")
+    result = simulate(load_scene(scene), history=True)
+    np.testing.assert_allclose(fig.axes[2].lines[0].get_ydata(), result.force_N[:, 0] / 1e6)
+
+
+def test_every_kind_writes_a_png_from_the_command_line(tiny, tmp_path):
+    for kind in ("spectrum", "probability", "distribution", "restitution", "history"):
+        out = tmp_path / f"{kind}.png"
+        assert main(["plot", str(tiny), "--kind", kind, "--out", str(out)]) == 0
+        assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and out.stat().st_size > 10_000
+
+
+def test_plot_errors_are_input_errors(tiny, tmp_path, capsys):
+    assert main(["plot", str(tmp_path / "missing.nc"), "--kind", "spectrum"]) == 2
+    assert "no such file" in capsys.readouterr().err
+    assert main(["plot", str(tiny), "--kind", "history", "--sel", "colour=3"]) == 2
+    assert "colour" in capsys.readouterr().err
+
+
+# -- notebook ----------------------------------------------------------------------------------
+def test_analysis_notebook_runs_headless(tiny, monkeypatch):
+    nbformat = pytest.importorskip("nbformat")
+    nbclient = pytest.importorskip("nbclient")
+    monkeypatch.setenv("POUND_MC_DATASET", str(tiny))
+    monkeypatch.setenv("JUPYTER_PLATFORM_DIRS", "1")
+    monkeypatch.setenv("MPLBACKEND", "Agg")
+    nb = nbformat.read(ROOT / "studies" / "analysis.ipynb", as_version=4)
+    client = nbclient.NotebookClient(
+        nb, kernel_name="python3", timeout=300, resources={"metadata": {"path": str(ROOT)}}
+    )
+    client.execute()
+    outputs = [o for c in nb.cells if c.cell_type == "code" for o in c.outputs]
+    assert not [o for o in outputs if o.output_type == "error"]
+    text = "".join(o.get("text", "") for o in outputs)
+    assert "tiny-analysis" in text  # it read the dataset it was pointed at
+    rerun, stored = re.search(r"rerun: ([\d.e+-]+) MN; dataset: ([\d.e+-]+) MN", text).groups()
+    assert float(rerun) == pytest.approx(float(stored), rel=1e-12)
+    images = [o for o in outputs if "image/png" in o.get("data", {})]
+    assert len(images) == 3  # spectrum, probability, history
+
+
+# -- report ------------------------------------------------------------------------------------
+def _report(tiny, tmp_path):
+    out = tmp_path / "report.html"
+    assert main(["report", str(tiny), "--out", str(out)]) == 0
+    return out
+
+
+def test_report_is_self_contained(ds, tiny, tmp_path):
+    page = _report(tiny, tmp_path).read_text()
+    for attr in re.findall(r'(?:src|href)="([^"]*)"', page):
+        assert attr.startswith("data:image/png;base64,"), attr[:60]
+    assert "<script" not in page and "url(" not in page and "@import" not in page
+    for key in ("spectrum", "probability", "distribution", "history"):
+        assert f'id="chart-{key}"' in page
+    assert html.escape(ds.attrs["study_text"]) in page
+    assert ds.attrs["study_hash"] in page and ds.attrs["numba_version"] in page
+    counts = ds.pound.status_counts()
+    assert f'<td>ok</td><td class="num">{counts["ok"]}</td>' in page
+    assert f"{ds.pound.energy_summary()['max']:.3g}" in page
+
+
+CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
+_FLAGS = [
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-dev-shm-usage",
+    "--no-first-run",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+    "--hide-scrollbars",
+    "--force-device-scale-factor=1",
+    "--window-size=1200,3000",
+]
+
+
+def _chromium(tmp_path, *args):
+    profile = tmp_path / f"profile-{len(list(tmp_path.glob('profile-*')))}"
+    return subprocess.run(
+        [CHROMIUM, *_FLAGS, f"--user-data-dir={profile}", *args],
+        capture_output=True,
+        text=True,
+        timeout=90,
+    )
+
+
+def _console_messages(stderr: str) -> list[str]:
+    return [line for line in stderr.splitlines() if ":CONSOLE" in line]
+
+
+@pytest.mark.skipif(
+    not os.access(CHROMIUM, os.X_OK),
+    reason="Debian's chromium is not installed (/usr/bin/chromium); .ci/run installs it",
+)
+def test_report_renders_in_headless_chromium(tiny, tmp_path):
+    from PIL import Image
+
+    report = _report(tiny, tmp_path)
+    page = report.read_text()
+    # the console check can fail: a page with a script error is caught
+    bad = tmp_path / "bad.html"
+    bad.write_text("<html><body><script>undefinedFunction();</script></body></html>")
+    run = _chromium(tmp_path, "--enable-logging=stderr", "--v=0", "--dump-dom", bad.as_uri())
+    assert any("undefinedFunction" in m for m in _console_messages(run.stderr))
+
+    # the report itself: no console messages at all (it has no scripts, loads nothing)
+    shot = tmp_path / "shot.png"
+    run = _chromium(
+        tmp_path, "--enable-logging=stderr", "--v=0", f"--screenshot={shot}", report.as_uri()
+    )
+    assert run.returncode == 0, run.stderr[-2000:]
+    assert _console_messages(run.stderr) == []
+    screen = np.asarray(Image.open(shot).convert("RGB")).astype(int)
+    assert screen.shape == (3000, 1200, 3)
+    assert (screen != 255).any(axis=2).mean() > 0.05  # not blank
+
+    # where the spectrum's <img> is laid out: the same page plus a script that writes the box
+    probe = tmp_path / "probe.html"
+    script = (
+        "<script>var r=document.getElementById('chart-spectrum').getBoundingClientRect();"
+        "document.body.setAttribute('data-box',JSON.stringify([r.left,r.top,r.width,r.height]));"
+        "</script></body>"
+    )
+    probe.write_text(page.replace("</body>", script))
+    dom = _chromium(tmp_path, "--dump-dom", probe.as_uri()).stdout
+    left, top, width, height = (round(v) for v in json.loads(html.unescape(
+        re.search(r'data-box="([^"]*)"', dom).group(1))))  # fmt: skip
+    uri = re.search(r'id="chart-spectrum" src="data:image/png;base64,([^"]+)"', page).group(1)
+    chart = np.asarray(Image.open(io.BytesIO(base64.b64decode(uri))).convert("RGB")).astype(int)
+    assert (height, width) == chart.shape[:2]  # drawn at its own size
+    assert top + height <= 3000
+    region = screen[top : top + height, left : left + width]
+    # the screenshot shows the chart there: nearly every pixel as in the PNG ...
+    assert (np.abs(region - chart).max(axis=2) <= 8).mean() > 0.98
+    # ... including the median lines in their colours (C0: #1f77b4, C1: #ff7f0e)
+    for rgb in ((0x1F, 0x77, 0xB4), (0xFF, 0x7F, 0x0E)):
+        near = (np.abs(region - np.array(rgb)).max(axis=2) <= 12).sum()
+        assert near > 200, rgb
+
+
+def test_package_import_registers_the_accessor():
+    code = "import xarray as xr, pound_mc; print(hasattr(xr.Dataset(), 'pound'))"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "True"
