@@ -19,7 +19,7 @@ from pound_mc import __version__
 from pound_mc.dataset import RESULT_VARIABLES
 from pound_mc.errors import InputError
 from pound_mc.relations import restitution_of_xi, xi_from_e
-from pound_mc.study import grid_dim_name
+from pound_mc.study import MATERIAL_KEY, grid_dim_name
 
 __all__ = ["StudyEngine"]
 
@@ -41,6 +41,8 @@ _KERNEL_KEYS = (
 def _dims_of(study, key: str) -> tuple[str, ...]:
     if key in study.grid:
         return (grid_dim_name(key),)
+    if key in study.material_variables:
+        return (grid_dim_name(MATERIAL_KEY), "sample")
     if any(v.key == key for v in study.variables):
         return ("sample",)
     return ()
@@ -60,8 +62,12 @@ class StudyEngine:
         from pound_mc.scene import scene_from_dict
 
         self.study = study
-        overrides = {key: float(values[0]) for key, values in study.grid.items()}
+        overrides = {
+            key: float(values[0]) for key, values in study.grid.items() if key != MATERIAL_KEY
+        }
         self.samples = study.draw()
+        #: Sampled keys that follow the material axis: ``{key: (n_materials, n)}``.
+        self.material_samples = study.draw_materials()
         overrides.update({key: float(values[0]) for key, values in self.samples.items()})
         self.scene = scene_from_dict(study.scene_dict(0, overrides), file=study.path)
         if study.record_arrays:
@@ -114,6 +120,9 @@ class StudyEngine:
         if key in study.grid:
             axis = list(study.grid).index(key) + 1
             return study.grid[key][idx[axis]]
+        if key in self.material_samples:
+            axis = list(study.grid).index(MATERIAL_KEY) + 1
+            return self.material_samples[key][idx[axis], idx[-1]]
         if key in self.samples:
             return self.samples[key][idx[-1]]
         if key in self._base:
@@ -230,8 +239,8 @@ class StudyEngine:
             dims = e_dims
             e = (
                 study.grid["contact.e"]
-                if dims and dims[0] != "sample"
-                else self.samples.get("contact.e", np.asarray(self._base.get("contact.e")))
+                if dims == (grid_dim_name("contact.e"),)
+                else self._sampled("contact.e", self._base.get("contact.e"))
             )
             e = np.asarray(e, float)
             xi = np.asarray(xi_from_e(e, self._base["contact.relation"]), float)
@@ -240,8 +249,8 @@ class StudyEngine:
             dims = xi_dims
             xi = (
                 study.grid["contact.xi"]
-                if dims and dims[0] != "sample"
-                else self.samples.get("contact.xi", np.asarray(self._base.get("contact.xi", 0.0)))
+                if dims == (grid_dim_name("contact.xi"),)
+                else self._sampled("contact.xi", self._base.get("contact.xi", 0.0))
             )
             xi = np.asarray(xi, float)
         out["xi"] = (dims, xi)
@@ -250,14 +259,25 @@ class StudyEngine:
         skey = self.stiffness_key
         name = "beta" if skey == "contact.beta" else "k_N_per_m"
         bdims = _dims_of(study, skey)
-        if bdims == ("sample",):
-            out[name] = (bdims, self.samples[skey])
+        if bdims and bdims[-1] == "sample":
+            out[name] = (bdims, self._sampled(skey, None))
         elif not bdims:
             out[name] = ((), np.asarray(float(self._base[skey])))
-        for key, values in self.samples.items():
+        for key in self.samples:
             if key not in ("contact.e", "contact.xi", skey):
-                out[grid_dim_name(key)] = (("sample",), values)
+                out[grid_dim_name(key)] = (_dims_of(study, key), self._sampled(key, None))
+        if MATERIAL_KEY in study.grid_labels:
+            names = np.asarray(study.grid_labels[MATERIAL_KEY], dtype=object)
+            out["material"] = ((grid_dim_name(MATERIAL_KEY),), names)
         return out
+
+    def _sampled(self, key: str, default) -> np.ndarray:
+        """Sampled values of ``key``: ``(n_materials, n)`` if it follows the material axis."""
+        if key in self.material_samples:
+            return self.material_samples[key]
+        if key in self.samples:
+            return self.samples[key]
+        return np.asarray(default)
 
     def provenance(self) -> dict:
         """Versions of the software that produced the numbers."""

@@ -10,10 +10,22 @@ unless ``fresh=True``.  When every chunk is done the dataset is assembled and wr
 
 Every simulation writes only its own output slot and all random numbers are drawn before any
 chunk runs, so results do not depend on thread count, chunk size or backend.
+
+Chunks run through an *executor*: a callable ``executor(engine, chunks)`` that yields
+``(chunk, result)`` pairs as chunks finish, in any order.  The default runs them one after the
+other in this process on numba's threads; :mod:`pound_mc.distributed` runs them on a Dask
+cluster.  Either way this process alone writes the chunk files and the dataset.
+
+Test hook: when the environment variable ``POUND_MC_TEST_PAUSE_AT`` names a stage (see
+:data:`PAUSE_STAGES`), the runner prints ``POUND_MC_TEST_PAUSE_AT: paused at <stage>`` to
+standard error and sleeps there (``POUND_MC_TEST_PAUSE_S`` seconds, default 600), so the
+interrupt drill (``tests/test_drills.py``) can kill the process at a known point.  It costs one
+environment lookup per stage and is not meant for users.
 """
 
 from __future__ import annotations
 
+import io
 import json
 import os
 import shutil
@@ -21,7 +33,8 @@ import signal
 import sys
 import threading
 import time
-from contextlib import contextmanager
+from collections.abc import Callable, Iterable, Iterator
+from contextlib import closing, contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -33,8 +46,10 @@ from pound_mc.dataset import RESULT_VARIABLES, build_dataset, write_netcdf
 from pound_mc.errors import InputError
 
 __all__ = [
+    "Chunk",
     "RunReport",
     "run_study",
+    "local_executor",
     "plan_text",
     "study_parameters",
     "chunk_ranges",
@@ -42,6 +57,38 @@ __all__ = [
 ]
 
 _MANIFEST = "manifest.json"
+
+#: Environment variable of the test hook that pauses the runner at a named stage.
+PAUSE_ENV = "POUND_MC_TEST_PAUSE_AT"
+#: Stages of the test hook, in the order a run passes them (``K``: a chunk's index,
+#: ``N``: the number of chunk files this call has written).
+PAUSE_STAGES = (
+    "manifest:part",  # manifest's temporary file written, not yet renamed
+    "chunk:K:half",  # chunk K's temporary file half written
+    "chunk:K:part",  # chunk K's temporary file complete, not yet renamed
+    "chunks:N",  # N chunk files written by this call
+    "dataset",  # every chunk done, dataset not yet assembled
+    "netcdf",  # dataset assembled, not yet written
+    "done",  # dataset written (the command line then draws the chart)
+)
+
+
+def _pause_at(stage: str) -> None:
+    """Test hook: sleep at ``stage`` if ``POUND_MC_TEST_PAUSE_AT`` names it."""
+    if os.environ.get(PAUSE_ENV) != stage:
+        return
+    print(f"{PAUSE_ENV}: paused at {stage}", file=sys.stderr, flush=True)
+    time.sleep(float(os.environ.get("POUND_MC_TEST_PAUSE_S", "600")))
+
+
+@dataclass(frozen=True)
+class Chunk:
+    """One chunk of a study: simulations ``start .. stop-1``, stored in ``path``."""
+
+    index: int
+    start: int
+    stop: int
+    path: Path
 
 
 @dataclass
@@ -79,11 +126,12 @@ def chunk_ranges(n: int, chunk_size: int) -> list[tuple[int, int]]:
 
 @contextmanager
 def _threads(n: int | None):
+    """Run the kernels on ``n`` numba threads inside the block (``None``: numba's default)."""
     if n is None:
         yield
         return
     if n < 1:
-        raise InputError(f"must be >= 1, got {n}", key="--workers")
+        raise InputError(f"must be >= 1, got {n}", key="--threads")
     old = numba.get_num_threads()
     numba.set_num_threads(min(n, numba.config.NUMBA_NUM_THREADS))
     try:
@@ -120,19 +168,34 @@ def _stop_between_chunks():
         signal.signal(signal.SIGINT, old)
 
 
-def _atomic_savez(path: Path, **arrays) -> None:
+def _atomic_write_bytes(path: Path, data: bytes, stage: str) -> None:
+    """Write ``data`` to a temporary file, flush it to disk and rename it to ``path``.
+
+    A reader sees either no ``path`` or the complete file, never a part of it; the temporary
+    ``.<name>.part`` an interrupted write leaves behind is never read and is overwritten by
+    the next write.
+    """
     tmp = path.with_name(f".{path.name}.part")
     with open(tmp, "wb") as fh:
-        np.savez(fh, **arrays)
+        half = len(data) // 2
+        fh.write(data[:half])
+        fh.flush()
+        _pause_at(f"{stage}:half")
+        fh.write(data[half:])
         fh.flush()
         os.fsync(fh.fileno())
+    _pause_at(f"{stage}:part")
     os.replace(tmp, path)
 
 
-def _atomic_write_text(path: Path, text: str) -> None:
-    tmp = path.with_name(f".{path.name}.part")
-    tmp.write_text(text)
-    os.replace(tmp, path)
+def _atomic_savez(path: Path, stage: str = "chunk", **arrays) -> None:
+    buffer = io.BytesIO()
+    np.savez(buffer, **arrays)
+    _atomic_write_bytes(path, buffer.getvalue(), stage)
+
+
+def _atomic_write_text(path: Path, text: str, stage: str = "text") -> None:
+    _atomic_write_bytes(path, text.encode(), stage)
 
 
 def study_parameters(study, samples: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
@@ -211,6 +274,7 @@ def _check_manifest(work: Path, study, fresh: bool) -> None:
                 },
                 indent=1,
             ),
+            stage="manifest",
         )
 
 

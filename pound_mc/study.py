@@ -9,7 +9,13 @@ A study is a scene (``[record]`` or ``[[records]]``, ``[left]``, ``[right]``, ``
     study, between 256 and 8192: :func:`pound_mc.runner.default_chunk_size`).
 ``[grid]``
     Axes of the spectra, keyed by the scene key they vary (``"left.period_s"``): a list of
-    numbers or ``{ start, stop, num }`` (evenly spaced, both ends included).
+    numbers or ``{ start, stop, num }`` (evenly spaced, both ends included).  One non-numeric
+    axis: ``"contact.material" = ["steel", "concrete", ...]`` (names of
+    :data:`pound_mc.materials.MATERIALS`); ``[sampling.vary]`` entries
+    ``{ material = "grid" }`` for ``contact.e`` and ``contact.beta`` then take each grid
+    point's material's ranges (the same design points for every material: common random
+    numbers).  The axis's values are the materials' indices in ``MATERIALS`` (0 steel,
+    1 concrete, 2 timber, 3 ceramics); their names are in ``Study.grid_labels``.
 ``[sampling]``
     ``n`` samples per grid point and record, ``method`` (``random`` | ``lhs`` | ``sobol``,
     default ``sobol``), optional ``seed`` (default: the study's), and ``[sampling.vary]``
@@ -22,6 +28,7 @@ naming the file and the key.  Nothing is written while validating.
 from __future__ import annotations
 
 import copy
+import dataclasses
 import hashlib
 import math
 import re
@@ -31,10 +38,17 @@ from pathlib import Path
 
 import numpy as np
 
-from pound_mc import sampling
+from pound_mc import materials, sampling
 from pound_mc.errors import InputError, InputErrors
 
-__all__ = ["Study", "load_study", "study_from_text", "NUMERIC_SCENE_KEYS", "grid_dim_name"]
+__all__ = [
+    "Study",
+    "load_study",
+    "study_from_text",
+    "NUMERIC_SCENE_KEYS",
+    "MATERIAL_KEY",
+    "grid_dim_name",
+]
 
 _STUDY_KEYS = {"name", "seed", "description", "chunk_size"}
 _SAMPLING_KEYS = {"n", "method", "seed", "vary"}
@@ -56,6 +70,9 @@ NUMERIC_SCENE_KEYS = {
     "contact.e",
     "integrator.dt_s",
 }
+#: The one non-numeric grid axis: the material whose measured ranges ``{ material = "grid" }``
+#: sampled variables take.
+MATERIAL_KEY = "contact.material"
 # Keys that replace each other: varying e drops a fixed xi from the scene and vice versa.
 _EXCLUSIVE = {"contact.e": "contact.xi", "contact.xi": "contact.e"}
 _NAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_-]*$")
@@ -87,6 +104,11 @@ class Study:
     record_names: list[str] = field(default_factory=list)
     #: ``(dt_s, acceleration)`` of every record, read and preprocessed while validating.
     record_arrays: list = field(default_factory=list, repr=False)
+    #: Names behind a non-numeric grid axis's values (``{"contact.material": ["steel", ...]}``).
+    grid_labels: dict[str, list[str]] = field(default_factory=dict)
+    #: Sampled keys that follow the material axis: ``{key: [variable per material]}`` (the
+    #: variable in ``variables`` is the first material's, standing for all of them).
+    material_variables: dict[str, list] = field(default_factory=dict)
 
     @property
     def shape(self) -> tuple[int, ...]:
@@ -107,8 +129,28 @@ class Study:
         return data
 
     def draw(self) -> dict[str, np.ndarray]:
-        """Sampled values ``{key: (n,)}``; the same at every grid point and record."""
+        """Sampled values ``{key: (n,)}``; the same at every grid point and record.
+
+        A key in :attr:`material_variables` gets its first material's values here; see
+        :meth:`draw_materials`.
+        """
         return sampling.draw(self.variables, self.n, self.sampling_seed, self.method)
+
+    def draw_materials(self) -> dict[str, np.ndarray]:
+        """Values of the keys that follow the material axis, ``{key: (n_materials, n)}``.
+
+        Row ``m`` maps the same design column as :meth:`draw` through the ranges of the
+        axis's ``m``-th material, so every material meets the same design points.
+        """
+        if not self.material_variables:
+            return {}
+        u = sampling.design(self.n, len(self.variables), self.sampling_seed, self.method)
+        out = {}
+        for j, variable in enumerate(self.variables):
+            per_material = self.material_variables.get(variable.key)
+            if per_material is not None:
+                out[variable.key] = np.stack([v.ppf(u[:, j]) for v in per_material])
+        return out
 
 
 def set_key(data: dict, key: str, value) -> None:
@@ -177,6 +219,34 @@ def _parse_grid_axis(key, spec, file, errors) -> np.ndarray | None:
         InputError("must be a list of numbers or { start, stop, num }", file=file, key=where)
     )
     return None
+
+
+def _parse_material_axis(spec, file, errors) -> list[str] | None:
+    """Validate a ``"contact.material"`` grid axis: distinct names of known materials."""
+    where = f"grid.{MATERIAL_KEY}"
+    if not isinstance(spec, list) or not spec or not all(isinstance(m, str) for m in spec):
+        errors.append(
+            InputError(
+                f"must be a list of material names from {list(materials.MATERIALS)}",
+                file=file,
+                key=where,
+            )
+        )
+        return None
+    unknown = [m for m in spec if m not in materials.MATERIALS]
+    if unknown:
+        errors.append(
+            InputError(
+                f"unknown material(s) {unknown}; choose from {list(materials.MATERIALS)}",
+                file=file,
+                key=where,
+            )
+        )
+        return None
+    if len(set(spec)) != len(spec):
+        errors.append(InputError("values must be distinct", file=file, key=where))
+        return None
+    return list(spec)
 
 
 def scene_model(data: dict, side: str) -> str:
@@ -332,7 +402,14 @@ def study_from_text(text: str, *, file: str | Path | None = None) -> Study:
     if not isinstance(grid_spec, dict):
         errors.append(InputError("must be a table", file=fname, key="grid"))
         grid_spec = {}
+    grid_labels: dict[str, list[str]] = {}
     for key, spec in grid_spec.items():
+        if key == MATERIAL_KEY:
+            names = _parse_material_axis(spec, fname, errors)
+            if names is not None:
+                grid_labels[key] = names
+                grid[key] = np.array([materials.MATERIALS.index(m) for m in names], dtype=float)
+            continue
         if key not in NUMERIC_SCENE_KEYS:
             errors.append(
                 InputError(
@@ -384,7 +461,36 @@ def study_from_text(text: str, *, file: str | Path | None = None) -> Study:
     if not isinstance(vary, dict):
         errors.append(InputError("must be a table", file=fname, key="sampling.vary"))
         vary = {}
+    material_variables: dict[str, list] = {}
     for key, vspec in vary.items():
+        if isinstance(vspec, dict) and vspec.get("material") == "grid":
+            if MATERIAL_KEY not in grid_labels:
+                errors.append(
+                    InputError(
+                        f'material = "grid" needs a grid axis "{MATERIAL_KEY}" '
+                        "(a list of material names)",
+                        file=fname,
+                        key=f"sampling.vary.{key}.material",
+                    )
+                )
+                continue
+            per_material = []
+            for material in grid_labels[MATERIAL_KEY]:
+                variable, errs = sampling.parse_variable(
+                    key, {**vspec, "material": material}, file=fname
+                )
+                errors.extend(errs)
+                if variable is None:
+                    break
+                per_material.append(variable)
+            else:
+                material_variables[key] = per_material
+                names = grid_labels[MATERIAL_KEY]
+                source = per_material[0].source.replace(
+                    f"over {names[0]},", f"over the grid point's material ({' | '.join(names)}),"
+                )
+                variables.append(dataclasses.replace(per_material[0], source=source))
+            continue
         if key not in NUMERIC_SCENE_KEYS:
             errors.append(
                 InputError(
@@ -407,6 +513,18 @@ def study_from_text(text: str, *, file: str | Path | None = None) -> Study:
         errors.extend(errs)
         if variable is not None:
             variables.append(variable)
+    follows_axis = [
+        k for k, v in vary.items() if isinstance(v, dict) and v.get("material") == "grid"
+    ]
+    if MATERIAL_KEY in grid_labels and not follows_axis:
+        errors.append(
+            InputError(
+                "the material axis changes nothing: give contact.e and/or contact.beta "
+                '{ material = "grid" } in [sampling.vary]',
+                file=fname,
+                key=f"grid.{MATERIAL_KEY}",
+            )
+        )
     if "contact.e" in vary and "contact.xi" in vary:
         errors.append(
             InputError(
@@ -417,7 +535,7 @@ def study_from_text(text: str, *, file: str | Path | None = None) -> Study:
     # the scene as written, once per record; a key that only a grid axis or a sampled
     # variable gives takes its first value (the other values are checked below)
     draws = sampling.draw(variables, n, sampling_seed, method) if variables else {}
-    first = {key: float(values[0]) for key, values in grid.items()}
+    first = {key: float(values[0]) for key, values in grid.items() if key != MATERIAL_KEY}
     first.update({key: float(values[0]) for key, values in draws.items()})
     shear = [side for side in ("left", "right") if scene_model(scene, side) == "shear"]
     for side in shear:
@@ -452,7 +570,7 @@ def study_from_text(text: str, *, file: str | Path | None = None) -> Study:
 
     # every grid value and every sampled value must make a valid scene: check the extremes
     if records and scene_ok:
-        ranges = [(f"grid.{k}", k, v) for k, v in grid.items()]
+        ranges = [(f"grid.{k}", k, v) for k, v in grid.items() if k != MATERIAL_KEY]
         ranges += [(f"sampling.vary.{k}", k, v) for k, v in draws.items()]
         for where, key, values in ranges:
             for value in dict.fromkeys((float(values.min()), float(values.max()))):
@@ -498,6 +616,8 @@ def study_from_text(text: str, *, file: str | Path | None = None) -> Study:
         description=description,
         record_names=names,
         record_arrays=loaded,
+        grid_labels=grid_labels,
+        material_variables=material_variables,
     )
 
 
