@@ -84,9 +84,11 @@ _INF = np.inf
 
 
 @jit(inline=True)
-def _force(model, d, dd, beta, xi, meff, zhd, phase):
+def _force(model, d, dd, beta, c0, meff, zhd, phase):
     """Contact force [N] of a law by its code, in a phase (0 open, 1 approach, 2 restitution).
 
+    ``c0 = 2 xi sqrt(beta m_eff)`` is the damping constant of the Jankowski and Kelvin laws
+    (precomputed per contact: seed eq. (1.1) reads ``c = c0 delta^0.25`` for Jankowski's).
     ``d`` is clipped at 0 so located switches never see a negative root.
     """
     if phase == 0:
@@ -94,14 +96,15 @@ def _force(model, d, dd, beta, xi, meff, zhd, phase):
     if d < 0.0:
         d = 0.0
     if model == 0:  # jankowski, seed eq. (1.1)
-        f = beta * d * math.sqrt(d)
+        sd = math.sqrt(d)
+        f = beta * d * sd
         if phase == 1:
-            f += 2.0 * xi * math.sqrt(beta * math.sqrt(d) * meff) * dd
+            f += c0 * math.sqrt(sd) * dd
         return f
     if model == 1:  # linear spring
         return beta * d
     if model == 2:  # kelvin-voigt
-        return beta * d + 2.0 * xi * math.sqrt(beta * meff) * dd
+        return beta * d + c0 * dd
     if model == 3:  # hertz
         return beta * d * math.sqrt(d)
     # hertzdamp
@@ -110,7 +113,7 @@ def _force(model, d, dd, beta, xi, meff, zhd, phase):
 
 
 @jit
-def _force_rate(model, d, dd, ddd, beta, xi, meff, zhd, phase):
+def _force_rate(model, d, dd, ddd, beta, c0, meff, zhd, phase):
     """Time derivative of :func:`_force` along the motion [N/s]."""
     if phase == 0 or d <= 0.0:
         return 0.0
@@ -118,14 +121,13 @@ def _force_rate(model, d, dd, ddd, beta, xi, meff, zhd, phase):
     if model == 0:
         r = 1.5 * beta * sd * dd
         if phase == 1:
-            c0 = 2.0 * xi * math.sqrt(beta * meff)
             q = math.sqrt(sd)  # d^0.25
             r += c0 * (0.25 * dd * dd / (q * q * q) + q * ddd)
         return r
     if model == 1:
         return beta * dd
     if model == 2:
-        return beta * dd + 2.0 * xi * math.sqrt(beta * meff) * ddd
+        return beta * dd + c0 * ddd
     if model == 3:
         return 1.5 * beta * sd * dd
     f = beta * d * sd * (1.0 + zhd * dd)
@@ -460,29 +462,23 @@ def _exact_root(q, v, p0s, slope, s, guess, lo, hi, which, c, omega, zeta, gamma
 
 
 @jit(inline=True)
-def _contact_forces(q, v, psi, gap, meff, beta, xi, zhd, phase, model, fc):
+def _contact_forces(q, v, psi, gap, meff, beta, cd, zhd, phase, model, fc):
     for c in range(fc.size):
         d = _rowdot(psi, c, q) - gap[c]
         dd = _rowdot(psi, c, v)
-        fc[c] = _force(model, d, dd, beta[c], xi[c], meff[c], zhd[c], phase[c])
+        fc[c] = _force(model, d, dd, beta[c], cd[c], meff[c], zhd[c], phase[c])
 
 
 @jit
 def _rk4(
-    q, v, s, hs, ag0, slope, omega, zeta, gamma, psi, gap, meff, beta, xi, zhd, phase, model,
-    qn, vn, wk, fc, cimp, fc0, sig0, quartic,
+    q, v, s, hs, ag0, slope, omega, zeta, gamma, psi, gap, meff, beta, cd, zhd, phase, model,
+    qn, vn, wk, fc, cimp, fc0,
 ):  # fmt: skip
     """One classical Runge-Kutta step of length ``hs`` from local time ``s``.
 
-    With ``quartic`` the independent variable is ``sigma = (t - s)^(1/4)`` and the step goes
-    from ``sigma = sig0`` to ``sig0 + hs``: right after a contact onset the damping term
-    ``delta^0.25 ~ (t - s)^0.25`` is smooth in ``sigma``, so classical Runge-Kutta keeps its
-    order there (equal steps in sigma grade the time steps like k^4).
-
     Writes the new state into ``qn, vn``, the contact impulses of the step into ``cimp`` and
-    the forces at the start into ``fc0`` (the accelerations at the start are ``wk[4]`` divided
-    by the sigma factor); returns the increments of input energy, damping energy and contact
-    work.
+    the forces at the start into ``fc0`` (the accelerations at the start are ``wk[4]``);
+    returns the increments of input energy, damping energy and contact work.
     """
     n = q.size
     nc = fc.size
@@ -504,27 +500,19 @@ def _rk4(
             for j in range(n):
                 wk[8, j] = q[j] + fac * wk[stage - 1, j]
                 wk[9, j] = v[j] + fac * wk[4 + stage - 1, j]
-        if quartic:
-            sg = sig0 + tau
-            tloc = s + sg * sg * sg * sg
-            jac = 4.0 * sg * sg * sg
-        else:
-            tloc = s + tau
-            jac = 1.0
-        ag = ag0 + slope * tloc
-        _contact_forces(wk[8], wk[9], psi, gap, meff, beta, xi, zhd, phase, model, fc)
+        ag = ag0 + slope * (s + tau)
+        _contact_forces(wk[8], wk[9], psi, gap, meff, beta, cd, zhd, phase, model, fc)
         _accel(wk[8], wk[9], ag, omega, zeta, gamma, psi, fc, wk[4 + stage])
         if stage == 0:
             for c in range(nc):
                 fc0[c] = fc[c]
         for j in range(n):
-            wk[stage, j] = jac * wk[9, j]
-            wk[4 + stage, j] *= jac
+            wk[stage, j] = wk[9, j]
         pin, pd = _powers(wk[9], ag, omega, zeta, gamma)
         pc = 0.0
         for c in range(nc):
             pc += fc[c] * _rowdot(psi, c, wk[9])
-        wgt = (1.0 if stage == 0 or stage == 3 else 2.0) * hs / 6.0 * jac
+        wgt = (1.0 if stage == 0 or stage == 3 else 2.0) * hs / 6.0
         e_in += wgt * pin
         e_d += wgt * pd
         w_c += wgt * pc
@@ -533,52 +521,6 @@ def _rk4(
     for j in range(n):
         qn[j] = q[j] + hs / 6.0 * (wk[0, j] + 2.0 * wk[1, j] + 2.0 * wk[2, j] + wk[3, j])
         vn[j] = v[j] + hs / 6.0 * (wk[4, j] + 2.0 * wk[5, j] + 2.0 * wk[6, j] + wk[7, j])
-    return e_in, e_d, w_c
-
-
-@jit
-def _contact_step(
-    q, v, s, hs, ag0, slope, omega, zeta, gamma, psi, gap, meff, beta, xi, zhd, phase, model,
-    qn, vn, wk, fc, cimp, fc0, onset, nsig, qa, va, ctot, fsc,
-):  # fmt: skip
-    """Advance a contact phase by ``hs`` from local time ``s``.
-
-    One RK4 step, or right after an onset (``onset``) ``nsig`` RK4 steps in
-    ``sigma = (t - s)^(1/4)``.
-    """
-    if not onset:
-        return _rk4(q, v, s, hs, ag0, slope, omega, zeta, gamma, psi, gap, meff, beta, xi, zhd,
-                    phase, model, qn, vn, wk, fc, cimp, fc0, 0.0, False)  # fmt: skip
-    n = q.size
-    nc = fc.size
-    dsig = hs**0.25 / nsig
-    for j in range(n):
-        qa[j] = q[j]
-        va[j] = v[j]
-    for c in range(nc):
-        ctot[c] = 0.0
-    e_in = 0.0
-    e_d = 0.0
-    w_c = 0.0
-    for k in range(nsig):
-        if k == 0:
-            d_in, d_d, d_c = _rk4(qa, va, s, dsig, ag0, slope, omega, zeta, gamma, psi, gap,
-                                  meff, beta, xi, zhd, phase, model, qn, vn, wk, fc, cimp, fc0,
-                                  0.0, True)  # fmt: skip
-        else:
-            d_in, d_d, d_c = _rk4(qa, va, s, dsig, ag0, slope, omega, zeta, gamma, psi, gap,
-                                  meff, beta, xi, zhd, phase, model, qn, vn, wk, fc, cimp, fsc,
-                                  k * dsig, True)  # fmt: skip
-        e_in += d_in
-        e_d += d_d
-        w_c += d_c
-        for c in range(nc):
-            ctot[c] += cimp[c]
-        for j in range(n):
-            qa[j] = qn[j]
-            va[j] = vn[j]
-    for c in range(nc):
-        cimp[c] = ctot[c]
     return e_in, e_d, w_c
 
 
@@ -597,6 +539,7 @@ def _adaptive(
     npts = ag.size
     m_sub = max(1, int(math.ceil(dt_rec / dt_s - 1e-9)))
     h = dt_rec / m_sub
+    cd = 2.0 * xi * np.sqrt(beta * meff)  # damping constants c0 of the force laws
     coef = np.empty((n, 2, 4))
     for j in range(n):
         coef[j] = _coefficients(omega[j], zeta[j], h)
@@ -630,13 +573,7 @@ def _adaptive(
     en1 = np.empty(4)
     nphi = -phi
     zf = np.zeros(nf)
-    onset_pending = False
     t_onset = 0.0
-    nsig = 4  # sigma sub-steps of the first contact sub-step
-    qa = np.empty(n)
-    va = np.empty(n)
-    ctot = np.empty(nc)
-    fsc = np.empty(nc)
     in_contact = False
     status = 0
     store = hx.shape[0] > 0
@@ -666,7 +603,7 @@ def _adaptive(
                 hx[i, f] = _rowdot(phi, f, q)
             for c in range(nc):
                 hd[i, c] = _rowdot(psi, c, q) - gap[c]
-                hf[i, c] = _force(model, hd[i, c], _rowdot(psi, c, v), beta[c], xi[c], meff[c],
+                hf[i, c] = _force(model, hd[i, c], _rowdot(psi, c, v), beta[c], cd[c], meff[c],
                                   zhd[c], phase[c])  # fmt: skip
         ag0 = ag[i]
         slope = (ag[i + 1] - ag[i]) / dt_rec
@@ -793,7 +730,6 @@ def _adaptive(
                         # Ye et al. (2009): zeta = 8 (1 - e) / (5 e v0), xi holds e
                         zhd[c_on] = 8.0 * (1.0 - xi[c_on]) / (5.0 * xi[c_on] * max(v0c, 1e-12))
                     hc = min(h, _duration(model, v0c, beta[c_on], meff[c_on]) / substeps)
-                    onset_pending = True
                     t_onset = i * dt_rec + s
                     in_contact = True
                 else:
@@ -801,14 +737,9 @@ def _adaptive(
             else:
                 # ---------------- contact sub-step (RK4) with located switches
                 fresh = False
-                # the first sub-step after an onset (hc / 64) is taken in sigma = (t -
-                # t_onset)^(1/4) (_contact_step), where delta^0.25 is smooth; then the steps
-                # double up to hc; towards separation, where the delta^0.5 term of the force
-                # rate is singular, sub-steps are graded geometrically
-                if onset_pending:
-                    hs = hc * (1.0 / 64.0)
-                else:
-                    hs = min(hc, max(i * dt_rec + s - t_onset, hc * (1.0 / 64.0)))
+                # sub-steps graded geometrically away from onset and towards separation,
+                # where the force law is not smooth (delta^0.25, delta^0.5 terms)
+                hs = min(hc, max(1.0 * (i * dt_rec + s - t_onset), hc * 1e-5))
                 for c in range(nc):
                     if phase[c] == 2:
                         ddc = _rowdot(psi, c, v)
@@ -817,19 +748,13 @@ def _adaptive(
                             hs = min(hs, max(-0.5 * dc / ddc, hc * 1e-2))
                 if hs >= dt_rec - s or dt_rec - s - hs < 1e-9 * hc:
                     hs = dt_rec - s
-                de_in, de_d, dw_c = _contact_step(
-                    q, v, s, hs, ag0, slope, omega, zeta, gamma, psi, gap, meff, beta, xi, zhd,
-                    phase, model, q1, v1, wk, fc, cimp, fc0, onset_pending, nsig, qa, va, ctot,
-                    fsc,
-                )  # fmt: skip
+                de_in, de_d, dw_c = _rk4(q, v, s, hs, ag0, slope, omega, zeta, gamma, psi, gap,
+                                         meff, beta, cd, zhd, phase, model, q1, v1, wk, fc,
+                                         cimp, fc0)  # fmt: skip
                 # switches: g at both ends with its rate
-                if onset_pending:
-                    _contact_forces(q, v, psi, gap, meff, beta, xi, zhd, phase, model, fsc)
-                    _accel(q, v, ag0 + slope * s, omega, zeta, gamma, psi, fsc, a0)
-                else:
-                    for j in range(n):
-                        a0[j] = wk[4, j]
-                _contact_forces(q1, v1, psi, gap, meff, beta, xi, zhd, phase, model, fc)
+                for j in range(n):
+                    a0[j] = wk[4, j]
+                _contact_forces(q1, v1, psi, gap, meff, beta, cd, zhd, phase, model, fc)
                 _accel(q1, v1, ag0 + slope * (s + hs), omega, zeta, gamma, psi, fc, a1)
                 t_ev = _INF
                 c_ev = -1
@@ -866,12 +791,10 @@ def _adaptive(
                         kind = kd
                 if c_ev >= 0 and t_ev < hs:
                     hs = t_ev
-                    de_in, de_d, dw_c = _contact_step(
-                        q, v, s, hs, ag0, slope, omega, zeta, gamma, psi, gap, meff, beta, xi,
-                        zhd, phase, model, q1, v1, wk, fc, cimp, fc0, onset_pending, nsig, qa,
-                        va, ctot, fsc,
-                    )  # fmt: skip
-                    _contact_forces(q1, v1, psi, gap, meff, beta, xi, zhd, phase, model, fc)
+                    de_in, de_d, dw_c = _rk4(q, v, s, hs, ag0, slope, omega, zeta, gamma, psi,
+                                             gap, meff, beta, cd, zhd, phase, model, q1, v1, wk,
+                                             fc, cimp, fc0)  # fmt: skip
+                    _contact_forces(q1, v1, psi, gap, meff, beta, cd, zhd, phase, model, fc)
                     _accel(q1, v1, ag0 + slope * (s + hs), omega, zeta, gamma, psi, fc, a1)
                 e_in += de_in
                 e_d += de_d
@@ -887,9 +810,9 @@ def _adaptive(
                     dd1 = _rowdot(psi, c, v1)
                     f0 = fc0[c]
                     f1 = fc[c]  # forces at the end of the (possibly cut) sub-step
-                    r0 = _force_rate(model, d0, dd0, _rowdot(psi, c, a0), beta[c], xi[c], meff[c],
+                    r0 = _force_rate(model, d0, dd0, _rowdot(psi, c, a0), beta[c], cd[c], meff[c],
                                      zhd[c], phase[c])  # fmt: skip
-                    r1 = _force_rate(model, d1, dd1, _rowdot(psi, c, a1), beta[c], xi[c], meff[c],
+                    r1 = _force_rate(model, d1, dd1, _rowdot(psi, c, a1), beta[c], cd[c], meff[c],
                                      zhd[c], phase[c])  # fmt: skip
                     fm = f1
                     tm = hs
@@ -918,7 +841,6 @@ def _adaptive(
                     q[j] = q1[j]
                     v[j] = v1[j]
                 s += hs
-                onset_pending = False
                 if c_ev >= 0 and hs == t_ev:
                     if kind == 1:
                         phase[c_ev] = 1
@@ -927,7 +849,6 @@ def _adaptive(
                         if model == 4:
                             zhd[c_ev] = 8.0 * (1.0 - xi[c_ev]) / (5.0 * xi[c_ev] * max(v0c, 1e-12))
                         hc = min(hc, _duration(model, v0c, beta[c_ev], meff[c_ev]) / substeps)
-                        onset_pending = True
                         t_onset = i * dt_rec + s
                     elif kind == 2:
                         phase[c_ev] = 2
@@ -971,7 +892,7 @@ def _adaptive(
             hx[i, f] = _rowdot(phi, f, q)
         for c in range(nc):
             hd[i, c] = _rowdot(psi, c, q) - gap[c]
-            hf[i, c] = _force(model, hd[i, c], _rowdot(psi, c, v), beta[c], xi[c], meff[c], zhd[c],
+            hf[i, c] = _force(model, hd[i, c], _rowdot(psi, c, v), beta[c], cd[c], meff[c], zhd[c],
                               phase[c])  # fmt: skip
     stored = 0.0
     for c in range(nc):
@@ -1050,7 +971,7 @@ def _finish(out, cout, peaks, side, phase, q, v, omega, e0, e_in, e_d, w_c, stor
 
 
 @jit(inline=True)
-def _force_grad(model, d, dd, beta, xi, meff, zhd, phase):
+def _force_grad(model, d, dd, beta, c0, meff, zhd, phase):
     """Force [N] and its partial derivatives by penetration [N/m] and by its rate [N s/m]."""
     if phase == 0 or d <= 0.0:
         return 0.0, 0.0, 0.0
@@ -1061,7 +982,6 @@ def _force_grad(model, d, dd, beta, xi, meff, zhd, phase):
         fdd = 0.0
         if phase == 1:
             q = math.sqrt(sd)  # d^0.25
-            c0 = 2.0 * xi * math.sqrt(beta * meff)
             f += c0 * q * dd
             fd += 0.25 * c0 * dd / (q * q * q)
             fdd = c0 * q
@@ -1069,8 +989,7 @@ def _force_grad(model, d, dd, beta, xi, meff, zhd, phase):
     if model == 1:
         return beta * d, beta, 0.0
     if model == 2:
-        c = 2.0 * xi * math.sqrt(beta * meff)
-        return beta * d + c * dd, beta, c
+        return beta * d + c0 * dd, beta, c0
     if model == 3:
         return beta * d * sd, 1.5 * beta * sd, 0.0
     f = beta * d * sd * (1.0 + zhd * dd)
@@ -1080,7 +999,7 @@ def _force_grad(model, d, dd, beta, xi, meff, zhd, phase):
 
 
 @jit
-def _newton_scalar(model, dstar, dn, ddn, g, c2h, h, beta, xi, meff, zhd):
+def _newton_scalar(model, dstar, dn, ddn, g, c2h, h, beta, c0, meff, zhd):
     """Contact force of one contact at the end of a Newmark step.
 
     Solves ``d - d* + g F(d, c2h (d - dn) - ddn) = 0`` for ``d`` in ``(0, d*)`` (the residual is
@@ -1095,7 +1014,7 @@ def _newton_scalar(model, dstar, dn, ddn, g, c2h, h, beta, xi, meff, zhd):
     f = 0.0
     for _ in range(100):
         ddt = c2h * (d - dn) - ddn
-        f, fd, fdd = _force_grad(model, d, ddt, beta, xi, meff, zhd, _phase_of(d, ddt))
+        f, fd, fdd = _force_grad(model, d, ddt, beta, c0, meff, zhd, _phase_of(d, ddt))
         r = d - dstar + g * f
         if abs(r) <= 1e-14 * dstar:
             return f, True
@@ -1109,7 +1028,7 @@ def _newton_scalar(model, dstar, dn, ddn, g, c2h, h, beta, xi, meff, zhd):
             d_new = 0.5 * (lo + hi)
         if abs(d_new - d) <= 1e-14 * dstar or hi - lo <= 1e-14 * dstar:
             ddt = c2h * (d_new - dn) - ddn
-            f = _force(model, d_new, ddt, beta, xi, meff, zhd, _phase_of(d_new, ddt))
+            f = _force(model, d_new, ddt, beta, c0, meff, zhd, _phase_of(d_new, ddt))
             return f, True
         d = d_new
     return f, False
@@ -1167,6 +1086,7 @@ def _fixed(
     npts = ag.size
     m_sub = max(1, int(math.ceil(dt_rec / dt_s - 1e-9)))
     h = dt_rec / m_sub
+    cd = 2.0 * xi * np.sqrt(beta * meff)  # damping constants c0 of the force laws
     n_steps = (npts - 1) * m_sub
     store = hx.shape[0] > 0
     a = np.empty(n)
@@ -1214,7 +1134,7 @@ def _fixed(
     for c in range(nc):
         dpen[c] = _rowdot(psi, c, q) - gap[c]
         ddpen[c] = _rowdot(psi, c, v)
-        fc[c] = _force(model, dpen[c], ddpen[c], beta[c], xi[c], meff[c], zhd[c],
+        fc[c] = _force(model, dpen[c], ddpen[c], beta[c], cd[c], meff[c], zhd[c],
                        _phase_of(dpen[c], ddpen[c]))  # fmt: skip
         was_in[c] = dpen[c] > 0.0
     _accel(q, v, ag[0], omega, zeta, gamma, psi, fc, a)
@@ -1255,7 +1175,7 @@ def _fixed(
             for c in range(nc):
                 dprev = _rowdot(psi, c, qprev) - gap[c]
                 vb = (dpen[c] - dprev) / h
-                fc[c] = _force(model, dpen[c], vb, beta[c], xi[c], meff[c], zhd[c],
+                fc[c] = _force(model, dpen[c], vb, beta[c], cd[c], meff[c], zhd[c],
                                _phase_of(dpen[c], vb))  # fmt: skip
             for j in range(n):
                 p = -gamma[j] * ag_n
@@ -1320,7 +1240,7 @@ def _fixed(
                 elif nc == 1:
                     # scalar safeguarded Newton with the analytic slope, root in (0, d*)
                     fn[0], conv = _newton_scalar(
-                        model, dstar[0], dpen[0], ddpen[0], g[0, 0], c2h, h, beta[0], xi[0],
+                        model, dstar[0], dpen[0], ddpen[0], g[0, 0], c2h, h, beta[0], cd[0],
                         meff[0], zhd[0],
                     )  # fmt: skip
                     if not conv:
@@ -1331,7 +1251,7 @@ def _fixed(
                         for c in range(nc):
                             ddt = c2h * (dtry[c] - dpen[c]) - ddpen[c]
                             ph = _phase_of(dtry[c], ddt)
-                            f, fd, fdd = _force_grad(model, dtry[c], ddt, beta[c], xi[c], meff[c],
+                            f, fd, fdd = _force_grad(model, dtry[c], ddt, beta[c], cd[c], meff[c],
                                                      zhd[c], ph)  # fmt: skip
                             fn[c] = f
                             rhs[c] = fd + fdd * c2h  # slope along the Newmark velocity
@@ -1356,7 +1276,7 @@ def _fixed(
                             break
                     for c in range(nc):
                         ddt = c2h * (dtry[c] - dpen[c]) - ddpen[c]
-                        fn[c] = _force(model, dtry[c], ddt, beta[c], xi[c], meff[c], zhd[c],
+                        fn[c] = _force(model, dtry[c], ddt, beta[c], cd[c], meff[c], zhd[c],
                                        _phase_of(dtry[c], ddt))  # fmt: skip
                     if not conv:
                         status = 2
@@ -1381,7 +1301,7 @@ def _fixed(
             ddpen[c] = dd1
             if method == 2:
                 # the force the next (lagged) step uses, from this state
-                fn[c] = _force(model, d1, dd1, beta[c], xi[c], meff[c], zhd[c], _phase_of(d1, dd1))
+                fn[c] = _force(model, d1, dd1, beta[c], cd[c], meff[c], zhd[c], _phase_of(d1, dd1))
             if d1 > cout[c, 2]:
                 cout[c, 2] = d1
         if method != 3:
