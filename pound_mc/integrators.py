@@ -999,16 +999,16 @@ def _force_grad(model, d, dd, beta, c0, meff, zhd, phase):
 
 
 @jit
-def _newton_scalar(model, dstar, dn, ddn, g, c2h, h, beta, c0, meff, zhd):
+def _newton_scalar(model, dstar, dn, ddn, g, c2h, fprev, beta, c0, meff, zhd):
     """Contact force of one contact at the end of a Newmark step.
 
     Solves ``d - d* + g F(d, c2h (d - dn) - ddn) = 0`` for ``d`` in ``(0, d*)`` (the residual is
-    ``-d*`` at 0 and ``g F > 0`` at ``d*``); Newton from the extrapolated penetration, kept in
-    the bracket by bisection.  Returns ``(F, converged)``.
+    ``-d*`` at 0 and ``g F > 0`` at ``d*``); Newton from ``d* - g F_prev`` (the force of the
+    previous step), kept in the bracket by bisection.  Returns ``(F, converged)``.
     """
     lo = 0.0
     hi = dstar
-    d = dn + h * ddn if dn > 0.0 else 0.5 * dstar
+    d = dstar - g * fprev
     if not (lo < d < hi):
         d = 0.5 * (lo + hi)
     f = 0.0
@@ -1240,7 +1240,7 @@ def _fixed(
                 elif nc == 1:
                     # scalar safeguarded Newton with the analytic slope, root in (0, d*)
                     fn[0], conv = _newton_scalar(
-                        model, dstar[0], dpen[0], ddpen[0], g[0, 0], c2h, h, beta[0], cd[0],
+                        model, dstar[0], dpen[0], ddpen[0], g[0, 0], c2h, fc[0], beta[0], cd[0],
                         meff[0], zhd[0],
                     )  # fmt: skip
                     if not conv:
@@ -1333,7 +1333,7 @@ def _fixed(
         bad = False
         for f in range(nf):
             x = abs(_rowdot(phi, f, q))
-            if not math.isfinite(x) or x > DIVERGENCE_LIMIT_M:
+            if not x < DIVERGENCE_LIMIT_M:  # also true for NaN
                 bad = True
             elif x > peaks[f]:
                 peaks[f] = x
@@ -1367,6 +1367,142 @@ def _fixed(
 
 
 @jit
+def _newmark_pair(
+    ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi, model, method, dt_s,
+    q, v, out, cout,
+):  # fmt: skip
+    """:func:`_fixed` for ``newmark`` / ``newmark-explicit`` on an SDOF pair, state in scalars.
+
+    Same scheme, same arithmetic order for the state, same outputs; an SDOF pair needs no
+    arrays in its step, which makes it about twice as fast (the tests hold it to the general
+    kernel).
+    """
+    npts = ag.size
+    m_sub = max(1, int(math.ceil(dt_rec / dt_s - 1e-9)))
+    h = dt_rec / m_sub
+    inv_m = 1.0 / m_sub
+    c2h = 2.0 / h
+    c4h = 4.0 / h
+    c4h2 = 4.0 / (h * h)
+    w0, w1 = omega[0], omega[1]
+    zw0, zw1 = 2.0 * zeta[0] * omega[0], 2.0 * zeta[1] * omega[1]
+    g0, g1 = gamma[0], gamma[1]
+    ps0, ps1 = psi[0, 0], psi[0, 1]
+    f0, f1 = phi[0, 0], phi[1, 1]
+    kh0 = w0 * w0 + 4.0 * zeta[0] * w0 / h + c4h2
+    kh1 = w1 * w1 + 4.0 * zeta[1] * w1 / h + c4h2
+    ik0, ik1 = 1.0 / kh0, 1.0 / kh1
+    gg = ps0 * ps0 * ik0 + ps1 * ps1 * ik1
+    b = beta[0]
+    cd = 2.0 * xi[0] * math.sqrt(beta[0] * meff[0])
+    me = meff[0]
+    gp = gap[0]
+    q0, q1 = q[0], q[1]
+    v0, v1 = v[0], v[1]
+    e0 = 0.5 * (v0 * v0 + w0 * w0 * q0 * q0 + v1 * v1 + w1 * w1 * q1 * q1)
+    zhd = 0.0
+    dpen = ps0 * q0 + ps1 * q1 - gp
+    ddpen = ps0 * v0 + ps1 * v1
+    fc = _force(model, dpen, ddpen, b, cd, me, zhd, _phase_of(dpen, ddpen))
+    was_in = dpen > 0.0
+    a0 = -zw0 * v0 - w0 * w0 * q0 - g0 * ag[0] - fc * ps0
+    a1 = -zw1 * v1 - w1 * w1 * q1 - g1 * ag[0] - fc * ps1
+    pin_prev = -ag[0] * (g0 * v0 + g1 * v1)
+    pd_prev = zw0 * v0 * v0 + zw1 * v1 * v1
+    pc_prev = fc * ddpen
+    e_in = 0.0
+    e_d = 0.0
+    w_c = 0.0
+    impulse = 0.0
+    impacts = 0.0
+    maxpen = -_INF
+    peak_f = 0.0
+    peak_t = 0.0
+    pk0 = 0.0
+    pk1 = 0.0
+    status = 0
+    steps = 0
+    for i in range(npts - 1):
+        dag = (ag[i + 1] - ag[i]) * inv_m
+        for k in range(m_sub):
+            ag1 = ag[i] + dag * (k + 1)
+            steps += 1
+            qs0 = (-g0 * ag1 + (c4h2 * q0 + c4h * v0 + a0) + zw0 * (c2h * q0 + v0)) * ik0
+            qs1 = (-g1 * ag1 + (c4h2 * q1 + c4h * v1 + a1) + zw1 * (c2h * q1 + v1)) * ik1
+            dstar = ps0 * qs0 + ps1 * qs1 - gp
+            if method == 2:
+                fn = fc  # lagged one step
+            elif dstar > 0.0:
+                fn, conv = _newton_scalar(model, dstar, dpen, ddpen, gg, c2h, fc, b, cd, me, zhd)
+                if not conv:
+                    status = 2
+            else:
+                fn = 0.0
+            n0 = qs0 - fn * ps0 * ik0
+            n1 = qs1 - fn * ps1 * ik1
+            dq0 = n0 - q0
+            dq1 = n1 - q1
+            nv0 = c2h * dq0 - v0
+            nv1 = c2h * dq1 - v1
+            a0 = c4h2 * dq0 - c4h * v0 - a0
+            a1 = c4h2 * dq1 - c4h * v1 - a1
+            q0, q1, v0, v1 = n0, n1, nv0, nv1
+            d1 = ps0 * q0 + ps1 * q1 - gp
+            dd1 = ps0 * v0 + ps1 * v1
+            if d1 > 0.0 and not was_in:
+                impacts += 1.0
+                if model == 4:
+                    zhd = 8.0 * (1.0 - xi[0]) / (5.0 * xi[0] * max(dd1, 1e-12))
+            was_in = d1 > 0.0
+            dpen = d1
+            ddpen = dd1
+            if method == 2:
+                fn = _force(model, d1, dd1, b, cd, me, zhd, _phase_of(d1, dd1))
+            if d1 > maxpen:
+                maxpen = d1
+            pin1 = -ag1 * (g0 * v0 + g1 * v1)
+            pd1 = zw0 * v0 * v0 + zw1 * v1 * v1
+            pc1 = fn * dd1
+            e_in += 0.5 * h * (pin_prev + pin1)
+            e_d += 0.5 * h * (pd_prev + pd1)
+            w_c += 0.5 * h * (pc_prev + pc1)
+            impulse += 0.5 * h * (fc + fn)
+            if fn > peak_f:
+                peak_f = fn
+                peak_t = (i * m_sub + k + 1) * h
+            pin_prev = pin1
+            pd_prev = pd1
+            pc_prev = pc1
+            fc = fn
+            x0 = abs(f0 * q0)
+            x1 = abs(f1 * q1)
+            if x0 > pk0:
+                pk0 = x0
+            if x1 > pk1:
+                pk1 = x1
+            if not (x0 < DIVERGENCE_LIMIT_M and x1 < DIVERGENCE_LIMIT_M):
+                status = 1
+                break
+        if status == 1:
+            break
+    q[0], q[1], v[0], v[1] = q0, q1, v0, v1
+    cout[0, 0] = peak_f
+    cout[0, 1] = impacts
+    cout[0, 2] = maxpen
+    cout[0, 3] = impulse
+    peaks = np.empty(2)
+    peaks[0] = pk0
+    peaks[1] = pk1
+    phase = np.zeros(1, dtype=np.int64)
+    stored = 0.0
+    if dpen > 0.0:
+        stored = _stored(model, dpen, b)
+        phase[0] = 1
+    _finish(out, cout, peaks, side, phase, q, v, omega, e0, e_in, e_d, w_c, stored, peak_f,
+            peak_t, steps, status)  # fmt: skip
+
+
+@jit
 def _run(
     ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi, model, method, dt_s,
     substeps, q, v, out, cout, hx, hd, hf, pre,
@@ -1374,6 +1510,12 @@ def _run(
     if method == 0:
         _adaptive(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi, model,
                   dt_s, substeps, q, v, out, cout, hx, hd, hf, pre)  # fmt: skip
+    elif (
+        (method == 1 or method == 2) and omega.size == 2 and gap.size == 1
+        and phi.shape[0] == 2 and phi[0, 1] == 0.0 and phi[1, 0] == 0.0 and hx.shape[0] == 0
+    ):  # fmt: skip
+        _newmark_pair(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi,
+                      model, method, dt_s, q, v, out, cout)  # fmt: skip
     else:
         _fixed(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi, model,
                method, dt_s, q, v, out, cout, hx, hd, hf)  # fmt: skip
