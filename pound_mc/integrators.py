@@ -422,6 +422,8 @@ def _exact_delta(q, v, p0s, slope, s, tau, c, omega, zeta, gamma, psi, gap):
     ddd = 0.0
     ag = p0s + slope * tau
     for j in range(q.size):
+        if psi[c, j] == 0.0:
+            continue  # e.g. the other building's modes for a floor
         qm, vm = _advance(q[j], v[j], -gamma[j] * p0s, -gamma[j] * ag, omega[j], zeta[j], tau)
         am = -2.0 * zeta[j] * omega[j] * vm - omega[j] * omega[j] * qm - gamma[j] * ag
         d += psi[c, j] * qm
@@ -573,6 +575,12 @@ def _adaptive(
     en1 = np.empty(4)
     nphi = -phi
     zf = np.zeros(nf)
+    # error bound of the cubic Hermite maximum in a linear step, (omega h)^4 / 384 of the
+    # amplitude, with a safety factor of 4: a candidate below the peak by more is no new peak
+    wmax = 0.0
+    for j in range(n):
+        wmax = max(wmax, omega[j])
+    herm_tol = 4.0 * (wmax * h) ** 4 / 384.0
     t_onset = 0.0
     in_contact = False
     status = 0
@@ -704,7 +712,7 @@ def _adaptive(
                             sign = 1.0 if sg == 0 else -1.0
                             hm, tg = _hermite_max(sign * xf0[f], sign * xfd0[f], sign * x1,
                                                   sign * xd1, hh)  # fmt: skip
-                            if hm > peaks[f] - 1e-3 * abs(hm):
+                            if hm > peaks[f] - herm_tol * abs(hm):
                                 tm = _exact_root(q, v, p0s, slope, s, tg, 0.0, hh, 1, f, omega,
                                                  zeta, gamma, mat, zf)  # fmt: skip
                                 xm, _, _ = _exact_delta(q, v, p0s, slope, s, tm, f, omega, zeta,
@@ -810,17 +818,21 @@ def _adaptive(
                     dd1 = _rowdot(psi, c, v1)
                     f0 = fc0[c]
                     f1 = fc[c]  # forces at the end of the (possibly cut) sub-step
-                    r0 = _force_rate(model, d0, dd0, _rowdot(psi, c, a0), beta[c], cd[c], meff[c],
-                                     zhd[c], phase[c])  # fmt: skip
-                    r1 = _force_rate(model, d1, dd1, _rowdot(psi, c, a1), beta[c], cd[c], meff[c],
-                                     zhd[c], phase[c])  # fmt: skip
                     fm = f1
                     tm = hs
-                    if r0 > 0.0 and r1 < 0.0 and d0 > 0.25 * d1:
-                        hm, th = _hermite_max(f0, r0, f1, r1, hs)
-                        if hm > fm:
-                            fm = hm
-                            tm = th
+                    # an interior maximum exceeds the step's end values by far less than 10 %
+                    # (sub-steps are a fraction of the contact duration): interpolate only
+                    # where it could raise this contact's peak
+                    if max(f0, f1) >= 0.9 * cout[c, 0] and d0 > 0.25 * d1:
+                        r0 = _force_rate(model, d0, dd0, _rowdot(psi, c, a0), beta[c], cd[c],
+                                         meff[c], zhd[c], phase[c])  # fmt: skip
+                        r1 = _force_rate(model, d1, dd1, _rowdot(psi, c, a1), beta[c], cd[c],
+                                         meff[c], zhd[c], phase[c])  # fmt: skip
+                        if r0 > 0.0 and r1 < 0.0:
+                            hm, th = _hermite_max(f0, r0, f1, r1, hs)
+                            if hm > fm:
+                                fm = hm
+                                tm = th
                     if f0 > fm:
                         fm = f0
                         tm = 0.0
