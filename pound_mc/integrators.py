@@ -47,6 +47,7 @@ __all__ = [
     "UNSTABLE_ENERGY_FRACTION",
     "run_kernel",
     "simulate_sdof_pairs",
+    "simulate_scene_batch",
     "exact_step_coefficients",
 ]
 
@@ -1695,3 +1696,96 @@ def simulate_sdof_pairs(
     result["status"] = result["status"].astype(np.int8)
     result["steps"] = result["steps"].astype(np.int64)
     return result
+
+
+@jit(parallel=True)
+def _scene_batch(
+    ag, dt_rec, omega, zeta, gamma, phi, side, psi, meff, gap, beta, xi, dt_s, model, method,
+    substeps, out, cout,
+):  # fmt: skip
+    nsim = beta.size
+    n = omega.size
+    nf = phi.shape[0]
+    nc = psi.shape[0]
+    for k in numba.prange(nsim):
+        empty = np.zeros((0, nf))
+        empty1 = np.zeros((0, nc))
+        _run(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap[k].copy(), meff,
+             np.full(nc, beta[k]), np.full(nc, xi[k]), model, method, dt_s[k], substeps,
+             np.zeros(n), np.zeros(n), out[k], cout[k], empty, empty1, empty1,
+             np.zeros(0))  # fmt: skip
+
+
+def simulate_scene_batch(
+    acc,
+    dt_rec,
+    arrays: dict,
+    *,
+    gap_m,
+    beta,
+    xi,
+    dt_s,
+    method: str = "adaptive",
+    contact_model: str = "jankowski",
+    substeps: int = 16,
+) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
+    """Run many simulations of one pair of buildings (any model) on one record, in threads.
+
+    Parameters
+    ----------
+    acc, dt_rec
+        Ground acceleration [m/s^2] and its sampling interval [s].
+    arrays : dict
+        :meth:`pound_mc.scene.Scene.modal_arrays` of the pair (shared by every simulation).
+    gap_m : array_like
+        Gaps [m], shape ``(nsim,)`` (every contact) or ``(nsim, n_contacts)``.
+    beta, xi, dt_s : array_like
+        Per simulation: impact stiffness [N/m^1.5, or N/m for linear laws], damping ratio (the
+        restitution ``e`` for ``hertzdamp``) and step bound [s].
+
+    Returns
+    -------
+    outputs : dict
+        ``{name: (nsim,)}`` for every name in :data:`OUTPUTS`.
+    contacts : dict
+        ``{name: (nsim, n_contacts)}`` for every name in :data:`CONTACT_OUTPUTS`.
+    """
+    from pound_mc.contact import CONTACT_MODELS
+
+    nc = arrays["psi"].shape[0]
+    beta, xi, dt_s = np.broadcast_arrays(
+        *[np.asarray(a, dtype=np.float64) for a in (beta, xi, dt_s)]
+    )
+    beta, xi, dt_s = (np.ascontiguousarray(a.ravel()) for a in (beta, xi, dt_s))
+    nsim = beta.size
+    gap = np.asarray(gap_m, dtype=np.float64)
+    gap = np.ascontiguousarray(
+        np.broadcast_to(gap.reshape(gap.shape[0] if gap.ndim else 1, -1), (nsim, nc))
+    )
+    out = np.empty((nsim, _N_OUT))
+    cout = np.empty((nsim, nc, len(CONTACT_OUTPUTS)))
+    f8 = np.float64
+    _scene_batch(
+        np.ascontiguousarray(acc, dtype=f8),
+        f8(dt_rec),
+        *(np.ascontiguousarray(arrays[k], dtype=f8) for k in ("omega", "zeta", "gamma", "phi")),
+        np.ascontiguousarray(arrays["side"], dtype=np.int64),
+        np.ascontiguousarray(arrays["psi"], dtype=f8),
+        np.ascontiguousarray(arrays["meff"], dtype=f8),
+        gap,
+        beta,
+        xi,
+        dt_s,
+        CONTACT_MODELS[contact_model]["code"],
+        METHODS[method],
+        f8(substeps),
+        out,
+        cout,
+    )  # fmt: skip
+    result = {name: out[:, k] for k, name in enumerate(OUTPUTS)}
+    result["impacts"] = result["impacts"].astype(np.int32)
+    result["status"] = result["status"].astype(np.int8)
+    result["steps"] = result["steps"].astype(np.int64)
+    contacts = {name: cout[:, :, k] for k, name in enumerate(CONTACT_OUTPUTS)}
+    contacts["impacts"] = contacts["impacts"].astype(np.int32)
+    return result, contacts
