@@ -748,7 +748,7 @@ def _adaptive(
                 fresh = False
                 # sub-steps graded geometrically away from onset and towards separation,
                 # where the force law is not smooth (delta^0.25, delta^0.5 terms)
-                hs = min(hc, max(1.0 * (i * dt_rec + s - t_onset), hc * 1e-5))
+                hs = min(hc, max(1.0 * (i * dt_rec + s - t_onset), hc * 1e-3))
                 for c in range(nc):
                     if phase[c] == 2:
                         ddc = _rowdot(psi, c, v)
