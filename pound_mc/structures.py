@@ -112,6 +112,11 @@ def _modes(m: np.ndarray, k: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _check_positive(values, *, key: str, file=None) -> np.ndarray:
+    vals = values if isinstance(values, list | tuple) else [values]
+    if not vals or not all(isinstance(x, int | float) and not isinstance(x, bool) for x in vals):
+        raise InputError(
+            f"must be a number or a list of numbers, got {values!r}", file=file, key=key
+        )
     arr = np.atleast_1d(np.asarray(values, dtype=float))
     if arr.ndim != 1 or arr.size == 0:
         raise InputError("must be a number or a non-empty list of numbers", file=file, key=key)
