@@ -754,7 +754,7 @@ def _adaptive(
                         ddc = _rowdot(psi, c, v)
                         if ddc < 0.0:
                             dc = _rowdot(psi, c, q) - gap[c]
-                            hs = min(hs, max(-0.5 * dc / ddc, hc * 1e-2))
+                            hs = min(hs, max(-0.5 * dc / ddc, hc * 0.25))
                 if hs >= dt_rec - s or dt_rec - s - hs < 1e-9 * hc:
                     hs = dt_rec - s
                 de_in, de_d, dw_c = _rk4(q, v, s, hs, ag0, slope, omega, zeta, gamma, psi, gap,
