@@ -13,8 +13,16 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("run", help="run a study and write <out>/<name>.nc and a spectrum chart")
     p.add_argument("study", metavar="STUDY.toml")
     p.add_argument("--out", default="outputs", metavar="DIR", help="output folder (outputs)")
-    p.add_argument("--workers", type=int, metavar="N", help="threads for the kernels")
-    p.add_argument("--scheduler", metavar="ADDRESS", help="dask.distributed scheduler address")
+    p.add_argument("--threads", type=int, metavar="N", help="numba threads (in-process run)")
+    p.add_argument(
+        "--workers",
+        type=int,
+        metavar="N",
+        help="run on a local Dask cluster of N worker processes (one thread each)",
+    )
+    p.add_argument(
+        "--scheduler", metavar="ADDRESS", help="run on the Dask cluster of this scheduler"
+    )
     p.add_argument("--fresh", action="store_true", help="discard earlier results of this study")
     p.add_argument("--chunk-size", type=int, metavar="N", help="simulations per chunk file")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -23,7 +31,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
     p = sub.add_parser("check", help="validate a study and print its plan; writes nothing")
     p.add_argument("study", metavar="STUDY.toml")
-    p.add_argument("--workers", type=int, metavar="N", help="threads for the estimate")
+    p.add_argument("--threads", type=int, metavar="N", help="threads for the estimate")
     p.add_argument("--chunk-size", type=int, metavar="N", help="simulations per chunk file")
     p.add_argument(
         "--calibrate", type=int, default=64, metavar="N", help="simulations timed for the estimate"
@@ -37,58 +45,59 @@ def _run(args) -> int:
     from pound_mc.runner import run_study
     from pound_mc.study import load_study
 
-    study = load_study(args.study)
-    if args.chunk_size is not None and args.chunk_size < 1:
-        raise InputError(f"must be >= 1, got {args.chunk_size}", key="--chunk-size")
-    if args.workers is not None and args.workers < 1:
-        raise InputError(f"must be >= 1, got {args.workers}", key="--workers")
-    if args.scheduler:
-        try:
-            from pound_mc.distributed import run_study_distributed
-        except ImportError:
-            raise InputError(
-                "running on a Dask cluster is not available in this version; "
-                "run without --scheduler to use the local threads",
-                key="--scheduler",
-            ) from None
-
-        report = run_study_distributed(
-            study, args.out, scheduler=args.scheduler, fresh=args.fresh, chunk_size=args.chunk_size
+    for key in ("chunk_size", "threads", "workers"):
+        value = getattr(args, key)
+        if value is not None and value < 1:
+            raise InputError(f"must be >= 1, got {value}", key="--" + key.replace("_", "-"))
+    dask = args.scheduler is not None or args.workers is not None
+    if args.scheduler is not None and args.workers is not None:
+        raise InputError("give either --scheduler or --workers, not both", key="--workers")
+    if dask and args.threads is not None:
+        raise InputError(
+            "sets the threads of an in-process run; each Dask worker runs on one thread",
+            key="--threads",
         )
-    else:
-        engine = StudyEngine(study)
-        t0 = time.perf_counter()
-        try:
-            report = run_study(
-                study,
-                args.out,
-                workers=args.workers,
-                fresh=args.fresh,
-                chunk_size=args.chunk_size,
-                progress=not args.no_progress,
-                engine=engine,
+    if dask:
+        from pound_mc.distributed import _import_distributed
+
+        _import_distributed()  # a missing optional dependency is reported before any work
+    study = load_study(args.study)
+    engine = StudyEngine(study)
+    t0 = time.perf_counter()
+    common = dict(
+        fresh=args.fresh,
+        chunk_size=args.chunk_size,
+        progress=not args.no_progress,
+        engine=engine,
+    )
+    try:
+        if dask:
+            from pound_mc.distributed import run_study_distributed
+
+            report = run_study_distributed(
+                study, args.out, scheduler=args.scheduler, workers=args.workers, **common
             )
-        except KeyboardInterrupt:
-            print(
-                f"interrupted: finished chunks are kept under {Path(args.out) / study.name}; "
-                "run the same command again to resume",
-                file=sys.stderr,
-            )
-            return 130
-        if not report.complete:
-            print(
-                f"interrupted after {report.chunks_run} chunks: finished chunks are kept under "
-                f"{Path(args.out) / study.name}; run the same command again to resume",
-                file=sys.stderr,
-            )
-            return 130
+        else:
+            report = run_study(study, args.out, threads=args.threads, **common)
+    except KeyboardInterrupt:
+        print(
+            f"interrupted: finished chunks are kept under {Path(args.out) / study.name}; "
+            "run the same command again to resume",
+            file=sys.stderr,
+        )
+        return 130
+    if not report.complete:
+        print(
+            f"interrupted after {report.chunks_run} chunks: finished chunks are kept under "
+            f"{Path(args.out) / study.name}; run the same command again to resume",
+            file=sys.stderr,
+        )
+        return 130
     print(
         f"{report.n_simulations:,} simulations, {report.chunks_run} of {report.chunks_total} "
         f"chunks run in {report.seconds:.1f} s"
         + (f" ({report.rate:,.0f} simulations/s)" if report.chunks_run else "")
         + f"; {time.perf_counter() - t0:.1f} s with the dataset"
-        if not args.scheduler
-        else f"{report.n_simulations:,} simulations"
     )
     print(f"wrote {report.path}")
     if not args.no_plot:
@@ -110,10 +119,10 @@ def _check(args) -> int:
     from pound_mc.study import load_study
 
     study = load_study(args.study)
-    if args.workers is not None and args.workers < 1:
-        raise InputError(f"must be >= 1, got {args.workers}", key="--workers")
+    if args.threads is not None and args.threads < 1:
+        raise InputError(f"must be >= 1, got {args.threads}", key="--threads")
     engine = StudyEngine(study)
-    seconds, compile_s = engine.calibrate(workers=args.workers, n=args.calibrate)
+    seconds, compile_s = engine.calibrate(workers=args.threads, n=args.calibrate)
     print(plan_text(study, chunk_size=args.chunk_size, seconds_per_simulation=seconds))
     print(
         f"  calibration: {args.calibrate} simulations spread over the study; "

@@ -7,6 +7,14 @@ Per sample: ``e``, ``beta``, ``xi``, ``e_effective`` (with the grid axis instead
 parameter is a grid axis, scalars where it is fixed).  Summaries over samples:
 ``peak_force_mean``, ``peak_force_quantile`` (the impact force spectrum) and
 ``pounding_probability``.  CF-1.13 attributes and provenance in global attributes.
+
+With a shear building the contacts are the pairs of floors at equal height, along a
+``contact`` dimension (coordinates ``contact`` 1-based, ``contact_elevation`` [m],
+``contact_left_floor`` and ``contact_right_floor`` 1-based): per simulation and contact, dims
+``(record, *grid axes, sample, contact)``: ``contact_peak_force``, ``contact_impacts``,
+``contact_max_penetration`` and ``contact_impulse``.  The per-simulation variables then sum
+(``impacts``, ``impulse``) or take the maximum (``peak_force``, ``max_penetration``) over the
+contacts.
 """
 
 from __future__ import annotations
@@ -17,7 +25,15 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-__all__ = ["RESULT_VARIABLES", "STATUS_FLAGS", "QUANTILES", "build_dataset", "write_netcdf"]
+__all__ = [
+    "RESULT_VARIABLES",
+    "CONTACT_VARIABLES",
+    "CONTACT_COORDINATES",
+    "STATUS_FLAGS",
+    "QUANTILES",
+    "build_dataset",
+    "write_netcdf",
+]
 
 #: Per-simulation outputs: name -> (units, long_name, dtype).
 RESULT_VARIABLES = {
@@ -30,6 +46,21 @@ RESULT_VARIABLES = {
     "dissipated_energy": ("J", "energy dissipated in impacts", "f8"),
     "energy_residual": ("1", "energy balance residual relative to input energy", "f8"),
     "status": ("1", "simulation status", "i1"),
+}
+#: Per-simulation, per-contact outputs of studies with a shear building (an extra trailing
+#: ``contact`` dimension): name -> (units, long_name, dtype).
+CONTACT_VARIABLES = {
+    "contact_peak_force": ("N", "peak impact force at the contact", "f8"),
+    "contact_impacts": ("1", "number of impacts (contact episodes) at the contact", "i4"),
+    "contact_max_penetration": ("m", "maximum penetration delta at the contact", "f8"),
+    "contact_impulse": ("N s", "impulse of the impact force at the contact", "f8"),
+}
+#: Coordinates of the ``contact`` dimension: name -> (units, long_name).
+CONTACT_COORDINATES = {
+    "contact": ("1", "contact index (pair of floors at equal height), 1-based"),
+    "contact_elevation": ("m", "elevation of the contact above the ground"),
+    "contact_left_floor": ("1", "floor of the left building at the contact, 1-based"),
+    "contact_right_floor": ("1", "floor of the right building at the contact, 1-based"),
 }
 #: Status codes of a simulation (CF flag_values / flag_meanings).
 STATUS_FLAGS = {0: "ok", 1: "unstable", 2: "not_converged"}
@@ -73,10 +104,12 @@ def build_dataset(
     study : pound_mc.study.Study
         The validated study (axes, names, text, hash, seed).
     results : dict
-        Per-simulation outputs, each an array of shape ``study.shape``.
+        Per-simulation outputs, each an array of shape ``study.shape``; the names of
+        :data:`CONTACT_VARIABLES` (optional) of shape ``(*study.shape, n_contacts)``.
     parameters : dict
         Contact and sampled parameters: ``{name: (dims, values)}`` (e.g. ``"e": (("sample",),
-        array)``).
+        array)``); names of :data:`CONTACT_COORDINATES` become coordinates (kept only with
+        the contact variables).
     provenance : dict, optional
         Extra global attributes.
     """
@@ -102,7 +135,17 @@ def build_dataset(
                 "units": "1",
             }
         data_vars[name] = (dims, np.asarray(results[name]).astype(dtype, copy=False), attrs)
+    per_contact = [name for name in CONTACT_VARIABLES if name in results]
+    for name in per_contact:
+        units, long_name, dtype = CONTACT_VARIABLES[name]
+        values = np.asarray(results[name]).astype(dtype, copy=False)
+        data_vars[name] = ((*dims, "contact"), values, {"units": units, "long_name": long_name})
     for name, (pdims, values) in parameters.items():
+        if name in CONTACT_COORDINATES:
+            if per_contact:
+                units, long_name = CONTACT_COORDINATES[name]
+                coords[name] = (pdims, values, {"units": units, "long_name": long_name})
+            continue
         data_vars[name] = (pdims, values, _param_attrs(name))
 
     ds = xr.Dataset(data_vars, coords=coords)

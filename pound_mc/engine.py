@@ -5,6 +5,11 @@ batch kernel takes, for any half-open range of simulation indices (C order of
 ``study.shape``).  Everything random is drawn once, in Python, before any range runs, so a
 range's results depend only on the study and the indices - not on threads, chunk size or
 backend.
+
+SDOF pairs run through :func:`~pound_mc.integrators.simulate_sdof_pairs`; a pair with a shear
+building through :func:`~pound_mc.integrators.simulate_scene_batch` with the modes of the
+study's one structure (:meth:`~pound_mc.scene.Scene.modal_arrays`, computed once), and then
+also gives the per-contact outputs of :data:`~pound_mc.dataset.CONTACT_VARIABLES`.
 """
 
 from __future__ import annotations
@@ -16,10 +21,10 @@ import numpy as np
 import xarray as xr
 
 from pound_mc import __version__
-from pound_mc.dataset import RESULT_VARIABLES
+from pound_mc.dataset import CONTACT_VARIABLES, RESULT_VARIABLES
 from pound_mc.errors import InputError
 from pound_mc.relations import restitution_of_xi, xi_from_e
-from pound_mc.study import MATERIAL_KEY, grid_dim_name
+from pound_mc.study import MATERIAL_KEY, grid_dim_name, scene_model
 
 __all__ = ["StudyEngine"]
 
@@ -36,6 +41,8 @@ _KERNEL_KEYS = (
     "contact.beta",
     "integrator.dt_s",
 )
+# Keys the batch of a pair with a shear building takes per simulation (its modes are fixed).
+_SCENE_KERNEL_KEYS = ("contact.gap_m", "contact.beta", "integrator.dt_s")
 
 
 def _dims_of(study, key: str) -> tuple[str, ...]:
@@ -82,6 +89,11 @@ class StudyEngine:
                 self.records.append(record_arrays(trace))
         self.shape = study.shape
         self._base = self._base_values(study.scene, self.scene)
+        #: Whether a building is a shear building: then every simulation runs the modes of
+        #: :attr:`arrays` (computed once) through the general batch, and the outputs include
+        #: the per-contact arrays of :data:`~pound_mc.dataset.CONTACT_VARIABLES`.
+        self.mdof = any(scene_model(study.scene, side) == "shear" for side in ("left", "right"))
+        self.arrays = self.scene.modal_arrays() if self.mdof else None
 
     # -- parameters -----------------------------------------------------------------------
     @staticmethod
@@ -150,11 +162,19 @@ class StudyEngine:
         return xi, None
 
     def parameters(self, indices: np.ndarray) -> dict[str, np.ndarray]:
-        """Per-simulation kernel parameters of the simulations with flat ``indices``."""
+        """Per-simulation kernel parameters of the simulations with flat ``indices``.
+
+        With a shear building (:attr:`mdof`) only the contact keys and the step: the gaps
+        ``contact.gap_m`` are then ``(n, n_contacts)`` where the scene fixes them.
+        """
         idx = np.unravel_index(np.asarray(indices, dtype=np.int64), self.shape)
         out = {}
-        for key in _KERNEL_KEYS:
+        for key in _SCENE_KERNEL_KEYS if self.mdof else _KERNEL_KEYS:
             source = self.stiffness_key if key == "contact.beta" else key
+            if self.mdof and key == "contact.gap_m" and _dims_of(self.study, key) == ():
+                gaps = np.broadcast_to(self.scene.gap_m, (idx[0].size, self.scene.gap_m.size))
+                out[key] = np.ascontiguousarray(gaps, float)  # one gap per contact (the scene's)
+                continue
             values = self._values(source, idx)
             if values is None:
                 raise InputError("is required", file=self.study.path, key=source)
@@ -171,13 +191,54 @@ class StudyEngine:
         """Run simulations ``start .. stop-1``; returns the per-simulation outputs."""
         return self.run_indices(np.arange(start, stop))
 
+    @property
+    def n_contacts(self) -> int:
+        """Number of pairs of floors that can pound."""
+        return len(self.scene.contacts)
+
+    def result_layout(self) -> dict[str, tuple[tuple[int, ...], str]]:
+        """Outputs of :meth:`run_indices`: ``{name: (shape after the simulation axis, dtype)}``.
+
+        :data:`~pound_mc.dataset.RESULT_VARIABLES` (one value per simulation), and with a shear
+        building (:attr:`mdof`) :data:`~pound_mc.dataset.CONTACT_VARIABLES` (one per contact).
+        """
+        out = {name: ((), dtype) for name, (_, _, dtype) in RESULT_VARIABLES.items()}
+        if self.mdof:
+            nc = self.n_contacts
+            out.update({name: ((nc,), dtype) for name, (_, _, dtype) in CONTACT_VARIABLES.items()})
+        return out
+
     def run_indices(self, indices: np.ndarray) -> dict[str, np.ndarray]:
-        """Run the simulations with flat ``indices``; returns the per-simulation outputs."""
+        """Run the simulations with flat ``indices``; the outputs of :meth:`result_layout`."""
         from pound_mc import integrators
 
         p = self.parameters(indices)
         n = p["record"].size
-        out = {name: np.empty(n, dtype=dtype) for name, (_, _, dtype) in RESULT_VARIABLES.items()}
+        out = {
+            name: np.empty((n, *tail), dtype=dtype)
+            for name, (tail, dtype) in self.result_layout().items()
+        }
+        if self.mdof:
+            for r in np.unique(p["record"]):
+                sel = np.flatnonzero(p["record"] == r)
+                dt_rec, acc = self.records[r]
+                part, contacts = integrators.simulate_scene_batch(
+                    acc,
+                    dt_rec,
+                    self.arrays,
+                    gap_m=p["contact.gap_m"][sel],
+                    beta=p["contact.beta"][sel],
+                    xi=p["contact.xi"][sel],
+                    dt_s=p["integrator.dt_s"][sel],
+                    method=self._base["integrator.method"],
+                    contact_model=self._base["contact.model"],
+                    substeps=self._base["integrator.substeps"],
+                )
+                for name in RESULT_VARIABLES:
+                    out[name][sel] = part[name]
+                for name in CONTACT_VARIABLES:
+                    out[name][sel] = contacts[name.removeprefix("contact_")]
+            return out
         for r in np.unique(p["record"]):
             sel = np.flatnonzero(p["record"] == r)
             dt_rec, acc = self.records[r]
@@ -269,7 +330,24 @@ class StudyEngine:
         if MATERIAL_KEY in study.grid_labels:
             names = np.asarray(study.grid_labels[MATERIAL_KEY], dtype=object)
             out["material"] = ((grid_dim_name(MATERIAL_KEY),), names)
+        if self.mdof:
+            out.update(self.contact_coordinates())
         return out
+
+    def contact_coordinates(self) -> dict[str, tuple[tuple[str, ...], np.ndarray]]:
+        """Coordinates of the ``contact`` dimension (floors 1-based, elevations [m])."""
+        contacts = self.scene.contacts
+        elevation = [np.nan if c.elevation_m is None else c.elevation_m for c in contacts]
+        dims = ("contact",)
+        return {
+            "contact": (dims, np.arange(1, len(contacts) + 1, dtype=np.int32)),
+            "contact_elevation": (dims, np.asarray(elevation, dtype=float)),
+            "contact_left_floor": (dims, np.array([c.left_floor + 1 for c in contacts], np.int32)),
+            "contact_right_floor": (
+                dims,
+                np.array([c.right_floor + 1 for c in contacts], np.int32),
+            ),
+        }
 
     def _sampled(self, key: str, default) -> np.ndarray:
         """Sampled values of ``key``: ``(n_materials, n)`` if it follows the material axis."""

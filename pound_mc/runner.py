@@ -33,6 +33,7 @@ import signal
 import sys
 import threading
 import time
+import zipfile
 from collections.abc import Callable, Iterable, Iterator
 from contextlib import closing, contextmanager
 from dataclasses import dataclass
@@ -42,7 +43,7 @@ import numba
 import numpy as np
 
 from pound_mc import __version__
-from pound_mc.dataset import RESULT_VARIABLES, build_dataset, write_netcdf
+from pound_mc.dataset import build_dataset, write_netcdf
 from pound_mc.errors import InputError
 
 __all__ = [
@@ -278,31 +279,60 @@ def _check_manifest(work: Path, study, fresh: bool) -> None:
         )
 
 
-def _load_chunk(path: Path, study, start: int, stop: int) -> dict | None:
+def _load_chunk(path: Path, study, start: int, stop: int, layout: dict) -> dict | None:
     """A finished chunk's arrays, or None if it is missing or not from this study."""
     if not path.exists():
         return None
     try:
-        with np.load(path, allow_pickle=False) as data:
+        with open(path, "rb") as fh, np.load(fh, allow_pickle=False) as data:
             if str(data["study_hash"]) != study.hash:
                 return None
             if int(data["start"]) != start or int(data["stop"]) != stop:
                 return None
-            return {name: data[name] for name in RESULT_VARIABLES}
-    except (OSError, ValueError, KeyError, EOFError):
+            out = {name: data[name] for name in layout}
+    except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile):
         return None  # unreadable or partial: run it again
+    if any(out[name].shape != (stop - start, *tail) for name, (tail, _) in layout.items()):
+        return None
+    return out
+
+
+#: Runs chunks and yields ``(chunk, result)`` pairs as they finish (in any order).
+Executor = Callable[[object, list[Chunk]], Iterator[tuple[Chunk, dict[str, np.ndarray]]]]
+
+
+def local_executor(threads: int | None = None) -> Executor:
+    """Executor that runs chunks one after the other in this process.
+
+    Parameters
+    ----------
+    threads : int, optional
+        Number of numba threads of the compiled kernels (default: numba's default); restored
+        when the run ends.
+    """
+    if threads is not None and threads < 1:
+        raise InputError(f"must be >= 1, got {threads}", key="--threads")
+
+    def run(engine, chunks: Iterable[Chunk]):
+        with _threads(threads):
+            for chunk in chunks:
+                yield chunk, engine.run_range(chunk.start, chunk.stop)
+
+    return run
 
 
 def run_study(
     study,
     out_dir: str | Path = "outputs",
     *,
-    workers: int | None = None,
+    threads: int | None = None,
     fresh: bool = False,
     chunk_size: int | None = None,
     progress: bool = True,
     engine=None,
     max_chunks: int | None = None,
+    executor: Executor | None = None,
+    on_chunk: Callable[[Chunk], None] | None = None,
 ):
     """Run every simulation of ``study`` and write ``<out_dir>/<name>.nc``.
 
@@ -312,8 +342,9 @@ def run_study(
         A validated study.
     out_dir : str or Path
         Output folder; chunk files go to ``<out_dir>/<name>/``.
-    workers : int, optional
-        Number of threads of the compiled kernels (default: numba's default).
+    threads : int, optional
+        Number of threads of the compiled kernels (default: numba's default); only for the
+        default executor.
     fresh : bool
         Discard earlier results of this study (needed after the study file changed).
     chunk_size : int, optional
@@ -325,6 +356,10 @@ def run_study(
         Prepared engine (records loaded, samples drawn); made from ``study`` if not given.
     max_chunks : int, optional
         Stop after running this many chunks (the run stays resumable); for tests and drills.
+    executor : callable, optional
+        Runs the chunks still to do (:data:`Executor`); default :func:`local_executor`.
+    on_chunk : callable, optional
+        Called with each :class:`Chunk` once its file is written (for progress hooks and tests).
 
     Returns
     -------
@@ -335,6 +370,10 @@ def run_study(
 
     from pound_mc.engine import StudyEngine
 
+    if executor is None:
+        executor = local_executor(threads)
+    elif threads is not None:
+        raise InputError("sets the threads of the local backend only", key="--threads")
     out_dir = Path(out_dir)
     chunk_size = chunk_size or study.chunk_size or default_chunk_size(study.n_simulations)
     engine = engine or StudyEngine(study)
@@ -343,16 +382,21 @@ def run_study(
 
     n = study.n_simulations
     ranges = chunk_ranges(n, chunk_size)
-    flat = {name: np.empty(n, dtype=dtype) for name, (_, _, dtype) in RESULT_VARIABLES.items()}
+    layout = engine.result_layout()  # {name: (shape after the simulation axis, dtype)}
+    flat = {name: np.empty((n, *tail), dtype=dtype) for name, (tail, dtype) in layout.items()}
     todo = []
     for k, (start, stop) in enumerate(ranges):
         path = work / f"chunk_{chunk_size}_{k:06d}.npz"
-        done = _load_chunk(path, study, start, stop)
+        done = _load_chunk(path, study, start, stop, layout)
         if done is None:
-            todo.append((k, start, stop, path))
+            todo.append(Chunk(k, start, stop, path))
         else:
-            for name in RESULT_VARIABLES:
+            for name in layout:
                 flat[name][start:stop] = done[name]
+    if max_chunks is not None:
+        todo_now = todo[: max(0, max_chunks)]
+    else:
+        todo_now = todo
 
     t0 = time.perf_counter()
     ran = 0
@@ -360,7 +404,7 @@ def run_study(
     interrupted = False
     bar = tqdm(
         total=n,
-        initial=n - sum(stop - start for _, start, stop, _ in todo),
+        initial=n - sum(c.stop - c.start for c in todo),
         unit="sim",
         unit_scale=True,
         disable=not progress,
@@ -368,26 +412,30 @@ def run_study(
         smoothing=0.1,
     )
     try:
-        with _threads(workers), _stop_between_chunks() as stop_requested:
-            for _k, start, stop, path in todo:
-                if stop_requested.is_set():
-                    interrupted = True
-                    break
-                if max_chunks is not None and ran >= max_chunks:
-                    break
-                result = engine.run_range(start, stop)
+        with (
+            _stop_between_chunks() as stop_requested,
+            closing(iter(executor(engine, todo_now))) as results,
+        ):
+            for chunk, result in results:
                 _atomic_savez(
-                    path,
+                    chunk.path,
+                    stage=f"chunk:{chunk.index}",
                     study_hash=np.array(study.hash),
-                    start=np.array(start),
-                    stop=np.array(stop),
-                    **result,
+                    start=np.array(chunk.start),
+                    stop=np.array(chunk.stop),
+                    **{name: result[name] for name in layout},
                 )
-                for name in RESULT_VARIABLES:
-                    flat[name][start:stop] = result[name]
+                for name in layout:
+                    flat[name][chunk.start : chunk.stop] = result[name]
                 ran += 1
-                simulations_run += stop - start
-                bar.update(stop - start)
+                simulations_run += chunk.stop - chunk.start
+                bar.update(chunk.stop - chunk.start)
+                _pause_at(f"chunks:{ran}")
+                if on_chunk is not None:
+                    on_chunk(chunk)
+                if stop_requested.is_set():
+                    interrupted = ran < len(todo)
+                    break
     finally:
         bar.close()
     seconds = time.perf_counter() - t0
@@ -395,8 +443,11 @@ def run_study(
     if not complete:
         return RunReport(None, n, len(ranges), ran, seconds, False, interrupted, simulations_run)
 
-    results = {name: flat[name].reshape(study.shape) for name in RESULT_VARIABLES}
+    _pause_at("dataset")
+    results = {name: a.reshape(study.shape + a.shape[1:]) for name, a in flat.items()}
     ds = build_dataset(study, results, engine.dataset_parameters(), provenance=engine.provenance())
+    _pause_at("netcdf")
     path = write_netcdf(ds, out_dir / f"{study.name}.nc")
+    _pause_at("done")
     seconds = time.perf_counter() - t0
     return RunReport(path, n, len(ranges), ran, seconds, True, False, simulations_run)

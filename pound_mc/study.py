@@ -21,6 +21,10 @@ A study is a scene (``[record]`` or ``[[records]]``, ``[left]``, ``[right]``, ``
     default ``sobol``), optional ``seed`` (default: the study's), and ``[sampling.vary]``
     (:mod:`pound_mc.sampling`).
 
+With a shear building (``model = "shear"`` in ``[left]`` or ``[right]``) the modes are
+computed once per study, so its grid axes and sampled keys are ``contact.*`` keys and
+``integrator.dt_s`` only; a ``left.*`` or ``right.*`` key there is refused.
+
 Every problem in a file is reported at once (:class:`~pound_mc.errors.InputErrors`), each
 naming the file and the key.  Nothing is written while validating.
 """
@@ -532,23 +536,33 @@ def study_from_text(text: str, *, file: str | Path | None = None) -> Study:
             )
         )
 
+    # a study with a shear building computes the modes once: no structural grid or variable
+    shear = [side for side in ("left", "right") if scene_model(scene, side) == "shear"]
+    if shear:
+        varied = [(f"grid.{k}", k) for k in grid] + [
+            (f"sampling.vary.{v.key}", v.key) for v in variables
+        ]
+        for where, key in varied:
+            if key.split(".", 1)[0] in ("left", "right"):
+                errors.append(
+                    InputError(
+                        f"cannot vary the structural key {key!r} in a study with a shear "
+                        f"building ([{shear[0]}] model = 'shear'): the modes are computed once "
+                        "per study; vary contact.* keys or integrator.dt_s",
+                        file=fname,
+                        key=where,
+                    )
+                )
+                grid.pop(key, None)
+        variables = [v for v in variables if v.key.split(".", 1)[0] not in ("left", "right")]
+
     # the scene as written, once per record; a key that only a grid axis or a sampled
     # variable gives takes its first value (the other values are checked below)
     draws = sampling.draw(variables, n, sampling_seed, method) if variables else {}
     first = {key: float(values[0]) for key, values in grid.items() if key != MATERIAL_KEY}
     first.update({key: float(values[0]) for key, values in draws.items()})
-    shear = [side for side in ("left", "right") if scene_model(scene, side) == "shear"]
-    for side in shear:
-        errors.append(
-            InputError(
-                "studies of shear buildings are not batched yet: run their scenes one at a "
-                "time with `pound-mc simulate SCENE.toml`; a study takes model = 'sdof'",
-                file=fname,
-                key=f"{side}.model",
-            )
-        )
-    scene_ok = not shear
-    for i, record in enumerate(records if not shear else []):
+    scene_ok = True
+    for i, record in enumerate(records):
         probe = copy.deepcopy(scene)
         probe["record"] = record
         for key, value in first.items():

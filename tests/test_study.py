@@ -123,10 +123,10 @@ MALFORMED = [
     ("no-record", GOOD.replace('[record]\nsource = "builtin:knet-akt013"\nduration_s = 5.0\n'
                                'pga_g = 0.3\n', ""), "record"),
     ("bad-toml", GOOD.replace("[grid]", "[grid"), None),
-    ("shear-model", _replace('model = "sdof"\nperiod_s = 0.5\ndamping_ratio = 0.05\n'
+    ("shear-structural-axis", _replace('model = "sdof"\nperiod_s = 0.5\ndamping_ratio = 0.05\n'
                              'mass_kg = 1.0e6', 'model = "shear"\nstorey_mass_kg = [1.0e6]\n'
                              'storey_stiffness_N_per_m = [1.0e8]\nstorey_height_m = [3.0]'),
-     "left.model"),
+     "grid.left.period_s"),
     ("building-model-unknown", _replace('model = "sdof"', 'model = "frame"'), "left.model"),
     ("vary-e-normal-outside", _replace('"contact.e" = { material = "concrete" }',
                                        '"contact.e" = {distribution = "normal", mean = 0.9, '

@@ -1,0 +1,155 @@
+"""Dask backend on a real LocalCluster: identical results, a worker killed mid-study."""
+
+import logging
+import os
+import signal
+import sys
+import time
+
+import pytest
+from test_runner import STUDY, N, _assert_identical
+
+from pound_mc.cli import main
+from pound_mc.engine import StudyEngine
+from pound_mc.runner import chunk_ranges, run_study
+from pound_mc.study import load_study
+
+distributed = pytest.importorskip("distributed")
+
+pytestmark = [
+    pytest.mark.slow,
+    # closing a cluster whose worker was killed can leave a socket or a pipe to the dead
+    # process unclosed until garbage collection; that is the cluster's shutdown, not ours
+    pytest.mark.filterwarnings("ignore::ResourceWarning"),
+    pytest.mark.filterwarnings("ignore::pytest.PytestUnraisableExceptionWarning"),
+]
+
+
+@pytest.fixture(scope="module")
+def cluster():
+    """Two one-threaded worker processes on loopback (the layout ``--workers 2`` starts)."""
+    with distributed.LocalCluster(
+        n_workers=2,
+        processes=True,
+        threads_per_worker=1,
+        host="127.0.0.1",
+        dashboard_address=":0",  # the scheduler's HTTP server on a free port
+        silence_logs=logging.CRITICAL,
+        env={"NUMBA_NUM_THREADS": "1"},
+    ) as cluster:
+        yield cluster
+
+
+@pytest.fixture(scope="module")
+def study_file(tmp_path_factory):
+    path = tmp_path_factory.mktemp("study") / "small.toml"
+    path.write_text(STUDY)
+    return path
+
+
+@pytest.fixture(scope="module")
+def reference(study_file, tmp_path_factory):
+    """The local backend's dataset: one chunk, one thread."""
+    out = tmp_path_factory.mktemp("ref")
+    report = run_study(load_study(study_file), out, threads=1, chunk_size=N, progress=False)
+    return report.path
+
+
+def test_scheduler_run_equals_local_run(cluster, study_file, reference, tmp_path, capsys):
+    out = tmp_path / "dask"
+    argv = ["run", str(study_file), "--out", str(out), "--no-plot", "--no-progress"]
+    assert main([*argv, "--scheduler", cluster.scheduler_address, "--chunk-size", "5"]) == 0
+    assert len(list((out / "small").glob("chunk_5_*.npz"))) == len(chunk_ranges(N, 5))
+    _assert_identical(reference, out / "small.nc")
+    # resumable exactly like a local run: nothing left to do, the same dataset again
+    assert main([*argv, "--chunk-size", "5"]) == 0
+    assert "0 of 10 chunks run" in capsys.readouterr().out
+    _assert_identical(reference, out / "small.nc")
+
+
+class SlowEngine(StudyEngine):
+    """An engine whose chunks take at least 0.2 s, so chunks are in flight when a worker dies.
+
+    Pickled by reference: the spawned workers get this process's ``sys.path`` (tests/ included
+    by conftest) and import it from this module.
+    """
+
+    def run_range(self, start, stop):
+        """Run the range as usual, then wait."""
+        out = super().run_range(start, stop)
+        time.sleep(0.2)
+        return out
+
+
+def test_worker_killed_mid_study(cluster, study_file, reference, tmp_path):
+    from pound_mc.distributed import run_study_distributed
+
+    chunk_size = 4
+    total = len(chunk_ranges(N, chunk_size))
+    written = []
+    killed = {}
+    with distributed.Client(cluster) as client:
+        pids = client.run(os.getpid)
+
+        def kill_one_busy_worker(chunk):
+            written.append(chunk.index)
+            if killed or len(written) < 3:
+                return
+            busy = [addr for addr, keys in client.processing().items() if keys]
+            if not busy:
+                return  # try again after the next chunk
+            addr = busy[0]
+            killed["addr"] = addr
+            killed["tasks"] = list(client.processing()[addr])
+            os.kill(pids[addr], signal.SIGKILL)
+
+        study = load_study(study_file)
+        report = run_study_distributed(
+            study,
+            tmp_path,
+            client=client,
+            chunk_size=chunk_size,
+            progress=False,
+            on_chunk=kill_one_busy_worker,
+            retries=2,
+            engine=SlowEngine(study),
+        )
+    assert killed["tasks"], "the killed worker had chunks in flight"
+    assert report.complete and report.chunks_run == total
+    # every chunk written exactly once: nothing lost, nothing duplicated
+    assert sorted(written) == list(range(total))
+    files = sorted((tmp_path / "small").glob("chunk_*.npz"))
+    assert len(files) == total
+    assert not list((tmp_path / "small").glob(".*.part"))
+    _assert_identical(reference, report.path)
+
+
+def test_local_cluster_from_the_command_line(study_file, reference, tmp_path):
+    out = tmp_path / "workers"
+    argv = ["run", str(study_file), "--out", str(out), "--no-plot", "--no-progress"]
+    assert main([*argv, "--workers", "2", "--chunk-size", "12"]) == 0
+    _assert_identical(reference, out / "small.nc")
+
+
+@pytest.mark.parametrize(
+    ("extra", "message"),
+    [
+        (["--workers", "2", "--scheduler", "tcp://127.0.0.1:8786"], "not both"),
+        (["--workers", "2", "--threads", "2"], "--threads"),
+        (["--workers", "0"], "--workers: must be >= 1"),
+        (["--scheduler", "no-port"], "cannot connect"),
+    ],
+)
+def test_bad_cluster_options(study_file, tmp_path, capsys, extra, message):
+    out = tmp_path / "bad"
+    assert main(["run", str(study_file), "--out", str(out), "--no-plot", *extra]) == 2
+    assert message in capsys.readouterr().err
+    assert not out.exists()
+
+
+def test_missing_dask_names_the_extra(study_file, tmp_path, capsys, monkeypatch):
+    monkeypatch.setitem(sys.modules, "distributed", None)  # import distributed -> ImportError
+    out = tmp_path / "nodask"
+    assert main(["run", str(study_file), "--out", str(out), "--workers", "2"]) == 2
+    assert 'pip install "pound-mc[dask]"' in capsys.readouterr().err
+    assert not out.exists()

@@ -1,0 +1,235 @@
+"""Studies of shear buildings: modes once per study, per-contact outputs along ``contact``."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from pound_mc.cli import main
+from pound_mc.engine import StudyEngine
+from pound_mc.runner import run_study
+from pound_mc.scene import scene_from_dict, simulate
+from pound_mc.study import study_from_text
+
+SHEAR_3 = """
+model = "shear"
+storey_mass_kg = [1.0e6, 1.0e6, 1.0e6]
+storey_stiffness_N_per_m = [1.2e9, 1.0e9, 0.8e9]
+storey_height_m = [3.0, 3.0, 3.0]
+damping_ratio = 0.05
+"""
+SHEAR_5 = """
+model = "shear"
+storey_mass_kg = [1.0e6, 1.0e6, 1.0e6, 1.0e6, 1.0e6]
+storey_stiffness_N_per_m = [0.9e9, 0.8e9, 0.7e9, 0.6e9, 0.5e9]
+storey_height_m = [3.0, 3.0, 3.0, 3.0, 3.0]
+damping_ratio = 0.05
+"""
+SDOF_6M = """
+model = "sdof"
+period_s = 0.4
+mass_kg = 2.0e6
+damping_ratio = 0.05
+height_m = 6.0
+"""
+
+
+def _study_text(name="shear_small", left=SHEAR_3, right=SHEAR_5, grid=None, vary=None) -> str:
+    grid = grid or '"contact.gap_m" = [0.0, 0.01]'
+    vary = (
+        vary
+        or '"contact.e" = { material = "concrete" }\n"contact.beta" = { material = "concrete" }'
+    )
+    return f"""
+[study]
+name = "{name}"
+seed = 11
+
+[record]
+source = "builtin:elcentro"
+duration_s = 4.5
+pga_g = 0.5
+
+[left]
+{left}
+[right]
+{right}
+[contact]
+model = "jankowski"
+gap_m = 0.01
+beta = 2.75e9
+e = 0.65
+relation = "jankowski2008"
+
+[integrator]
+method = "adaptive"
+dt_s = 0.01
+
+[grid]
+{grid}
+
+[sampling]
+n = 4
+method = "sobol"
+[sampling.vary]
+{vary}
+"""
+
+
+@pytest.fixture(scope="module")
+def shear_run(tmp_path_factory):
+    """The small 3 + 5 storey study run through the command line."""
+    tmp = tmp_path_factory.mktemp("shear")
+    path = tmp / "shear_small.toml"
+    path.write_text(_study_text())
+    out = tmp / "out"
+    assert main(["run", str(path), "--out", str(out), "--no-progress"]) == 0
+    with xr.open_dataset(out / "shear_small.nc") as ds:
+        yield path, out, ds.load()
+
+
+def test_shear_study_runs_with_a_contact_dimension(shear_run):
+    _, out, ds = shear_run
+    assert (out / "shear_small_spectrum.png").is_file()
+    assert ds.sizes["contact"] == 3
+    np.testing.assert_array_equal(ds["contact"].values, [1, 2, 3])
+    np.testing.assert_allclose(ds["contact_elevation"].values, [3.0, 6.0, 9.0])
+    np.testing.assert_array_equal(ds["contact_left_floor"].values, [1, 2, 3])
+    np.testing.assert_array_equal(ds["contact_right_floor"].values, [1, 2, 3])
+    for name in ("contact", "contact_elevation", "contact_left_floor", "contact_right_floor"):
+        assert name in ds.coords
+        assert {"units", "long_name"} <= set(ds[name].attrs)
+    assert ds["contact_elevation"].attrs["units"] == "m"
+    units = {
+        "contact_peak_force": "N",
+        "contact_impacts": "1",
+        "contact_max_penetration": "m",
+        "contact_impulse": "N s",
+    }
+    for name, unit in units.items():
+        assert ds[name].dims == ("record", "contact_gap_m", "sample", "contact")
+        assert ds[name].attrs["units"] == unit
+        assert ds[name].attrs["long_name"]
+    assert ds["peak_force"].dims == ("record", "contact_gap_m", "sample")
+    assert (ds["status"] == 0).all()
+    assert (ds["impacts"] > 0).any()
+
+
+def test_per_simulation_outputs_reduce_the_contacts(shear_run):
+    _, _, ds = shear_run
+    np.testing.assert_array_equal(ds["peak_force"], ds["contact_peak_force"].max("contact"))
+    np.testing.assert_array_equal(ds["impacts"], ds["contact_impacts"].sum("contact"))
+    np.testing.assert_array_equal(
+        ds["max_penetration"], ds["contact_max_penetration"].max("contact")
+    )
+    np.testing.assert_allclose(ds["impulse"], ds["contact_impulse"].sum("contact"), rtol=1e-12)
+
+
+def test_each_simulation_matches_its_scene(shear_run):
+    path, _, ds = shear_run
+    study = study_from_text(path.read_text(), file=path)
+    for g, gap in enumerate(ds["contact_gap_m"].values):
+        for s in range(study.n):
+            overrides = {
+                "contact.gap_m": float(gap),
+                "contact.e": float(ds["e"][s]),
+                "contact.beta": float(ds["beta"][s]),
+            }
+            scene = scene_from_dict(study.scene_dict(0, overrides), file=path)
+            res = simulate(scene)
+            point = ds.isel(record=0, contact_gap_m=g, sample=s)
+            np.testing.assert_allclose(
+                point["contact_peak_force"].values, res.contacts["peak_force"], rtol=1e-12
+            )
+            np.testing.assert_array_equal(point["contact_impacts"].values, res.contacts["impacts"])
+            np.testing.assert_allclose(
+                point["contact_impulse"].values, res.contacts["impulse"], rtol=1e-12
+            )
+            assert float(point["peak_force"]) == pytest.approx(res.outputs["peak_force"], rel=1e-12)
+
+
+def test_chunk_files_carry_the_contacts_and_resume(tmp_path):
+    study = study_from_text(_study_text(name="shear_chunks"), file=tmp_path / "s.toml")
+    engine = StudyEngine(study)
+    layout = engine.result_layout()
+    assert layout["contact_peak_force"] == ((3,), "f8")
+    assert layout["peak_force"] == ((), "f8")
+    first = run_study(study, tmp_path, chunk_size=3, progress=False, max_chunks=1)
+    assert not first.complete
+    chunk = sorted((tmp_path / "shear_chunks").glob("chunk_*.npz"))[0]
+    with np.load(chunk) as data:
+        assert data["contact_peak_force"].shape == (3, 3)
+    report = run_study(study, tmp_path, chunk_size=3, progress=False)
+    assert report.complete
+    with xr.open_dataset(report.path) as ds:
+        resumed = ds["contact_peak_force"].values
+    whole = engine.run_range(0, study.n_simulations)["contact_peak_force"]
+    np.testing.assert_array_equal(resumed.reshape(-1, 3), whole)
+
+
+def test_sdof_with_height_beside_a_shear_building(tmp_path):
+    path = tmp_path / "mixed.toml"
+    beta = '"contact.beta" = { material = "concrete" }'
+    grid = '"contact.xi" = [0.2, 0.4]'
+    path.write_text(_study_text(name="mixed", left=SDOF_6M, grid=grid, vary=beta))
+    out = tmp_path / "out"
+    assert main(["run", str(path), "--out", str(out), "--no-progress", "--no-plot"]) == 0
+    with xr.open_dataset(out / "mixed.nc") as ds:
+        assert ds.sizes["contact"] == 1
+        assert float(ds["contact_elevation"][0]) == 6.0
+        assert int(ds["contact_left_floor"][0]) == 1
+        assert int(ds["contact_right_floor"][0]) == 2
+        np.testing.assert_array_equal(ds["peak_force"], ds["contact_peak_force"].isel(contact=0))
+
+
+def test_sdof_pair_has_no_contact_dimension(tmp_path):
+    sdof = SDOF_6M.replace("height_m = 6.0", "")
+    text = _study_text(name="sdof_pair", left=sdof, right=sdof.replace("0.4", "0.9"))
+    study = study_from_text(text, file=tmp_path / "s.toml")
+    engine = StudyEngine(study)
+    assert not engine.mdof
+    assert set(engine.run_range(0, 2)) == set(engine.result_layout())
+    assert "contact" not in engine.dataset_parameters()
+
+
+@pytest.mark.parametrize(
+    ("grid", "vary", "key"),
+    [
+        (
+            '"left.damping_ratio" = [0.02, 0.05]',
+            None,
+            "grid.left.damping_ratio",
+        ),
+        (
+            None,
+            '"right.damping_ratio" = { distribution = "uniform", low = 0.02, high = 0.05 }',
+            "sampling.vary.right.damping_ratio",
+        ),
+    ],
+)
+def test_structural_keys_are_refused(tmp_path, capsys, grid, vary, key):
+    path = tmp_path / "bad.toml"
+    path.write_text(_study_text(name="bad", grid=grid, vary=vary))
+    out = tmp_path / "out"
+    assert main(["run", str(path), "--out", str(out), "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert key in err and "structural" in err and str(path) in err
+    assert not out.exists()
+
+
+def test_structural_key_of_the_sdof_beside_a_shear_building_is_refused(tmp_path, capsys):
+    path = tmp_path / "bad.toml"
+    path.write_text(_study_text(name="bad", left=SDOF_6M, grid='"left.period_s" = [0.3, 0.5]'))
+    assert main(["check", str(path)]) == 2
+    assert "grid.left.period_s" in capsys.readouterr().err
+
+
+def test_shipped_shear_study_validates():
+    studies = Path(__file__).resolve().parent.parent / "studies"
+    study = study_from_text(
+        (studies / "shear_spectrum.toml").read_text(), file=studies / "shear_spectrum.toml"
+    )
+    engine = StudyEngine(study)
+    assert engine.mdof and engine.n_contacts == 3
+    assert study.shape == (1, 4, 64)
