@@ -78,6 +78,9 @@ CONTACT_OUTPUTS = ("peak_force", "impacts", "max_penetration", "impulse")
 UNSTABLE_ENERGY_FRACTION = 0.5
 #: A displacement beyond this [m] is a diverging run.
 DIVERGENCE_LIMIT_M = 1.0e3
+#: Most integration steps one simulation may take (record length / dt_s); beyond it the run is
+#: flagged not converged instead of running for hours.
+MAX_STEPS = 2.0e9
 
 _INF = np.inf
 
@@ -583,6 +586,8 @@ def _adaptive(
         wmax = max(wmax, omega[j])
     herm_tol = 4.0 * (wmax * h) ** 4 / 384.0
     t_onset = 0.0
+    # steps allowed: 200 per linear step of the record, plus room for many contacts
+    budget = 200 * (npts - 1) * m_sub + 1_000_000
     in_contact = False
     status = 0
     store = hx.shape[0] > 0
@@ -620,6 +625,11 @@ def _adaptive(
         k_grid = 0  # index of the next grid point within the interval
         while s < dt_rec * (1.0 - 1e-12):
             steps += 1
+            if steps > budget:
+                # absurd parameters (say beta = 1e300 makes contact sub-steps of 1e-119 s):
+                # give up instead of running for ever, and say so
+                status = 2
+                break
             if not in_contact:
                 # ---------------- exact linear step to the next grid point
                 s_next = (k_grid + 1) * h
@@ -971,7 +981,8 @@ def _finish(out, cout, peaks, side, phase, q, v, omega, e0, e_in, e_d, w_c, stor
     out[9] = e_in
     out[10] = steps
     out[11] = peak_t
-    if status == 1:
+    if status != 0:
+        # unstable or not converged: no plain numbers that could be taken for results
         for k in (0, 2, 3, 4, 5, 6, 7):
             out[k] = np.nan
         for c in range(nc):
@@ -1520,6 +1531,17 @@ def _run(
     ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi, model, method, dt_s,
     substeps, q, v, out, cout, hx, hd, hf, pre,
 ):  # fmt: skip
+    if not (dt_s > 0.0) or (ag.size - 1) * dt_rec / dt_s > MAX_STEPS:
+        # a step so small that the run could not end: flagged as not converged
+        for k in range(out.size):
+            out[k] = np.nan
+        out[1] = 0.0
+        out[8] = 2.0
+        out[10] = 0.0
+        for c in range(cout.shape[0]):
+            for k in range(cout.shape[1]):
+                cout[c, k] = np.nan
+        return
     if method == 0:
         _adaptive(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi, model,
                   dt_s, substeps, q, v, out, cout, hx, hd, hf, pre)  # fmt: skip

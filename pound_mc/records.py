@@ -82,6 +82,8 @@ __all__ = [
 
 #: Standard gravity [m/s^2] (CGPM 1901), used for every conversion from and to g.
 G = 9.80665
+#: Longest sampling interval accepted for an accelerogram [s].
+MAX_DT_S = 1.0
 
 #: Acceleration units a record may be in, as factors to m/s^2.
 UNITS: dict[str, float] = {"g": G, "gal": 0.01, "m/s^2": 1.0}
@@ -170,6 +172,12 @@ def _check_samples(data: np.ndarray, dt: float, *, file, what: str = "record") -
     """Reject empty records, bad sampling intervals and non-finite samples."""
     if not (math.isfinite(dt) and dt > 0):
         raise InputError(f"sampling interval must be > 0 s, got dt = {dt!r}", file=file)
+    if dt > MAX_DT_S:
+        raise InputError(
+            f"sampling interval dt = {dt:g} s is too long for an accelerogram "
+            f"(at most {MAX_DT_S:g} s)",
+            file=file,
+        )
     if data.size == 0:
         raise InputError(f"the {what} holds no samples (empty record)", file=file)
     bad = np.flatnonzero(~np.isfinite(data))

@@ -198,6 +198,9 @@ def scene_from_dict(data: dict, *, file: str | Path | None = None) -> Scene:
     right = building_from_dict(data["right"], file=file_s, side="right")
     contacts = contacts_between(left, right, file=file_s)
 
+    for table in ("contact", "integrator"):
+        if table in data and not isinstance(data[table], dict):
+            raise InputError(f"must be a table, got {data[table]!r}", file=file_s, key=table)
     ct = dict(data.get("contact", {}))
     unknown = sorted(set(ct) - _CONTACT_KEYS)
     if unknown:
@@ -207,7 +210,7 @@ def scene_from_dict(data: dict, *, file: str | Path | None = None) -> Scene:
             key=f"contact.{unknown[0]}",
         )
     model = ct.get("model", "jankowski")
-    if model not in CONTACT_MODELS:
+    if not isinstance(model, str) or model not in CONTACT_MODELS:
         raise InputError(
             f"unknown contact model {model!r}; allowed: {', '.join(CONTACT_MODELS)}",
             file=file_s,
@@ -242,7 +245,7 @@ def scene_from_dict(data: dict, *, file: str | Path | None = None) -> Scene:
         if not 0.0 < e <= 1.0:
             raise InputError(f"must be in (0, 1], got {e!r}", file=file_s, key="contact.e")
         relation = ct.get("relation", "kelvin" if model == "kelvin" else "jankowski2008")
-        if relation not in RELATIONS:
+        if not isinstance(relation, str) or relation not in RELATIONS:
             raise InputError(
                 f"unknown relation {relation!r}; allowed: {', '.join(RELATIONS)}",
                 file=file_s,
@@ -263,7 +266,7 @@ def scene_from_dict(data: dict, *, file: str | Path | None = None) -> Scene:
     if unknown:
         raise InputError(f"unknown key {unknown[0]!r}", file=file_s, key=f"integrator.{unknown[0]}")
     method = it.get("method", "adaptive")
-    if method not in METHODS:
+    if not isinstance(method, str) or method not in METHODS:
         raise InputError(
             f"unknown method {method!r}; allowed: {', '.join(METHODS)}",
             file=file_s,

@@ -56,6 +56,8 @@ __all__ = [
 
 _STUDY_KEYS = {"name", "seed", "description", "chunk_size"}
 _SAMPLING_KEYS = {"n", "method", "seed", "vary"}
+#: Largest number of samples per grid point (2^24: Sobol designs and memory stay sane).
+MAX_SAMPLES = 2**24
 _TOP_LEVEL = {"study", "record", "records", "left", "right", "contact", "integrator", "grid",
               "sampling"}  # fmt: skip
 
@@ -331,6 +333,17 @@ def study_from_text(text: str, *, file: str | Path | None = None) -> Study:
         errors.append(
             InputError(f"unknown table; allowed {sorted(_TOP_LEVEL)}", file=fname, key=key)
         )
+    for key in sorted(set(data) & _TOP_LEVEL):
+        value = data[key]
+        is_table = isinstance(value, dict)
+        if key == "records":
+            is_table = isinstance(value, list) and all(isinstance(r, dict) for r in value)
+        if not is_table:
+            what = "an array of tables [[records]]" if key == "records" else f"a table [{key}]"
+            errors.append(InputError(f"must be {what}, got {value!r}", file=fname, key=key))
+    if errors:
+        # the tables themselves are malformed: checking their keys would only add noise
+        raise InputErrors(errors)
 
     # [study]
     head = data.get("study")
@@ -442,12 +455,18 @@ def study_from_text(text: str, *, file: str | Path | None = None) -> Study:
         )
     if "n" in spec:
         n = spec["n"]
-        if not _is_int(n) or n < 1:
-            errors.append(InputError("must be an integer >= 1", file=fname, key="sampling.n"))
+        if not _is_int(n) or not 1 <= n <= MAX_SAMPLES:
+            errors.append(
+                InputError(
+                    f"must be an integer in [1, {MAX_SAMPLES:,}], got {n!r}",
+                    file=fname,
+                    key="sampling.n",
+                )
+            )
             n = 1
     if "method" in spec:
         method = spec["method"]
-        if method not in sampling.DESIGNS:
+        if not isinstance(method, str) or method not in sampling.DESIGNS:
             errors.append(
                 InputError(
                     f"unknown method {method!r}; choose one of {sorted(sampling.DESIGNS)}",
