@@ -218,6 +218,11 @@ class StudyEngine:
             name: np.empty((n, *tail), dtype=dtype)
             for name, (tail, dtype) in self.result_layout().items()
         }
+        settings = {
+            "method": self._base["integrator.method"],
+            "contact_model": self._base["contact.model"],
+            "substeps": self._base["integrator.substeps"],
+        }
         if self.mdof:
             for r in np.unique(p["record"]):
                 sel = np.flatnonzero(p["record"] == r)
@@ -230,9 +235,7 @@ class StudyEngine:
                     beta=p["contact.beta"][sel],
                     xi=p["contact.xi"][sel],
                     dt_s=p["integrator.dt_s"][sel],
-                    method=self._base["integrator.method"],
-                    contact_model=self._base["contact.model"],
-                    substeps=self._base["integrator.substeps"],
+                    **settings,
                 )
                 for name in RESULT_VARIABLES:
                     out[name][sel] = part[name]
@@ -255,9 +258,7 @@ class StudyEngine:
                 beta=p["contact.beta"][sel],
                 xi=p["contact.xi"][sel],
                 dt_s=p["integrator.dt_s"][sel],
-                method=self._base["integrator.method"],
-                contact_model=self._base["contact.model"],
-                substeps=self._base["integrator.substeps"],
+                **settings,
             )
             for name in RESULT_VARIABLES:
                 out[name][sel] = part[name]

