@@ -335,14 +335,6 @@ def _rowdot(mat, r, x):
 
 
 @jit(inline=True)
-def _dot(row, x):
-    acc = 0.0
-    for j in range(x.size):
-        acc += row[j] * x[j]
-    return acc
-
-
-@jit(inline=True)
 def _accel(q, v, ag, omega, zeta, gamma, psi, fc, a):
     """Modal accelerations into ``a`` for ground acceleration ``ag`` and contact forces."""
     n = q.size

@@ -52,7 +52,6 @@ __all__ = [
     "run_study",
     "local_executor",
     "plan_text",
-    "study_parameters",
     "chunk_ranges",
     "default_chunk_size",
 ]
@@ -197,24 +196,6 @@ def _atomic_savez(path: Path, stage: str = "chunk", **arrays) -> None:
 
 def _atomic_write_text(path: Path, text: str, stage: str = "text") -> None:
     _atomic_write_bytes(path, text.encode(), stage)
-
-
-def study_parameters(study, samples: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
-    """Per-simulation value of every varied scene key, broadcast to ``study.shape``.
-
-    Keys fixed in the scene are not included; the chunk runner takes them from the scene.
-    """
-    shape = study.shape
-    out = {}
-    for axis, (key, values) in enumerate(study.grid.items(), start=1):
-        view = [1] * len(shape)
-        view[axis] = values.size
-        out[key] = np.broadcast_to(values.reshape(view), shape)
-    for key, values in samples.items():
-        view = [1] * len(shape)
-        view[-1] = values.size
-        out[key] = np.broadcast_to(values.reshape(view), shape)
-    return out
 
 
 def plan_text(study, chunk_size: int | None = None, seconds_per_simulation: float | None = None):
