@@ -1,16 +1,16 @@
 """pound-mc: Monte Carlo parametric studies of earthquake-induced structural pounding.
 
 The impact physics is Jankowski's non-linear viscoelastic model (Jankowski 2008, J. Theor.
-Appl. Mech. 46(3)); see :mod:`pound_mc.contact`, :mod:`pound_mc.relations` and
-:mod:`pound_mc.materials`.
+Appl. Mech. 46(3)); see :mod:`pound_mc.physics.contact`, :mod:`pound_mc.physics.relations` and
+:mod:`pound_mc.physics.materials`.
 """
 
 from __future__ import annotations
 
-__version__ = "0.1.0"
-
-from pound_mc import accessor as _accessor  # noqa: E402, F401  (registers ``ds.pound``)
-from pound_mc.contact import (  # noqa: E402
+from pound_mc._version import __version__
+from pound_mc.analysis import accessor as _accessor  # noqa: E402, F401  (registers ``ds.pound``)
+from pound_mc.errors import InputError, InputErrors  # noqa: E402
+from pound_mc.physics.contact import (  # noqa: E402
     CONTACT_MODELS,
     contact_duration_hertz,
     effective_mass,
@@ -21,8 +21,7 @@ from pound_mc.contact import (  # noqa: E402
     linear_force,
     max_penetration_elastic,
 )
-from pound_mc.errors import InputError, InputErrors  # noqa: E402
-from pound_mc.relations import (  # noqa: E402
+from pound_mc.physics.relations import (  # noqa: E402
     RELATIONS,
     effective_restitution,
     hertzdamp_zeta,

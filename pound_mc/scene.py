@@ -2,7 +2,7 @@
 
 A scene holds ``[record]``, ``[left]``, ``[right]``, ``[contact]`` and ``[integrator]``
 (``../shared/DESIGN.md`` section 6).  :func:`simulate` runs it through the compiled kernels of
-:mod:`pound_mc.integrators`.
+:mod:`pound_mc.integrators.kernels`.
 """
 
 from __future__ import annotations
@@ -15,11 +15,11 @@ from typing import Any
 
 import numpy as np
 
-from pound_mc.contact import CONTACT_MODELS
 from pound_mc.errors import InputError
-from pound_mc.integrators import CONTACT_OUTPUTS, METHODS, OUTPUTS, run_kernel
-from pound_mc.relations import RELATIONS, xi_from_e
-from pound_mc.structures import Building, Contact, building_from_dict, contacts_between
+from pound_mc.integrators.kernels import CONTACT_OUTPUTS, METHODS, OUTPUTS, run_kernel
+from pound_mc.physics.contact import CONTACT_MODELS
+from pound_mc.physics.relations import RELATIONS, xi_from_e
+from pound_mc.physics.structures import Building, Contact, building_from_dict, contacts_between
 
 __all__ = ["Scene", "SimulationResult", "scene_from_dict", "load_scene", "simulate"]
 
@@ -82,7 +82,7 @@ class Scene:
 
     def load_record(self):
         """The scene's record as an obspy Trace [m/s^2], preprocessed."""
-        from pound_mc.records import load_record
+        from pound_mc.motions.records import load_record
 
         spec = dict(self.record)
         spec.pop("name", None)
@@ -336,7 +336,7 @@ def simulate(
     method, dt_s, substeps : optional
         Override the scene's integrator settings.
     """
-    from pound_mc.records import record_arrays
+    from pound_mc.motions.records import record_arrays
 
     if record is None:
         record = record_arrays(scene.load_record())

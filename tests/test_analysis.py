@@ -21,7 +21,7 @@ import xarray as xr
 
 import pound_mc  # noqa: F401  (registers ds.pound)
 from pound_mc.cli import main
-from pound_mc.cli_analysis import draw
+from pound_mc.cli.analysis import draw
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -156,8 +156,9 @@ def test_probability_rules_from_attributes_and_from_separation(ds, tiny):
     ax = marked.pound.plot.probability().axes[0]
     ddc = [ln for ln in ax.lines if ln.get_linestyle() == ":"]
     assert [ln.get_xdata()[0] for ln in ddc] == [pytest.approx(7.5)]
-    # by default: ABS, SRSS, DDC of every simulation (pound_mc.separation), median over samples
-    separation = pytest.importorskip("pound_mc.separation")
+    # by default: ABS, SRSS, DDC of every simulation (pound_mc.physics.separation),
+    # median over samples
+    separation = pytest.importorskip("pound_mc.physics.separation")
     gaps = separation.study_gaps(ds)
     ax = draw(tiny, "probability").axes[0]
     for style, name in (("--", "gap_abs"), ("-.", "gap_srss"), (":", "gap_ddc")):
@@ -197,7 +198,7 @@ def test_restitution_chart_marks_the_study_samples(ds, tiny):
     (points,) = ax.collections
     np.testing.assert_allclose(points.get_offsets()[:, 0], ds["e"].values)
     np.testing.assert_allclose(points.get_offsets()[:, 1], ds["e_effective"].values)
-    from pound_mc.relations import effective_restitution
+    from pound_mc.physics.relations import effective_restitution
 
     curve = next(ln for ln in ax.lines if ln.get_label() == "Jankowski law, jankowski2008")
     np.testing.assert_allclose(
@@ -207,8 +208,8 @@ def test_restitution_chart_marks_the_study_samples(ds, tiny):
 
 # -- work-precision and stability from their CSV tables -----------------------------------------
 def test_work_precision_and_stability_charts_from_their_csv(tmp_path):
-    from pound_mc.bench import benchmark
-    from pound_mc.stability import stability_map
+    from pound_mc.numerics.bench import benchmark
+    from pound_mc.numerics.stability import stability_map
 
     bench = benchmark(scenes=("shear-3-5",), methods=["adaptive"], repeats=1, progress=False)
     bench.to_csv(tmp_path / "bench.csv", index=False)

@@ -39,8 +39,8 @@ def test_droptest_writes_charts(tmp_path, capsys):
 
 
 def test_restitution_chart_plots_the_relations():
-    from pound_mc.plot import restitution_chart
-    from pound_mc.relations import effective_restitution
+    from pound_mc.analysis.plot import restitution_chart
+    from pound_mc.physics.relations import effective_restitution
 
     fig = restitution_chart(targets=[0.2, 0.5, 0.8])
     lines = {ln.get_label(): ln for ln in fig.axes[0].get_lines()}

@@ -2,7 +2,7 @@ import math
 
 import pytest
 
-from pound_mc import contact
+from pound_mc.physics import contact
 
 
 def test_jankowski_force_phases():

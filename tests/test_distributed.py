@@ -10,9 +10,9 @@ import pytest
 from test_runner import STUDY, N, _assert_identical
 
 from pound_mc.cli import main
-from pound_mc.engine import StudyEngine
-from pound_mc.runner import chunk_ranges, run_study
-from pound_mc.study import load_study
+from pound_mc.study.definition import load_study
+from pound_mc.study.engine import StudyEngine
+from pound_mc.study.runner import chunk_ranges, run_study
 
 distributed = pytest.importorskip("distributed")
 
@@ -82,7 +82,7 @@ class SlowEngine(StudyEngine):
 
 
 def test_worker_killed_mid_study(cluster, study_file, reference, tmp_path):
-    from pound_mc.distributed import run_study_distributed
+    from pound_mc.study.distributed import run_study_distributed
 
     chunk_size = 4
     total = len(chunk_ranges(N, chunk_size))

@@ -28,10 +28,10 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from test_runner import STUDY, N, _assert_identical
 
-from pound_mc import integrators
 from pound_mc.cli import main
-from pound_mc.relations import xi_from_e
-from pound_mc.runner import PAUSE_ENV
+from pound_mc.integrators import kernels as integrators
+from pound_mc.physics.relations import xi_from_e
+from pound_mc.study.runner import PAUSE_ENV
 
 # ------------------------------------------------------------------------- interrupt drill
 
@@ -54,9 +54,9 @@ def torn(self, path=None, *args, **kwargs):
     time.sleep(600)
 
 xr.Dataset.to_netcdf = torn
-from pound_mc import integrators
+from pound_mc.integrators import kernels as integrators
 from pound_mc.cli import main
-from pound_mc.relations import xi_from_e
+from pound_mc.physics.relations import xi_from_e
 sys.exit(main(sys.argv[1:]))
 """
 
@@ -430,7 +430,7 @@ def test_bad_input_drill(case):
 def test_huge_record_dt_is_refused(tmp_path):
     """A record with DT = 1e60 s is no accelerogram (a study on it would never end)."""
     from pound_mc.errors import InputError
-    from pound_mc.records import load_record
+    from pound_mc.motions.records import load_record
 
     record = tmp_path / "quake.at2"
     record.write_text(_at2_text().replace("DT=   0.0100", "DT=   1e60"))
@@ -458,7 +458,7 @@ def robustness_counts() -> dict[str, dict[str, int]]:
 
     Also the source of the counts quoted in the reports (run this module's function).
     """
-    from pound_mc.records import load_record, record_arrays
+    from pound_mc.motions.records import load_record, record_arrays
 
     grids = np.meshgrid(*_EXTREMES.values(), indexing="ij")
     p = {key: g.ravel() for key, g in zip(_EXTREMES, grids, strict=True)}

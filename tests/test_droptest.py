@@ -4,10 +4,10 @@ import numpy as np
 import pytest
 from reference_impact import jankowski_impact
 
-from pound_mc.contact import HERTZ_DURATION_INTEGRAL, contact_duration_hertz
-from pound_mc.droptest import drop_test
 from pound_mc.errors import InputError
-from pound_mc.relations import restitution_of_xi
+from pound_mc.physics.contact import HERTZ_DURATION_INTEGRAL, contact_duration_hertz
+from pound_mc.physics.droptest import drop_test
+from pound_mc.physics.relations import restitution_of_xi
 
 
 def test_elastic_peak_penetration_eq_2_5_and_duration():

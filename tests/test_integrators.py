@@ -1,13 +1,13 @@
 """Accuracy of the compiled integrators against independent solutions.
 
-Independent references used here (none shares code with ``pound_mc.integrators``):
+Independent references used here (none shares code with ``pound_mc.integrators.kernels``):
 
 * closed-form damped free vibration of an SDOF oscillator (Chopra, Dynamics of Structures,
   eq. 2.2.4);
 * the matrix exponential of the physical first-order system augmented with the linearly
   interpolated ground acceleration (exact for a piecewise-linear record, physical floor
   coordinates, not modes);
-* :func:`pound_mc.reference.reference_solution`: SciPy DOP853 at rtol 1e-11 in physical
+* :func:`pound_mc.integrators.reference.reference_solution`: SciPy DOP853 at rtol 1e-11 in physical
   coordinates with the contact law written out and contact phases as terminal events.
 """
 
@@ -18,9 +18,9 @@ import numpy as np
 import pytest
 from scipy.linalg import expm
 
-from pound_mc.integrators import METHODS, OUTPUTS, run_kernel
-from pound_mc.records import record_arrays
-from pound_mc.reference import reference_solution
+from pound_mc.integrators.kernels import METHODS, OUTPUTS, run_kernel
+from pound_mc.integrators.reference import reference_solution
+from pound_mc.motions.records import record_arrays
 from pound_mc.scene import load_scene, scene_from_dict, simulate
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from pound_mc.integrators import METHODS, OUTPUTS, run_kernel
+from pound_mc.integrators.kernels import METHODS, OUTPUTS, run_kernel
 from pound_mc.scene import scene_from_dict
 
 OUT = {name: k for k, name in enumerate(OUTPUTS)}
@@ -22,7 +22,7 @@ def scene(**contact):
 
 @pytest.fixture(scope="module")
 def record():
-    from pound_mc.records import record_arrays
+    from pound_mc.motions.records import record_arrays
 
     return record_arrays(scene().load_record())
 

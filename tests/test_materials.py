@@ -1,7 +1,7 @@
 import pytest
 
-from pound_mc import materials
 from pound_mc.errors import InputError
+from pound_mc.physics import materials
 
 # Jankowski (2008) Table 2, typed here from the paper: (material, velocity, e_min, e_max).
 TABLE2 = [

@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from pound_mc import records
 from pound_mc.cli import main
 from pound_mc.errors import InputError
-from pound_mc.records import (
+from pound_mc.motions import records
+from pound_mc.motions.records import (
     G,
     builtin_catalogue,
     load_record,
@@ -20,9 +20,9 @@ from pound_mc.records import (
     record_arrays,
     record_info,
 )
-from pound_mc.spectra import response_spectrum
+from pound_mc.physics.spectra import response_spectrum
 
-# obspy is imported through pound_mc.records, which silences its import-time deprecation
+# obspy is imported through pound_mc.motions.records, which silences its import-time deprecation
 # warning (filterwarnings = error)
 obspy = records.obspy
 ELCENTRO = records._builtin_path("elcentro")

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 from reference_impact import jankowski_impact
 
-from pound_mc import relations
 from pound_mc.errors import InputError
+from pound_mc.physics import relations
 
 
 @pytest.mark.parametrize("e", [0.1, 0.3, 0.5, 0.65, 0.8, 0.9, 0.99, 1.0])

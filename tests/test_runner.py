@@ -12,11 +12,11 @@ import pytest
 import xarray as xr
 
 from pound_mc.cli import main
-from pound_mc.dataset import RESULT_VARIABLES
-from pound_mc.engine import StudyEngine
 from pound_mc.errors import InputError, InputErrors
-from pound_mc.runner import chunk_ranges, default_chunk_size, run_study
-from pound_mc.study import load_study, study_from_text
+from pound_mc.study.dataset import RESULT_VARIABLES
+from pound_mc.study.definition import load_study, study_from_text
+from pound_mc.study.engine import StudyEngine
+from pound_mc.study.runner import chunk_ranges, default_chunk_size, run_study
 
 STUDY = """
 [study]
@@ -142,9 +142,9 @@ def test_interrupted_run_resumes_identically(study_file, reference, tmp_path):
 
 _KILLED_RUN = """
 import sys, time
-from pound_mc.engine import StudyEngine
-from pound_mc.runner import run_study
-from pound_mc.study import load_study
+from pound_mc.study.engine import StudyEngine
+from pound_mc.study.runner import run_study
+from pound_mc.study.definition import load_study
 
 study = load_study(sys.argv[1])
 engine = StudyEngine(study)

@@ -1,8 +1,8 @@
 import numpy as np
 import pytest
 
-from pound_mc import sampling
 from pound_mc.errors import InputError
+from pound_mc.study import sampling
 
 
 def _mean_error(method, n, seeds=24):

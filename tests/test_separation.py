@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from pound_mc.errors import InputError
-from pound_mc.separation import (
+from pound_mc.physics.separation import (
     cqc_correlation,
     gap_abs,
     gap_ddc,
@@ -15,7 +15,7 @@ from pound_mc.separation import (
     required_gaps,
     study_gaps,
 )
-from pound_mc.study import study_from_text
+from pound_mc.study.definition import study_from_text
 
 
 @pytest.mark.parametrize("zeta", [0.02, 0.05, 0.1, 0.2])
@@ -101,7 +101,7 @@ def test_substeps_catch_the_peak_between_samples():
 
 
 def test_required_gaps_for_a_record():
-    from pound_mc.records import load_record, record_arrays
+    from pound_mc.motions.records import load_record, record_arrays
 
     dt, acc = record_arrays(load_record("builtin:elcentro", duration_s=20.0))
     g = required_gaps(dt, acc, 0.5, 1.0)
@@ -160,7 +160,7 @@ n = 4
 
 
 def test_study_gaps_match_required_gaps():
-    from pound_mc.engine import StudyEngine
+    from pound_mc.study.engine import StudyEngine
 
     study = study_from_text(STUDY)
     g = study_gaps(study)

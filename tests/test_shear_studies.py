@@ -7,10 +7,10 @@ import pytest
 import xarray as xr
 
 from pound_mc.cli import main
-from pound_mc.engine import StudyEngine
-from pound_mc.runner import run_study
 from pound_mc.scene import scene_from_dict, simulate
-from pound_mc.study import study_from_text
+from pound_mc.study.definition import study_from_text
+from pound_mc.study.engine import StudyEngine
+from pound_mc.study.runner import run_study
 
 SHEAR_3 = """
 model = "shear"

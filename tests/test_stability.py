@@ -4,7 +4,7 @@ import math
 
 import pytest
 
-from pound_mc import stability as S
+from pound_mc.numerics import stability as S
 
 
 def test_predicted_limits_from_the_amplification_matrix():

@@ -5,7 +5,7 @@ import pytest
 
 from pound_mc.cli import main
 from pound_mc.errors import InputErrors
-from pound_mc.study import study_from_text
+from pound_mc.study.definition import study_from_text
 
 GOOD = """
 [study]

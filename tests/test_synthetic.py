@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 from scipy.integrate import quad
 
-from pound_mc import synthetic
 from pound_mc.errors import InputError
-from pound_mc.records import G, load_record, record_arrays
+from pound_mc.motions import synthetic
+from pound_mc.motions.records import G, load_record, record_arrays
 
 
 def _binned_ratio(params, seeds, width_hz=1.0, band_hz=(0.5, 15.0), target_params=None):
@@ -56,7 +56,7 @@ def test_mean_periodogram_matches_clough_penzien_spectrum():
 def _clough_penzien_written_out(w, wg, zg, wf, zf, s0):
     # Clough & Penzien (1975): S(w) = S0 (wg^4 + 4 zg^2 wg^2 w^2) / ((wg^2 - w^2)^2
     # + 4 zg^2 wg^2 w^2) * w^4 / ((wf^2 - w^2)^2 + 4 zf^2 wf^2 w^2), written out independently
-    # of pound_mc.synthetic.  Convention (pound_mc/synthetic.py module docstring and
+    # of pound_mc.motions.synthetic.  Convention (pound_mc/synthetic.py module docstring and
     # clough_penzien_psd): w is angular frequency in rad/s and S is two-sided in w, i.e. the
     # variance is the integral of S over -inf < w < inf, so S0 is the two-sided intensity
     # [m^2/s^3]; no factor 2 or 2 pi enters.

@@ -6,7 +6,7 @@ The grid of ``xi`` is eq. (2.9) of Jankowski (2008) evaluated at evenly spaced t
 ``e`` (log-spaced 0.005-0.2, then evenly to 1), which spaces the tabulated restitutions
 roughly like the targets.  Each row is one
 high-accuracy integration of the dimensionless single impact
-(:func:`pound_mc.relations.single_impact_restitution`, DOP853, rtol 1e-13).
+(:func:`pound_mc.physics.relations.single_impact_restitution`, DOP853, rtol 1e-13).
 """
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from pound_mc.relations import single_impact_restitution
+from pound_mc.physics.relations import single_impact_restitution
 
 HERE = Path(__file__).resolve().parent
 

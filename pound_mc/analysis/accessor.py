@@ -1,0 +1,290 @@
+"""The ``pound`` accessor of :class:`xarray.Dataset`: study results one call away.
+
+Registered on ``import pound_mc``::
+
+    import xarray as xr
+    import pound_mc
+
+    ds = xr.open_dataset("outputs/quickstart.nc")
+    ds.pound.spectrum(contact_gap_m=0.01)      # quantiles of peak force over samples [N]
+    ds.pound.probability()                     # fraction of samples with an impact [-]
+    ds.pound.plot.spectrum()                   # matplotlib Figures
+    ds.pound.plot.history(left_period_s=0.5, contact_gap_m=0.01, sample=3)
+
+Selections (``**sel``) take a dimension and a value; numeric coordinates pick the nearest value,
+so ``left_period_s=0.3`` works although the stored value is ``0.30000000000000004``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import xarray as xr
+
+__all__ = ["PoundAccessor", "PoundPlot", "scene_at"]
+
+_OK = 0
+_MATERIAL_KEY = "contact.material"
+
+
+def _select(obj, ds: xr.Dataset, sel: dict):
+    """``obj.sel(sel)``, nearest for numeric coordinates, exact otherwise."""
+    unknown = sorted(set(sel) - set(ds.dims))
+    if unknown:
+        raise ValueError(f"no dimension {unknown[0]!r}; the dataset has {list(ds.dims)}")
+    numeric = {k: v for k, v in sel.items() if ds[k].dtype.kind in "fiu"}
+    other = {k: v for k, v in sel.items() if k not in numeric}
+    if numeric:
+        obj = obj.sel(numeric, method="nearest")
+    if other:
+        obj = obj.sel(other)
+    return obj
+
+
+def scene_at(ds: xr.Dataset, *, record=0, sample=0, study_path=None, **coords):
+    """Rebuild the scene of one simulation of a study dataset.
+
+    The study is rebuilt from the dataset's ``study_text`` (its records read again), the grid
+    values are those at the given coordinates (nearest) and the sampled values those of
+    ``sample`` (the study's sampling is deterministic), so :func:`pound_mc.scene.simulate`
+    reproduces the dataset's numbers for that simulation.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A study dataset (:mod:`pound_mc.study.dataset`).
+    record : int or str
+        Record index or name.
+    sample : int
+        Sample index.
+    study_path : str or Path, optional
+        Where the study file was, for records given by a relative path (default: the current
+        folder).
+    **coords
+        One value per grid dimension (default: its first value).
+
+    Returns
+    -------
+    scene : pound_mc.scene.Scene
+    record_arrays : tuple
+        ``(dt_s, acceleration)`` of the record, as the study engine ran it.
+    index : dict
+        The integer position of the simulation along every dimension of ``peak_force``.
+    """
+    from pound_mc.errors import InputError
+    from pound_mc.scene import scene_from_dict
+    from pound_mc.study.definition import grid_dim_name, study_from_text
+
+    text = ds.attrs.get("study_text")
+    if not text:
+        raise InputError("the dataset carries no study_text attribute; is it a pound-mc result?")
+    study = study_from_text(text, file=study_path)
+    if study.hash != ds.attrs.get("study_hash", study.hash):
+        raise InputError("the dataset's study_text does not match its study_hash")
+    from pound_mc.analysis.plot import _nearest_index
+
+    unknown = sorted(set(coords) - {grid_dim_name(k) for k in study.grid})
+    if unknown:
+        raise ValueError(f"{unknown[0]!r} is not a grid dimension of this study")
+    r = record if isinstance(record, int | np.integer) else _nearest_index(ds, "record", record)
+    if not 0 <= int(sample) < study.n:
+        raise ValueError(f"sample must be in 0..{study.n - 1}, got {sample}")
+    index = {"record": int(r)}
+    overrides = {}
+    for key, values in study.grid.items():
+        dim = grid_dim_name(key)
+        i = _nearest_index(ds, dim, coords[dim]) if dim in coords else 0
+        index[dim] = i
+        if key != _MATERIAL_KEY:  # the material axis is not a scene key: it picks ranges
+            overrides[key] = float(values[i])
+    index["sample"] = int(sample)
+    for key, values in study.draw().items():
+        overrides[key] = float(values[int(sample)])
+    draw_materials = getattr(study, "draw_materials", None)
+    if draw_materials is not None:  # sampled keys that follow the material axis
+        m = index.get(grid_dim_name(_MATERIAL_KEY), 0)
+        for key, values in draw_materials().items():
+            overrides[key] = float(values[m, int(sample)])
+    scene = scene_from_dict(study.scene_dict(int(r), overrides), file=study_path)
+    return scene, study.record_arrays[int(r)], index
+
+
+class PoundPlot:
+    """Charts of a study dataset (``ds.pound.plot``); each returns a matplotlib Figure."""
+
+    def __init__(self, ds: xr.Dataset):
+        self._ds = ds
+
+    def spectrum(self, path=None, **kwargs):
+        """Impact force spectrum (:func:`pound_mc.analysis.plot.spectrum_chart`)."""
+        from pound_mc.analysis.plot import spectrum_chart
+
+        return spectrum_chart(self._ds, path, **kwargs)
+
+    def probability(self, path=None, **kwargs):
+        """Pounding probability against gap (:func:`pound_mc.analysis.plot.probability_chart`)."""
+        from pound_mc.analysis.plot import probability_chart
+
+        return probability_chart(self._ds, path, **kwargs)
+
+    def distribution(self, path=None, **kwargs):
+        """Peak force distribution (:func:`pound_mc.analysis.plot.distribution_chart`)."""
+        from pound_mc.analysis.plot import distribution_chart
+
+        return distribution_chart(self._ds, path, **kwargs)
+
+    def restitution(self, path=None, **kwargs):
+        """Restitution relations with the study's sampled ``e`` and ``e_effective`` marked."""
+        from pound_mc.analysis.plot import restitution_chart
+
+        ds = self._ds
+        samples = None
+        if "e" in ds and "e_effective" in ds:
+            e, e_eff = xr.broadcast(ds["e"], ds["e_effective"])
+            law = ds.attrs.get("contact_model", "contact")
+            relation = ds.attrs.get("xi_relation", "")
+            samples = (e.values, e_eff.values, f"study: {law} law, {relation} ({e.size} values)")
+        return restitution_chart(path, samples=samples, **kwargs)
+
+    def history(self, path=None, *, record=0, sample=0, study_path=None, **coords):
+        """Time history of one simulation of the study, rebuilt and run again.
+
+        See :func:`scene_at` for the arguments; the figure's title names the simulation.
+        """
+        from pound_mc.analysis.plot import save
+        from pound_mc.analysis.plot_numerics import time_history_chart
+
+        result, index = self._ds.pound.simulate(
+            record=record, sample=sample, study_path=study_path, **coords
+        )
+        fig = time_history_chart(result)
+        where = ", ".join(
+            f"{d} = {self._ds[d].values[i]:g}" if d not in ("record", "sample") else f"{d} {i}"
+            for d, i in index.items()
+        )
+        fig.suptitle(f"{self._ds.attrs.get('study_name', '')}: {where}", fontsize=9)
+        return save(fig, path)
+
+
+@xr.register_dataset_accessor("pound")
+class PoundAccessor:
+    """Analysis of a pound-mc study dataset: ``ds.pound``."""
+
+    def __init__(self, ds: xr.Dataset):
+        self._ds = ds
+
+    @property
+    def plot(self) -> PoundPlot:
+        """Charts: ``ds.pound.plot.spectrum()``, ``.probability()``, ``.distribution()``, ..."""
+        return PoundPlot(self._ds)
+
+    @property
+    def ok(self) -> xr.DataArray:
+        """True where the simulation finished with status ok."""
+        return self._ds["status"] == _OK
+
+    @property
+    def grid_dims(self) -> list[str]:
+        """Grid dimensions of the study (``peak_force``'s dims less record and sample)."""
+        return [d for d in self._ds["peak_force"].dims if d not in ("record", "sample")]
+
+    def spectrum(self, quantiles=(0.05, 0.5, 0.95), *, variable="peak_force", **sel):
+        """Quantiles of a result over the samples (status ok): the impact force spectrum.
+
+        Parameters
+        ----------
+        quantiles : sequence of float
+            Quantile levels in [0, 1].
+        variable : str
+            Per-simulation result (default ``peak_force`` [N]).
+        **sel
+            ``dim=value`` selections (nearest for numeric coordinates).
+
+        Returns
+        -------
+        xarray.DataArray
+            Dims ``quantile`` and the dims left after the selection, less ``sample``; the
+            variable's units.
+        """
+        ds = self._ds
+        values = ds[variable].where(self.ok)
+        values = _select(values, ds, sel)
+        q = values.quantile(list(np.atleast_1d(quantiles)), dim="sample")
+        q.attrs = {
+            "units": ds[variable].attrs.get("units", "1"),
+            "long_name": f"quantiles over samples of {ds[variable].attrs.get('long_name', '')}",
+        }
+        return q.rename(f"{variable}_quantile")
+
+    def probability(self, threshold: float | None = None, **sel):
+        """Fraction of the samples (status ok) that pounded.
+
+        Parameters
+        ----------
+        threshold : float, optional
+            Count only impacts with a peak force above this [N] (default: any impact).
+        **sel
+            ``dim=value`` selections (nearest for numeric coordinates).
+
+        Returns
+        -------
+        xarray.DataArray
+            Pounding probability [-] over the dims left, less ``sample``.
+        """
+        ds = self._ds
+        pounded = ds["impacts"] > 0
+        if threshold is not None:
+            pounded = pounded & (ds["peak_force"] > threshold)
+        p = _select(pounded.where(self.ok), ds, sel).mean("sample")
+        more = "" if threshold is None else f" and a peak force above {threshold:g} N"
+        p.attrs = {"units": "1", "long_name": f"fraction of samples with an impact{more}"}
+        return p.rename("pounding_probability")
+
+    def status_counts(self) -> dict[str, int]:
+        """Number of simulations per status (``ok``, ``unstable``, ``not_converged``)."""
+        status = self._ds["status"]
+        values = np.asarray(status.attrs.get("flag_values", [0, 1, 2])).tolist()
+        names = str(status.attrs.get("flag_meanings", "ok unstable not_converged")).split()
+        data = status.values
+        return {
+            name: int(np.count_nonzero(data == v)) for v, name in zip(values, names, strict=True)
+        }
+
+    def energy_summary(self) -> dict[str, float]:
+        """Magnitude of the energy balance residual [-] over the simulations with status ok.
+
+        Returns
+        -------
+        dict
+            ``median``, ``p95``, ``max`` of ``|energy_residual|`` and ``n`` (simulations).
+        """
+        r = np.abs(self._ds["energy_residual"].where(self.ok).values)
+        r = r[np.isfinite(r)]
+        if not r.size:
+            return {"median": np.nan, "p95": np.nan, "max": np.nan, "n": 0}
+        return {
+            "median": float(np.median(r)),
+            "p95": float(np.quantile(r, 0.95)),
+            "max": float(r.max()),
+            "n": int(r.size),
+        }
+
+    def scene(self, *, record=0, sample=0, study_path=None, **coords):
+        """The scene of one simulation (see :func:`scene_at`)."""
+        return scene_at(self._ds, record=record, sample=sample, study_path=study_path, **coords)[0]
+
+    def simulate(self, *, record=0, sample=0, history=True, study_path=None, **coords):
+        """Run one simulation of the study again, with its histories.
+
+        Returns
+        -------
+        result : pound_mc.scene.SimulationResult
+        index : dict
+            Integer position of the simulation along every dimension of ``peak_force``
+            (``ds.peak_force[index]`` is the stored result).
+        """
+        from pound_mc.scene import simulate
+
+        scene, rec, index = scene_at(
+            self._ds, record=record, sample=sample, study_path=study_path, **coords
+        )
+        return simulate(scene, record=rec, history=history), index

@@ -1,0 +1,214 @@
+"""A study's results page: one self-contained HTML file (``pound-mc report``).
+
+The page holds the charts as inline PNG (``data:`` URIs), the study text, the provenance
+(the dataset's global attributes) and a summary of the simulations' status and energy balance
+residual.  It loads nothing from anywhere (no scripts, fonts, style sheets or images outside
+the file), so it can be mailed or archived as it is.
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+import io
+import os
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["chart_png", "report_html", "write_report"]
+
+_CSS = """
+body { font-family: sans-serif; margin: 16px 24px; color: #222; max-width: 1100px; }
+h1 { font-size: 1.5em; margin: 0 0 4px 0; }
+h2 { font-size: 1.15em; margin: 28px 0 8px 0; border-bottom: 1px solid #ccc; }
+p.lead { margin: 0 0 12px 0; color: #555; }
+table { border-collapse: collapse; font-size: 0.9em; }
+td, th { border: 1px solid #ccc; padding: 3px 8px; text-align: left; vertical-align: top; }
+th { background: #f2f2f2; }
+td.num { text-align: right; font-variant-numeric: tabular-nums; }
+figure { margin: 10px 0 18px 0; }
+figcaption { font-size: 0.9em; color: #444; max-width: 936px; }
+img { max-width: 100%; height: auto; display: block; }
+pre { background: #f7f7f7; border: 1px solid #ddd; padding: 8px; font-size: 0.85em;
+      overflow-x: auto; }
+""".strip()
+
+
+def chart_png(fig, dpi: int = 100) -> tuple[bytes, int, int]:
+    """PNG bytes of ``fig`` and its width and height [px]."""
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=dpi)
+    data = buf.getvalue()
+    width = int.from_bytes(data[16:20], "big")  # IHDR chunk
+    height = int.from_bytes(data[20:24], "big")
+    return data, width, height
+
+
+def _figure_html(key: str, fig, caption: str) -> str:
+    data, width, height = chart_png(fig)
+    uri = "data:image/png;base64," + base64.b64encode(data).decode("ascii")
+    return (
+        f'<figure id="{key}"><img id="chart-{key}" src="{uri}" width="{width}" '
+        f'height="{height}" alt="{html.escape(caption)}">'
+        f"<figcaption>{html.escape(caption)}</figcaption></figure>"
+    )
+
+
+def _row(*cells, header=False) -> str:
+    tag = "th" if header else "td"
+    out = []
+    for cell in cells:
+        cls = ' class="num"' if isinstance(cell, int | float | np.number) else ""
+        text = f"{cell:.3g}" if isinstance(cell, float | np.floating) else str(cell)
+        out.append(f"<{tag}{cls}>{html.escape(text)}</{tag}>")
+    return "<tr>" + "".join(out) + "</tr>"
+
+
+def _summary_html(ds) -> str:
+    counts = ds.pound.status_counts()
+    total = int(ds["status"].size)
+    rows = [_row("status", "simulations", "share", header=True)]
+    for name, n in counts.items():
+        rows.append(_row(name, n, f"{100.0 * n / total:.2f} %"))
+    energy = ds.pound.energy_summary()
+    ok = ds.pound.ok
+    pounded = int(((ds["impacts"] > 0) & ok).sum())
+    erows = [
+        _row("quantity", "value", header=True),
+        _row("simulations with status ok", energy["n"]),
+        _row("median |energy residual| [-]", energy["median"]),
+        _row("95th percentile |energy residual| [-]", energy["p95"]),
+        _row("largest |energy residual| [-]", energy["max"]),
+        _row("simulations that pounded (status ok)", pounded),
+    ]
+    return (
+        "<h2>Simulations: status and energy balance</h2>"
+        f"<p>{total:,} simulations ({_shape_text(ds)}). The energy residual is the energy "
+        "balance error relative to the energy put in by the ground motion; a simulation whose "
+        "balance is broken by more than half the input energy is flagged unstable and its "
+        "numbers are NaN.</p>"
+        f'<table id="status">{"".join(rows)}</table><br>'
+        f'<table id="energy">{"".join(erows)}</table>'
+    )
+
+
+def _shape_text(ds) -> str:
+    dims = ds["peak_force"].dims
+    return " x ".join(f"{ds.sizes[d]} {d}" for d in dims)
+
+
+def _provenance_html(ds) -> str:
+    rows = [_row("attribute", "value", header=True)]
+    for key, value in ds.attrs.items():
+        if key == "study_text":
+            continue
+        rows.append(_row(key, value if not isinstance(value, np.ndarray) else list(value)))
+    return f'<h2>Provenance</h2><table id="provenance">{"".join(rows)}</table>'
+
+
+def report_html(ds, *, base_dir=None, history: bool = True) -> str:
+    """The results page of a study dataset as one HTML string.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A study dataset (:mod:`pound_mc.study.dataset`).
+    base_dir : str or Path, optional
+        Folder of relative record paths (for the separation rules and the time history).
+    history : bool
+        Include the time history of the simulation with the largest peak force (rebuilt from
+        the study text and run again).
+    """
+    import pound_mc  # noqa: F401  (registers ds.pound)
+    from pound_mc.analysis import plot
+    from pound_mc.errors import InputError
+
+    name = ds.attrs.get("study_name", "study")
+    description = ""
+    figures = []
+    fig = plot.spectrum_chart(ds)
+    figures.append(
+        _figure_html(
+            "spectrum",
+            fig,
+            "Impact force spectrum: median peak impact force over the samples (line) and the "
+            "5-95 % range (band) against the first grid axis, one line per value of the second.",
+        )
+    )
+    if plot.GAP_DIM in ds.dims:
+        fig = plot.probability_chart(ds, base_dir=base_dir)
+        figures.append(
+            _figure_html(
+                "probability",
+                fig,
+                "Pounding probability: the fraction of samples with at least one impact against "
+                "the initial gap; vertical lines mark the gaps the ABS, SRSS and DDC separation "
+                "rules ask for.",
+            )
+        )
+    if int(((ds["impacts"] > 0) & ds.pound.ok).sum()):
+        fig = plot.distribution_chart(ds)
+        figures.append(
+            _figure_html(
+                "distribution",
+                fig,
+                "Distribution of the peak impact force of the simulations that pounded.",
+            )
+        )
+    if history:
+        force = ds["peak_force"].where(ds.pound.ok).fillna(-1.0)
+        flat = int(np.argmax(force.values))
+        if force.values.flat[flat] > 0:
+            idx = dict(zip(force.dims, np.unravel_index(flat, force.shape), strict=True))
+            coords = {d: ds[d].values[i] for d, i in idx.items() if d not in ("record", "sample")}
+            try:
+                fig = ds.pound.plot.history(
+                    record=int(idx["record"]),
+                    sample=int(idx["sample"]),
+                    study_path=None if base_dir is None else Path(base_dir) / "study.toml",
+                    **coords,
+                )
+            except InputError as exc:  # records not readable here: say so on the page
+                figures.append(f"<p>(No time history: {html.escape(str(exc))})</p>")
+            else:
+                figures.append(
+                    _figure_html(
+                        "history",
+                        fig,
+                        "Time history of the simulation with the largest peak impact force, "
+                        "run again from the study text: top-floor displacements, penetration "
+                        "and contact force.",
+                    )
+                )
+    for line in str(ds.attrs.get("study_text", "")).splitlines():
+        if line.strip().startswith("description"):
+            description = line.split("=", 1)[1].strip().strip('"')
+    body = [
+        f"<h1>pound-mc results: {html.escape(name)}</h1>",
+        f'<p class="lead">{html.escape(description)}</p>',
+        "<h2>Charts</h2>",
+        *figures,
+        _summary_html(ds),
+        "<h2>Study</h2>",
+        f'<pre id="study-text">{html.escape(str(ds.attrs.get("study_text", "")))}</pre>',
+        _provenance_html(ds),
+    ]
+    return (
+        "<!DOCTYPE html>\n"
+        '<html lang="en"><head><meta charset="utf-8">'
+        '<meta name="viewport" content="width=device-width, initial-scale=1">'
+        f"<title>pound-mc results: {html.escape(name)}</title>"
+        f"<style>{_CSS}</style></head>\n<body>\n" + "\n".join(body) + "\n</body></html>\n"
+    )
+
+
+def write_report(ds, path: str | Path, *, base_dir=None, history: bool = True) -> Path:
+    """Write the results page (:func:`report_html`) to ``path`` atomically."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    text = report_html(ds, base_dir=base_dir, history=history)
+    tmp = path.with_name(f".{path.name}.part")
+    tmp.write_text(text, encoding="utf-8")
+    os.replace(tmp, path)
+    return path

@@ -1,0 +1,173 @@
+"""Subcommands about the impact physics: ``materials``, ``calibrate`` and ``droptest``."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+
+from pound_mc.errors import InputError
+from pound_mc.physics import materials
+from pound_mc.physics.relations import RELATIONS, effective_restitution, xi_from_e
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    """Add the physics subcommands to the ``pound-mc`` parser."""
+    p = sub.add_parser("materials", help="the seed paper's Tables 1-3 (measured e and beta)")
+    p.add_argument("--table", type=int, choices=(1, 2, 3), help="only this table")
+    p.add_argument("--json", action="store_true", help="print the tables as JSON")
+    p.add_argument("--plot", metavar="FILE.png", help="chart of Table 2 against impact velocity")
+    p.set_defaults(func=_materials)
+
+    p = sub.add_parser("calibrate", help="impact damping ratio xi for a restitution e")
+    p.add_argument("--e", type=float, required=True, help="coefficient of restitution (0, 1]")
+    p.add_argument(
+        "--relation",
+        default="jankowski2008",
+        help=f"relation for 'xi' in --json ({', '.join(RELATIONS)}; default jankowski2008)",
+    )
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(func=_calibrate)
+
+    p = sub.add_parser("droptest", help="virtual drop test of the seed's experiment")
+    p.add_argument("--material", default="concrete", choices=materials.MATERIALS)
+    p.add_argument("--mass", type=float, help="ball mass [kg] (default: middle ball of Table 1)")
+    p.add_argument("--velocity", type=float, default=1.0, help="impact velocity [m/s]")
+    p.add_argument("--beta", type=float, help="impact stiffness (default: Table 3 mean)")
+    group = p.add_mutually_exclusive_group()
+    group.add_argument("--e", type=float, help="target restitution (default: Table 2 mid-range)")
+    group.add_argument("--xi", type=float, help="impact damping ratio")
+    p.add_argument("--relation", default=None, help="xi-e relation (default jankowski2008)")
+    p.add_argument("--model", default="jankowski", help="contact law (default jankowski)")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.add_argument("--plot", metavar="FILE.png", help="write the force time history chart")
+    p.add_argument(
+        "--out",
+        metavar="DIR",
+        help="write the drop-test, relations and Table 2 charts into DIR",
+    )
+    p.set_defaults(func=_droptest)
+
+
+def _materials(args) -> int:
+    numbers = (args.table,) if args.table else (1, 2, 3)
+    if args.json:
+        out = {f"table{n}": materials.table(n).to_dict(orient="records") for n in numbers}
+        print(json.dumps(out, indent=1))
+    else:
+        titles = {
+            1: "Table 1. Balls used in the drop experiment",
+            2: "Table 2. Coefficient of restitution e [-] against prior-impact velocity [m/s]",
+            3: "Table 3. Impact stiffness parameter beta [N/m^1.5] against ball mass [kg]",
+        }
+        for n in numbers:
+            print(f"Jankowski (2008) {titles[n]}")
+            print(materials.table(n).to_string(index=False))
+            print()
+    if args.plot:
+        from pound_mc.analysis.plot import restitution_ranges_chart
+
+        restitution_ranges_chart(args.plot)
+        print(f"wrote {args.plot}")
+    return 0
+
+
+def _calibrate(args) -> int:
+    from pound_mc.physics.droptest import drop_test
+
+    e = args.e
+    if args.relation not in RELATIONS:
+        raise InputError(
+            f"unknown relation {args.relation!r}; choose one of {sorted(RELATIONS)}",
+            key="--relation",
+        )
+    rows = {}
+    for name in RELATIONS:
+        xi = float(xi_from_e(e, name))
+        if name == "kelvin":
+            # The Kelvin relation belongs to the linear viscoelastic law: check it there.
+            achieved = drop_test(1.0, 1.0, 1.0e7, xi=xi, model="kelvin", n_history=4).restitution
+            law = "kelvin"
+        else:
+            achieved = float(effective_restitution(e, name))
+            law = "jankowski"
+        rows[name] = {"xi": xi, "e_effective": achieved, "contact_model": law}
+    chosen = rows[args.relation]
+    if args.json:
+        print(
+            json.dumps(
+                {
+                    "e": e,
+                    "relation": args.relation,
+                    "xi": chosen["xi"],
+                    "e_effective": chosen["e_effective"],
+                    "relations": rows,
+                }
+            )
+        )
+        return 0
+    print(f"target restitution e = {e:g}")
+    print(f"{'relation':<15}{'law':<11}{'xi':>12}{'e really produced':>20}")
+    for name, row in rows.items():
+        mark = "  <-" if name == args.relation else ""
+        print(
+            f"{name:<15}{row['contact_model']:<11}{row['xi']:>12.6f}"
+            f"{row['e_effective']:>20.6f}{mark}"
+        )
+    return 0
+
+
+def _droptest(args) -> int:
+    from pound_mc.analysis.plot import droptest_chart, restitution_chart, restitution_ranges_chart
+    from pound_mc.physics.droptest import drop_test
+
+    t1 = materials.table(1)
+    balls = t1[t1["material"] == args.material]
+    if args.mass is None:
+        middle = balls.iloc[len(balls) // 2]
+        mass = 0.5 * (middle["mass_min_kg"] + middle["mass_max_kg"])
+    else:
+        mass = args.mass
+    if not (np.isfinite(args.velocity) and args.velocity > 0):
+        raise InputError(f"must be > 0, got {args.velocity}", key="--velocity")
+    if not (mass > 0 and math.isfinite(mass)):
+        raise InputError(f"must be > 0, got {mass}", key="--mass")
+    beta = args.beta
+    if beta is None:
+        beta = materials.stiffness_range(args.material, mass)[2]
+    xi, e = args.xi, args.e
+    if xi is None and e is None:
+        e = float(np.mean(materials.restitution_range(args.material, args.velocity)))
+    result = drop_test(
+        mass, args.velocity, beta, xi=xi, e=e, relation=args.relation, model=args.model
+    )
+    out = result.as_dict()
+    out.update(material=args.material, e_target=e, relation=args.relation)
+    if args.json:
+        print(json.dumps(out))
+    else:
+        print(f"virtual drop test: {args.material} ball on a rigid {args.material} surface")
+        print(f"  mass {mass:.4g} kg, impact velocity {args.velocity:g} m/s, beta {beta:.4g}")
+        if e is not None:
+            print(f"  target e {e:.4f} -> xi {result.xi:.5f} ({args.relation or 'jankowski2008'})")
+        print(f"  restitution achieved  {result.restitution:.6f}")
+        print(f"  peak penetration      {result.max_penetration_m * 1e6:.4f} um")
+        print(f"  peak force            {result.peak_force_N:.6g} N")
+        print(f"  contact duration      {result.contact_duration_s * 1e3:.6f} ms")
+    written = []
+    if args.plot:
+        droptest_chart(result, args.plot)
+        written.append(args.plot)
+    if args.out:
+        folder = Path(args.out)
+        written.append(droptest_chart(result, folder / "droptest.png") and folder / "droptest.png")
+        restitution_chart(folder / "restitution_relations.png")
+        restitution_ranges_chart(folder / "restitution_table2.png")
+        written += [folder / "restitution_relations.png", folder / "restitution_table2.png"]
+    if written and not args.json:
+        for path in written:
+            print(f"wrote {path}")
+    return 0

@@ -1,0 +1,130 @@
+"""Subcommands about ground motions: ``records list`` and ``records info``."""
+
+from __future__ import annotations
+
+import argparse
+import json
+
+import numpy as np
+
+from pound_mc.errors import InputError
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    """Add ``records list`` and ``records info`` to the ``pound-mc`` parser."""
+    p = sub.add_parser("records", help="ground motions: the built-in catalogue, record summaries")
+    actions = p.add_subparsers(dest="records_command", metavar="ACTION")
+    actions.required = True
+
+    q = actions.add_parser("list", help="the built-in records (builtin:NAME)")
+    q.add_argument("--json", action="store_true", help="print the catalogue as JSON")
+    q.set_defaults(func=_list)
+
+    q = actions.add_parser("info", help="PGA, duration and step of a record")
+    q.add_argument(
+        "source",
+        metavar="NAME|PATH",
+        help="builtin:NAME, synthetic:MODEL, a bare builtin name or a file",
+    )
+    q.add_argument("--json", action="store_true", help="print one JSON object")
+    q.add_argument("--plot", metavar="FILE.png", help="acceleration and 5%%-damped PSA chart")
+    q.add_argument("--units", help="units of the file's values: g, gal or m/s^2")
+    q.add_argument("--component", help="component of a multi-trace file")
+    q.add_argument("--seed", type=int, default=0, help="realisation of a synthetic motion")
+    q.add_argument(
+        "--raw",
+        action="store_true",
+        help="keep the record's mean (default: demeaned as in studies)",
+    )
+    q.set_defaults(func=_info)
+
+
+def _list(args) -> int:
+    from pound_mc.motions.records import builtin_catalogue
+
+    catalogue = builtin_catalogue()
+    if args.json:
+        print(json.dumps(catalogue, indent=1))
+        return 0
+    columns = ("name", "event", "station", "component", "format", "source_package")
+    rows = [
+        {"name": f"builtin:{name}", **{k: str(entry[k]) for k in columns[1:]}}
+        for name, entry in catalogue.items()
+    ]
+    widths = {c: max(len(c), *(len(r[c]) for r in rows)) for c in columns}
+    print("  ".join(c.ljust(widths[c]) for c in columns).rstrip())
+    print("  ".join("-" * widths[c] for c in columns))
+    for row in rows:
+        print("  ".join(row[c].ljust(widths[c]) for c in columns).rstrip())
+    return 0
+
+
+def _resolve(source: str) -> str:
+    """A bare catalogue name means ``builtin:NAME`` unless a file of that name exists."""
+    from pathlib import Path
+
+    from pound_mc.motions.records import BUILTIN_RECORDS
+
+    if ":" not in source and source.lower() in BUILTIN_RECORDS and not Path(source).exists():
+        return f"builtin:{source.lower()}"
+    return source
+
+
+def _info(args) -> int:
+    from pound_mc.motions.records import load_record, record_arrays, record_info
+
+    source = _resolve(args.source)
+    seed = args.seed if source.lower().startswith("synthetic:") else None
+    trace = load_record(
+        source, demean=not args.raw, units=args.units, component=args.component, seed=seed
+    )
+    info = record_info(trace)
+    if args.plot:
+        _plot(trace, info, args.plot)
+    if args.json:
+        print(json.dumps(info))
+        return 0
+    print(f"{'record':<12} {info.get('source', source)}")
+    for key in ("event", "date", "station", "component", "format", "source_units"):
+        if key in info:
+            print(f"{key.replace('_', ' '):<12} {info[key]}")
+    dt, _ = record_arrays(trace)
+    print(f"{'samples':<12} {info['npts']} at dt = {dt:g} s ({1.0 / dt:g} Hz)")
+    print(f"{'duration':<12} {info['duration_s']:.4g} s")
+    print(f"{'PGA':<12} {info['pga_g']:.5g} g = {info['pga_m_s2']:.5g} m/s^2")
+    if args.plot:
+        print(f"wrote {args.plot}")
+    return 0
+
+
+def _plot(trace, info: dict, path: str) -> None:
+    from matplotlib.figure import Figure
+
+    from pound_mc.analysis.plot import save
+    from pound_mc.motions.records import G, record_arrays
+    from pound_mc.physics.spectra import response_spectrum
+
+    if not str(path).lower().endswith(".png"):
+        raise InputError(
+            f"the chart is written as PNG; give a .png file, got {path!r}", key="--plot"
+        )
+    dt, acc = record_arrays(trace)
+    t = np.arange(acc.size) * dt
+    periods = np.geomspace(max(0.02, 2.0 * dt), 5.0, 120)
+    psa = response_spectrum(dt, acc, periods, damping=0.05)
+    fig = Figure(figsize=(8.0, 6.5), layout="constrained")
+    ax1, ax2 = fig.subplots(2, 1)
+    ax1.plot(t, acc / G, lw=0.6, color="tab:blue")
+    ax1.set_xlabel("time [s]")
+    ax1.set_ylabel("ground acceleration [g]")
+    title = info.get("source", "")
+    details = ", ".join(str(info[k]) for k in ("event", "station", "component") if k in info)
+    ax1.set_title(f"{title}\n{details}" if details else title, fontsize=9)
+    ax1.grid(alpha=0.3)
+    ax2.plot(periods, psa / G, color="tab:red")
+    ax2.set_xscale("log")
+    ax2.set_xlabel("period [s]")
+    ax2.set_ylabel("pseudo-acceleration [g]")
+    ax2.set_title("5 %-damped pseudo-acceleration response spectrum", fontsize=9)
+    ax2.grid(alpha=0.3, which="both")
+    save(fig, path)

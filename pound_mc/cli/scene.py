@@ -1,0 +1,111 @@
+"""Subcommands for single scenes and the numerics: ``simulate``, ``bench``, ``stability``."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    """Add ``simulate``, ``bench`` and ``stability`` to the ``pound-mc`` parser."""
+    p = sub.add_parser("simulate", help="run one scene (TOML) and print its results")
+    p.add_argument("scene", metavar="SCENE.toml")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.add_argument("--plot", metavar="FILE.png", help="chart of displacements, penetration, force")
+    p.add_argument("--method", help="override [integrator] method")
+    p.add_argument("--dt", type=float, metavar="S", help="override [integrator] dt_s")
+    p.set_defaults(func=_simulate)
+
+    p = sub.add_parser("bench", help="speed against accuracy of every method (B1 and MDOF)")
+    p.add_argument("--json", action="store_true", help="print the table as JSON records")
+    p.add_argument("--out", default="outputs", metavar="DIR", help="folder for CSV and PNG")
+    p.add_argument("--repeats", type=int, default=7, help="timed runs per point (median)")
+    p.add_argument("--methods", nargs="+", metavar="METHOD", help="methods to run (all)")
+    p.add_argument("--scenes", nargs="+", metavar="SCENE", default=["B1", "shear-3-5"])
+    p.set_defaults(func=_bench)
+
+    p = sub.add_parser("stability", help="map the largest stable step against contact stiffness")
+    p.add_argument("--out", default="outputs", metavar="DIR", help="folder for CSV and PNG")
+    p.add_argument("--json", action="store_true", help="print the table as JSON records")
+    p.set_defaults(func=_stability)
+
+
+def _simulate(args) -> int:
+    from pound_mc.errors import InputError
+    from pound_mc.integrators.kernels import METHODS
+    from pound_mc.scene import load_scene, simulate
+
+    scene = load_scene(args.scene)
+    if args.method is not None and args.method not in METHODS:
+        raise InputError(f"unknown method {args.method!r}; allowed: {', '.join(METHODS)}",
+                         key="--method")  # fmt: skip
+    if args.dt is not None and not args.dt > 0:
+        raise InputError(f"must be > 0, got {args.dt}", key="--dt")
+    res = simulate(scene, history=args.plot is not None, method=args.method, dt_s=args.dt)
+    if args.plot:
+        from pound_mc.analysis.plot_numerics import time_history_chart
+
+        time_history_chart(res, args.plot)
+    info = res.to_json()
+    if args.json:
+        print(json.dumps(info, indent=2))
+    else:
+        print(f"scene            {args.scene}")
+        print(f"method           {info['method']} (contact law {info['contact_model']})")
+        print(f"status           {info['status']}")
+        print(f"impacts          {info['impacts']}")
+        print(f"peak force       {info['peak_force_N']:.6g} N at t = {info['peak_force_time_s']} s")
+        print(f"max penetration  {info['max_penetration_m']:.6g} m")
+        print(f"peak disp left   {info['peak_disp_left_m']:.6g} m")
+        print(f"peak disp right  {info['peak_disp_right_m']:.6g} m")
+        print(f"energy residual  {info['energy_residual']:.3g} (of the energy put in)")
+        if args.plot:
+            print(f"chart            {args.plot}")
+    return 0 if info["status"] == "ok" else 1
+
+
+def _bench(args) -> int:
+    from pound_mc.analysis.plot_numerics import work_precision_chart
+    from pound_mc.errors import InputError
+    from pound_mc.integrators.kernels import METHODS
+    from pound_mc.numerics.bench import SCENES, benchmark
+
+    for m in args.methods or []:
+        if m not in METHODS:
+            raise InputError(
+                f"unknown method {m!r}; allowed: {', '.join(METHODS)}", key="--methods"
+            )
+    for s in args.scenes:
+        if s not in SCENES:
+            raise InputError(f"unknown scene {s!r}; allowed: {', '.join(SCENES)}", key="--scenes")
+    table = benchmark(args.scenes, args.methods, repeats=args.repeats, progress=not args.json)
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    table.to_csv(out / "bench.csv", index=False)
+    work_precision_chart(table, out / "work_precision.png")
+    if args.json:
+        print(table.to_json(orient="records", indent=1))
+    else:
+        cols = ["scene", "method", "dt_s", "substeps", "seconds", "impacts", "err_peak_force",
+                "err_peak_disp_left", "err_peak_disp_right", "status"]  # fmt: skip
+        print(table[cols].to_string(index=False, float_format=lambda x: f"{x:.3g}"))
+        print(f"wrote {out / 'bench.csv'} and {out / 'work_precision.png'}")
+    return 0
+
+
+def _stability(args) -> int:
+    from pound_mc.analysis.plot_numerics import stability_map_chart
+    from pound_mc.numerics.stability import stability_map
+
+    table = stability_map()
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    table.to_csv(out / "stability.csv", index=False)
+    stability_map_chart(table, out / "stability_map.png")
+    if args.json:
+        print(table.to_json(orient="records", indent=1))
+    else:
+        print(table.to_string(index=False, float_format=lambda x: f"{x:.4g}"))
+        print(f"wrote {out / 'stability.csv'} and {out / 'stability_map.png'}")
+    return 0

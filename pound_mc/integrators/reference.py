@@ -1,0 +1,404 @@
+"""Independent tight-tolerance reference solution of a scene (SciPy, pure Python).
+
+Used to check the compiled kernels of :mod:`pound_mc.integrators.kernels`; it shares none of their
+code.  The buildings are integrated in *physical* floor coordinates (not modes),
+
+``M x'' + C x' + K x = -M 1 a_g(t) + f_c(x, x')``,
+
+with the mass, stiffness and (classical) damping matrices of
+:class:`pound_mc.physics.structures.Building`.
+At a contact between left floor ``i`` and right floor ``j`` the penetration is
+``delta = x_i - x_j - gap`` and the force ``F >= 0`` acts as ``-F`` on the left floor and ``+F`` on
+the right floor (``../shared/DESIGN.md`` section 2).  The force laws are written out here:
+
+``jankowski`` (seed eq. 1.1)
+    approach (``delta_dot > 0``): ``F = beta delta^1.5 + c delta_dot`` with
+    ``c = 2 xi sqrt(beta sqrt(delta) m_eff)``; restitution: ``F = beta delta^1.5``.
+``hertz``
+    ``F = beta delta^1.5``.
+``linear`` / ``kelvin``
+    ``F = k delta`` / ``F = k delta + 2 xi sqrt(k m_eff) delta_dot``.
+``hertzdamp``
+    ``F = max(0, beta delta^1.5 (1 + zeta delta_dot))`` with ``zeta = 8 (1 - e) / (5 e v0)``
+    (Ye et al. 2009), ``v0`` the approach velocity of the episode.
+
+The ground acceleration is the record's samples linearly interpolated, so the right-hand side
+has kinks at the samples: the solution is integrated sample interval by sample interval, each a
+smooth problem, with SciPy's ``DOP853`` at ``rtol = 1e-11``.  Every contact carries an explicit
+phase (open, approach, restitution); the switches are terminal events (open -> approach when
+``delta`` crosses 0 upwards, approach -> restitution when ``delta_dot`` crosses 0 downwards,
+restitution -> open when ``delta`` crosses 0 downwards, restitution -> approach when
+``delta_dot`` crosses 0 upwards) and the integration restarts after each with the new phases,
+so the right-hand side is smooth inside every segment.  Peak force and peak displacements are
+continuous-time maxima: the dense output of every segment is sampled finely and the best sample
+refined with :func:`scipy.optimize.minimize_scalar`.
+
+This is slow (seconds for a 30 s SDOF-pair record) and meant for tests and checks only.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+from scipy.integrate import solve_ivp
+from scipy.optimize import minimize_scalar
+
+__all__ = ["reference_solution"]
+
+_OPEN, _APPROACH, _RESTITUTION = 0, 1, 2
+#: Dense-output samples per solver step when looking for maxima.
+_SAMPLES_PER_STEP = 8
+_MODELS = ("jankowski", "hertz", "linear", "kelvin", "hertzdamp")
+
+
+def _contact_force(model, d, dd, beta, xi, m_eff, zhd, phase):
+    """Contact force [N] in a phase (0 open, 1 approach, 2 restitution); arrays allowed."""
+    if phase == _OPEN:
+        return np.zeros_like(np.asarray(d, dtype=float))
+    d = np.maximum(d, 0.0)
+    if model == "jankowski":
+        f = beta * d**1.5
+        if phase == _APPROACH:
+            f = f + 2.0 * xi * np.sqrt(beta * np.sqrt(d) * m_eff) * dd
+        return f
+    if model == "hertz":
+        return beta * d**1.5
+    if model == "linear":
+        return beta * d
+    if model == "kelvin":
+        return beta * d + 2.0 * xi * np.sqrt(beta * m_eff) * dd
+    # hertzdamp
+    return np.maximum(beta * d**1.5 * (1.0 + zhd * dd), 0.0)
+
+
+def _refine_max(fun, t_lo, t_hi, f_guess):
+    """Maximum of a smooth scalar ``fun`` on ``[t_lo, t_hi]`` (bounded Brent)."""
+    if t_hi <= t_lo:
+        return f_guess
+    res = minimize_scalar(
+        lambda t: -fun(t),
+        bounds=(t_lo, t_hi),
+        method="bounded",
+        options={"xatol": 1e-13 * max(1.0, abs(t_hi)), "maxiter": 200},
+    )
+    return max(f_guess, -float(res.fun))
+
+
+def reference_solution(
+    scene,
+    record=None,
+    rtol: float = 1e-11,
+    atol_scale: float = 1e-12,
+    *,
+    x0=None,
+    v0=None,
+) -> dict:
+    """Solve ``scene`` with SciPy's DOP853 at a tight tolerance.
+
+    Parameters
+    ----------
+    scene : pound_mc.scene.Scene
+        The scene (buildings, contacts, gap, contact law; its integrator settings are ignored).
+    record : tuple (dt_s, acceleration), optional
+        Sampling interval [s] and samples [m/s^2]; default the scene's own record
+        (``scene.load_record()``).  The simulation runs from t = 0 to the last sample.
+    rtol : float
+        Relative tolerance of the ODE solver.
+    atol_scale : float
+        Absolute tolerance relative to the response scale (displacement ``PGA / omega_min^2``
+        or the initial state, velocities that times ``omega_max``).
+    x0, v0 : array_like, optional
+        Initial floor displacements [m] and velocities [m/s] relative to the ground, left
+        building's floors (bottom to top) then right building's; default at rest.
+
+    Returns
+    -------
+    dict
+        ``peak_force`` [N], ``impacts``, ``max_penetration`` [m] (0 without impacts),
+        ``peak_disp_left``, ``peak_disp_right`` [m] (max over floors and time of ``|x|``),
+        ``impact_times`` (list [s]), ``peak_force_time`` [s], per-contact arrays
+        ``contact_peak_force`` and ``contact_impacts``, ``x_end``, ``v_end`` (final state),
+        ``segments`` (solver calls), ``wall_s``.
+    """
+    t_wall = time.perf_counter()
+    model = scene.contact_model
+    if model not in _MODELS:
+        raise ValueError(f"unsupported contact model {model!r}")
+    if record is None:
+        from pound_mc.motions.records import record_arrays
+
+        record = record_arrays(scene.load_record())
+    dt_rec, acc = record
+    dt_rec = float(dt_rec)
+    acc = np.asarray(acc, dtype=float)
+    npts = acc.size
+
+    left, right = scene.left, scene.right
+    nl, nr = left.n_floors, right.n_floors
+    n = nl + nr
+    m = np.zeros((n, n))
+    k = np.zeros((n, n))
+    c = np.zeros((n, n))
+    for sl, b in ((slice(0, nl), left), (slice(nl, n), right)):
+        m[sl, sl] = b.mass_matrix()
+        k[sl, sl] = b.stiffness_matrix()
+        c[sl, sl] = b.damping_matrix()
+    minv = np.linalg.inv(m)
+    # first-order system y = [x, v]: y' = A y + b(t) + contact terms
+    a_lin = np.zeros((2 * n, 2 * n))
+    a_lin[:n, n:] = np.eye(n)
+    a_lin[n:, :n] = -minv @ k
+    a_lin[n:, n:] = -minv @ c
+    masses = np.diag(m)
+
+    nc = len(scene.contacts)
+    il = np.array([ct.left_floor for ct in scene.contacts], dtype=int)
+    ir = np.array([nl + ct.right_floor for ct in scene.contacts], dtype=int)
+    meff = np.array([ct.m_eff for ct in scene.contacts], dtype=float)
+    gap = np.broadcast_to(np.asarray(scene.gap_m, dtype=float), (nc,)).copy()
+    beta = float(scene.stiffness)
+    if model == "hertzdamp":
+        e_coef = float(scene.e)
+        xi = 0.0
+    else:
+        e_coef = 1.0
+        xi = float(scene.xi) if scene.xi is not None else 0.0
+    zhd = np.zeros(nc)
+
+    y = np.zeros(2 * n)
+    if x0 is not None:
+        y[:n] = np.asarray(x0, dtype=float)
+    if v0 is not None:
+        y[n:] = np.asarray(v0, dtype=float)
+
+    # tolerances
+    omega_all = np.r_[left.omega, right.omega]
+    pga = float(np.max(np.abs(acc))) if npts else 0.0
+    x_scale = max(pga / omega_all.min() ** 2, np.max(np.abs(y[:n])), 1e-300)
+    x_scale = max(x_scale, np.max(np.abs(y[n:])) / omega_all.min())
+    atol = np.r_[
+        np.full(n, atol_scale * x_scale), np.full(n, atol_scale * x_scale * omega_all.max())
+    ]
+
+    # phases at the start (already in contact: by the sign of delta_dot, not counted)
+    phase = np.zeros(nc, dtype=int)
+    for j in range(nc):
+        d = y[il[j]] - y[ir[j]] - gap[j]
+        if d > 0.0:
+            dd = y[n + il[j]] - y[n + ir[j]]
+            phase[j] = _APPROACH if dd > 0.0 else _RESTITUTION
+            if model == "hertzdamp":
+                zhd[j] = 8.0 * (1.0 - e_coef) / (5.0 * e_coef * max(dd, 1e-12))
+
+    state = {"ag0": 0.0, "slope": 0.0, "t0": 0.0}
+
+    def forces(x, v):
+        f = np.zeros(nc)
+        for j in range(nc):
+            if phase[j] != _OPEN:
+                d = x[il[j]] - x[ir[j]] - gap[j]
+                dd = v[il[j]] - v[ir[j]]
+                f[j] = _contact_force(model, d, dd, beta, xi, meff[j], zhd[j], phase[j])
+        return f
+
+    def rhs(t, yy):
+        dy = a_lin @ yy
+        dy[n:] -= state["ag0"] + state["slope"] * (t - state["t0"])
+        if np.any(phase):
+            f = forces(yy[:n], yy[n:])
+            np.subtract.at(dy, n + il, f / masses[il])
+            np.add.at(dy, n + ir, f / masses[ir])
+        return dy
+
+    def make_event(j, which, direction):
+        if which == "d":
+
+            def ev(_t, yy):
+                return yy[il[j]] - yy[ir[j]] - gap[j]
+
+        else:
+
+            def ev(_t, yy):
+                return yy[n + il[j]] - yy[n + ir[j]]
+
+        ev.terminal = True
+        ev.direction = direction
+        return ev
+
+    ev_d_up = [make_event(j, "d", 1.0) for j in range(nc)]
+    ev_dd_down = [make_event(j, "dd", -1.0) for j in range(nc)]
+    ev_d_down = [make_event(j, "d", -1.0) for j in range(nc)]
+    ev_dd_up = [make_event(j, "dd", 1.0) for j in range(nc)]
+
+    peak_x = np.zeros(n)
+    peak_f = np.zeros(nc)
+    peak_f_time = 0.0
+    impacts = np.zeros(nc, dtype=int)
+    max_pen = np.full(nc, -np.inf)
+    impact_times: list[float] = []
+    segments = 0
+    h_last = None
+    for f_idx in range(n):
+        peak_x[f_idx] = abs(y[f_idx])
+
+    def scan_segment(sol_t, dense):
+        """Continuous-time maxima of |x| per floor and of the contact forces."""
+        nonlocal peak_f_time
+        tt = np.asarray(sol_t)
+        if tt.size < 2:
+            return
+        frac = np.linspace(0.0, 1.0, _SAMPLES_PER_STEP + 1)[:-1]
+        grid = (tt[:-1, None] + np.diff(tt)[:, None] * frac[None, :]).ravel()
+        grid = np.r_[grid, tt[-1]]
+        yy = dense(grid)
+        ax = np.abs(yy[:n])
+        for f_idx in range(n):
+            kk = int(np.argmax(ax[f_idx]))
+            val = ax[f_idx, kk]
+            if val > peak_x[f_idx] * (1.0 - 1e-3):
+                lo = grid[max(kk - 1, 0)]
+                hi = grid[min(kk + 1, grid.size - 1)]
+                val = _refine_max(lambda t, f_idx=f_idx: abs(dense(t)[f_idx]), lo, hi, val)
+                peak_x[f_idx] = max(peak_x[f_idx], val)
+        for j in range(nc):
+            if phase[j] == _OPEN:
+                continue
+
+            def force_at(t, j=j):
+                s = dense(t)
+                return _contact_force(
+                    model,
+                    s[il[j]] - s[ir[j]] - gap[j],
+                    s[n + il[j]] - s[n + ir[j]],
+                    beta,
+                    xi,
+                    meff[j],
+                    zhd[j],
+                    phase[j],
+                )
+
+            fs = _contact_force(
+                model,
+                yy[il[j]] - yy[ir[j]] - gap[j],
+                yy[n + il[j]] - yy[n + ir[j]],
+                beta,
+                xi,
+                meff[j],
+                zhd[j],
+                phase[j],
+            )
+            kk = int(np.argmax(fs))
+            val = float(fs[kk])
+            t_best = grid[kk]
+            if val > peak_f[j] * (1.0 - 1e-3):
+                lo = grid[max(kk - 1, 0)]
+                hi = grid[min(kk + 1, grid.size - 1)]
+                if hi > lo:
+                    res = minimize_scalar(
+                        lambda t: -float(force_at(t)),
+                        bounds=(lo, hi),
+                        method="bounded",
+                        options={"xatol": 1e-13 * max(1.0, hi), "maxiter": 200},
+                    )
+                    if -res.fun > val:
+                        val = -float(res.fun)
+                        t_best = float(res.x)
+            if val > peak_f[j]:
+                peak_f[j] = val
+                if val >= peak_f.max():
+                    peak_f_time = t_best
+
+    for i in range(npts - 1):
+        t_a = i * dt_rec
+        t_b = (i + 1) * dt_rec
+        state["ag0"] = acc[i]
+        state["slope"] = (acc[i + 1] - acc[i]) / dt_rec
+        state["t0"] = t_a
+        t = t_a
+        while t_b - t > 1e-14 * max(1.0, t_b):
+            events, kinds = [], []
+            for j in range(nc):
+                if phase[j] == _OPEN:
+                    events.append(ev_d_up[j])
+                    kinds.append((j, "onset"))
+                elif phase[j] == _APPROACH:
+                    events.append(ev_dd_down[j])
+                    kinds.append((j, "turn"))
+                else:
+                    events.append(ev_d_down[j])
+                    kinds.append((j, "separation"))
+                    events.append(ev_dd_up[j])
+                    kinds.append((j, "reapproach"))
+            kw = {}
+            if h_last is not None:
+                kw["first_step"] = min(h_last, t_b - t)
+            sol = solve_ivp(
+                rhs,
+                (t, t_b),
+                y,
+                method="DOP853",
+                rtol=rtol,
+                atol=atol,
+                events=events,
+                dense_output=True,
+                **kw,
+            )
+            segments += 1
+            if sol.status < 0:
+                raise RuntimeError(f"solve_ivp failed at t = {t}: {sol.message}")
+            if sol.t.size >= 2:
+                steps = np.diff(sol.t)
+                h_last = float(steps.max())
+            scan_segment(sol.t, sol.sol)
+            y = sol.y[:, -1].copy()
+            t = float(sol.t[-1])
+            if sol.status == 1:
+                fired = [(float(te[0]), idx) for idx, te in enumerate(sol.t_events) if te.size > 0]
+                _, idx = min(fired)
+                j, kind = kinds[idx]
+                if kind == "onset":
+                    phase[j] = _APPROACH
+                    impacts[j] += 1
+                    impact_times.append(t)
+                    if model == "hertzdamp":
+                        vimp = y[n + il[j]] - y[n + ir[j]]
+                        zhd[j] = 8.0 * (1.0 - e_coef) / (5.0 * e_coef * max(vimp, 1e-12))
+                    h_last = None  # let the solver choose a step for the stiff contact
+                elif kind == "turn":
+                    phase[j] = _RESTITUTION
+                    max_pen[j] = max(max_pen[j], y[il[j]] - y[ir[j]] - gap[j])
+                elif kind == "separation":
+                    phase[j] = _OPEN
+                else:
+                    phase[j] = _APPROACH
+
+    x_left = peak_x[:nl]
+    x_right = peak_x[nl:]
+    total_impacts = int(impacts.sum())
+    return {
+        "peak_force": float(peak_f.max()) if nc else 0.0,
+        "peak_force_time": float(peak_f_time),
+        "impacts": total_impacts,
+        "max_penetration": float(max_pen.max()) if total_impacts else 0.0,
+        "peak_disp_left": float(x_left.max()),
+        "peak_disp_right": float(x_right.max()),
+        "impact_times": impact_times,
+        "contact_peak_force": peak_f.copy(),
+        "contact_impacts": impacts.copy(),
+        "x_end": y[:n].copy(),
+        "v_end": y[n:].copy(),
+        "segments": segments,
+        "wall_s": time.perf_counter() - t_wall,
+    }
+
+
+if __name__ == "__main__":  # pragma: no cover - manual check on a scene file
+    import sys
+
+    from pound_mc.scene import load_scene
+
+    res = reference_solution(load_scene(sys.argv[1]))
+    for key in ("peak_force", "impacts", "max_penetration", "peak_disp_left", "peak_disp_right"):
+        print(f"{key}: {res[key]!r}")
+    print(f"wall: {res['wall_s']:.1f} s, segments {res['segments']}")

@@ -1,0 +1,203 @@
+"""Study results as a self-describing :class:`xarray.Dataset` and its netCDF file.
+
+Layout (``../shared/DESIGN.md`` section 8): per simulation, dims ``(record, *grid axes,
+sample)``: ``peak_force``, ``impacts``, ``max_penetration``, ``peak_disp_left``,
+``peak_disp_right``, ``impulse``, ``dissipated_energy``, ``energy_residual``, ``status``.
+Per sample: ``e``, ``beta``, ``xi``, ``e_effective`` (with the grid axis instead where that
+parameter is a grid axis, scalars where it is fixed).  Summaries over samples:
+``peak_force_mean``, ``peak_force_quantile`` (the impact force spectrum) and
+``pounding_probability``.  CF-1.13 attributes and provenance in global attributes.
+
+With a shear building the contacts are the pairs of floors at equal height, along a
+``contact`` dimension (coordinates ``contact`` 1-based, ``contact_elevation`` [m],
+``contact_left_floor`` and ``contact_right_floor`` 1-based): per simulation and contact, dims
+``(record, *grid axes, sample, contact)``: ``contact_peak_force``, ``contact_impacts``,
+``contact_max_penetration`` and ``contact_impulse``.  The per-simulation variables then sum
+(``impacts``, ``impulse``) or take the maximum (``peak_force``, ``max_penetration``) over the
+contacts.
+"""
+
+from __future__ import annotations
+
+import os
+import warnings
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+__all__ = [
+    "RESULT_VARIABLES",
+    "CONTACT_VARIABLES",
+    "CONTACT_COORDINATES",
+    "STATUS_FLAGS",
+    "QUANTILES",
+    "build_dataset",
+    "write_netcdf",
+]
+
+#: Per-simulation outputs: name -> (units, long_name, dtype).
+RESULT_VARIABLES = {
+    "peak_force": ("N", "peak impact force (continuous-time maximum)", "f8"),
+    "impacts": ("1", "number of impacts (contact episodes)", "i4"),
+    "max_penetration": ("m", "maximum penetration delta", "f8"),
+    "peak_disp_left": ("m", "peak absolute displacement of the left building", "f8"),
+    "peak_disp_right": ("m", "peak absolute displacement of the right building", "f8"),
+    "impulse": ("N s", "total impulse of the impact force", "f8"),
+    "dissipated_energy": ("J", "energy dissipated in impacts", "f8"),
+    "energy_residual": ("1", "energy balance residual relative to input energy", "f8"),
+    "status": ("1", "simulation status", "i1"),
+}
+#: Per-simulation, per-contact outputs of studies with a shear building (an extra trailing
+#: ``contact`` dimension): name -> (units, long_name, dtype).
+CONTACT_VARIABLES = {
+    "contact_peak_force": ("N", "peak impact force at the contact", "f8"),
+    "contact_impacts": ("1", "number of impacts (contact episodes) at the contact", "i4"),
+    "contact_max_penetration": ("m", "maximum penetration delta at the contact", "f8"),
+    "contact_impulse": ("N s", "impulse of the impact force at the contact", "f8"),
+}
+#: Coordinates of the ``contact`` dimension: name -> (units, long_name).
+CONTACT_COORDINATES = {
+    "contact": ("1", "contact index (pair of floors at equal height), 1-based"),
+    "contact_elevation": ("m", "elevation of the contact above the ground"),
+    "contact_left_floor": ("1", "floor of the left building at the contact, 1-based"),
+    "contact_right_floor": ("1", "floor of the right building at the contact, 1-based"),
+}
+#: Status codes of a simulation (CF flag_values / flag_meanings).
+STATUS_FLAGS = {0: "ok", 1: "unstable", 2: "not_converged"}
+#: Quantiles of the impact force spectrum.
+QUANTILES = (0.05, 0.16, 0.5, 0.84, 0.95)
+
+_PARAMETER_ATTRS = {
+    "e": ("1", "coefficient of restitution (target)"),
+    "beta": ("N m-1.5", "impact stiffness parameter"),
+    "k_N_per_m": ("N m-1", "linear impact stiffness"),
+    "xi": ("1", "impact damping ratio"),
+    "e_effective": ("1", "coefficient of restitution the contact law really produces"),
+    "gap_m": ("m", "initial separation gap"),
+    "period_s": ("s", "natural period"),
+    "damping_ratio": ("1", "structural damping ratio"),
+    "mass_kg": ("kg", "mass"),
+    "dt_s": ("s", "integration step"),
+    "pga_g": ("1", "peak ground acceleration in units of g"),
+    "duration_s": ("s", "record duration kept"),
+}
+
+
+def _param_attrs(key: str) -> dict:
+    table, name = key.split(".", 1) if "." in key else ("", key)
+    units, long_name = _PARAMETER_ATTRS.get(name, ("1", name))
+    prefix = f"{table} " if table in ("left", "right", "record") else ""
+    return {"units": units, "long_name": prefix + long_name, "scene_key": key}
+
+
+def build_dataset(
+    study,
+    results: dict[str, np.ndarray],
+    parameters: dict[str, tuple[tuple[str, ...], np.ndarray]],
+    *,
+    provenance: dict | None = None,
+) -> xr.Dataset:
+    """Assemble the study dataset.
+
+    Parameters
+    ----------
+    study : pound_mc.study.definition.Study
+        The validated study (axes, names, text, hash, seed).
+    results : dict
+        Per-simulation outputs, each an array of shape ``study.shape``; the names of
+        :data:`CONTACT_VARIABLES` (optional) of shape ``(*study.shape, n_contacts)``.
+    parameters : dict
+        Contact and sampled parameters: ``{name: (dims, values)}`` (e.g. ``"e": (("sample",),
+        array)``); names of :data:`CONTACT_COORDINATES` become coordinates (kept only with
+        the contact variables).
+    provenance : dict, optional
+        Extra global attributes.
+    """
+    from pound_mc.study.definition import grid_dim_name
+
+    dims = ("record", *(grid_dim_name(k) for k in study.grid), "sample")
+    coords = {
+        "record": ("record", np.asarray(study.record_names, dtype=object), {
+            "long_name": "ground-motion record", "cf_role": "timeseries_id"}),
+        "sample": ("sample", np.arange(study.n, dtype=np.int32), {
+            "long_name": "Monte Carlo sample index", "units": "1"}),
+    }  # fmt: skip
+    for key, values in study.grid.items():
+        coords[grid_dim_name(key)] = (grid_dim_name(key), values, _param_attrs(key))
+    data_vars = {}
+    for name, (units, long_name, dtype) in RESULT_VARIABLES.items():
+        attrs = {"units": units, "long_name": long_name}
+        if name == "status":
+            attrs = {
+                "long_name": long_name,
+                "flag_values": np.array(list(STATUS_FLAGS), dtype=np.int8),
+                "flag_meanings": " ".join(STATUS_FLAGS.values()),
+                "units": "1",
+            }
+        data_vars[name] = (dims, np.asarray(results[name]).astype(dtype, copy=False), attrs)
+    per_contact = [name for name in CONTACT_VARIABLES if name in results]
+    for name in per_contact:
+        units, long_name, dtype = CONTACT_VARIABLES[name]
+        values = np.asarray(results[name]).astype(dtype, copy=False)
+        data_vars[name] = ((*dims, "contact"), values, {"units": units, "long_name": long_name})
+    for name, (pdims, values) in parameters.items():
+        if name in CONTACT_COORDINATES:
+            if per_contact:
+                units, long_name = CONTACT_COORDINATES[name]
+                coords[name] = (pdims, values, {"units": units, "long_name": long_name})
+            continue
+        data_vars[name] = (pdims, values, _param_attrs(name))
+
+    ds = xr.Dataset(data_vars, coords=coords)
+    ok = ds["status"] == 0
+    force = ds["peak_force"].where(ok)
+    with warnings.catch_warnings():
+        # where every sample was flagged the summaries are NaN, which is the answer
+        warnings.filterwarnings("ignore", "All-NaN slice", RuntimeWarning)
+        warnings.filterwarnings("ignore", "Mean of empty slice", RuntimeWarning)
+        ds["peak_force_mean"] = force.mean("sample")
+        q = force.quantile(list(QUANTILES), dim="sample")
+    ds["peak_force_mean"].attrs = {"units": "N", "long_name": "mean peak impact force over samples"}
+    ds["peak_force_quantile"] = q
+    ds["peak_force_quantile"].attrs = {
+        "units": "N",
+        "long_name": "quantiles of peak impact force over samples (impact force spectrum)",
+    }
+    ds["quantile"].attrs = {"long_name": "quantile level", "units": "1"}
+    pounding = (ds["impacts"] > 0).where(ok)
+    ds["pounding_probability"] = pounding.mean("sample")
+    ds["pounding_probability"].attrs = {
+        "units": "1",
+        "long_name": "fraction of samples with at least one impact",
+    }
+    ds.attrs = {
+        "Conventions": "CF-1.13",
+        "title": f"pound-mc study {study.name}",
+        "source": "pound-mc Monte Carlo pounding study",
+        "study_name": study.name,
+        "study_hash": study.hash,
+        "study_text": study.text,
+        "seed": study.seed,
+        "sampling_method": study.method,
+        "sampling_seed": study.sampling_seed,
+        "sampled_variables": "; ".join(f"{v.key}: {v.source}" for v in study.variables),
+        **(provenance or {}),
+    }
+    return ds
+
+
+def write_netcdf(ds: xr.Dataset, path: str | Path) -> Path:
+    """Write ``ds`` to ``path`` atomically (a temporary file renamed into place)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.name}.part")
+    encoding = {}
+    for name, var in ds.variables.items():
+        if var.dtype.kind == "f":
+            encoding[name] = {"_FillValue": np.nan}
+        elif var.dtype.kind == "O":
+            encoding[name] = {"dtype": str}
+    ds.to_netcdf(tmp, engine="netcdf4", format="NETCDF4", encoding=encoding)
+    os.replace(tmp, path)
+    return path

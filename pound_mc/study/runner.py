@@ -1,0 +1,418 @@
+"""Execute a study: chunks of simulations through the compiled kernels, resumable.
+
+The simulations of a study are numbered in C order of ``study.shape`` = ``(record, *grid
+axes, sample)`` and cut into chunks of ``chunk_size``.  Each finished chunk is written
+atomically to ``<out>/<name>/chunk_NNNNNN.npz`` (temporary file renamed into place), so an
+interrupted run (Ctrl-C, a killed process) loses at most the chunks in flight; re-running the
+same study skips the finished ones.  A changed study file is detected by its hash and refused
+unless ``fresh=True``.  When every chunk is done the dataset is assembled and written to
+``<out>/<name>.nc``.
+
+Every simulation writes only its own output slot and all random numbers are drawn before any
+chunk runs, so results do not depend on thread count, chunk size or backend.
+
+Chunks run through an *executor*: a callable ``executor(engine, chunks)`` that yields
+``(chunk, result)`` pairs as chunks finish, in any order.  The default runs them one after the
+other in this process on numba's threads; :mod:`pound_mc.study.distributed` runs them on a Dask
+cluster.  Either way this process alone writes the chunk files and the dataset.
+
+Test hook: when the environment variable ``POUND_MC_TEST_PAUSE_AT`` names a stage (see
+:data:`PAUSE_STAGES`), the runner prints ``POUND_MC_TEST_PAUSE_AT: paused at <stage>`` to
+standard error and sleeps there (``POUND_MC_TEST_PAUSE_S`` seconds, default 600), so the
+interrupt drill (``tests/test_drills.py``) can kill the process at a known point.  It costs one
+environment lookup per stage and is not meant for users.
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import os
+import shutil
+import signal
+import sys
+import threading
+import time
+import zipfile
+from collections.abc import Callable, Iterable, Iterator
+from contextlib import closing, contextmanager
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from pound_mc._version import __version__
+from pound_mc.errors import InputError
+from pound_mc.integrators.threads import numba_threads
+from pound_mc.study.dataset import build_dataset, write_netcdf
+
+__all__ = [
+    "Chunk",
+    "RunReport",
+    "run_study",
+    "local_executor",
+    "plan_text",
+    "chunk_ranges",
+    "default_chunk_size",
+]
+
+_MANIFEST = "manifest.json"
+
+#: Environment variable of the test hook that pauses the runner at a named stage.
+PAUSE_ENV = "POUND_MC_TEST_PAUSE_AT"
+#: Stages of the test hook, in the order a run passes them (``K``: a chunk's index,
+#: ``N``: the number of chunk files this call has written).
+PAUSE_STAGES = (
+    "manifest:part",  # manifest's temporary file written, not yet renamed
+    "chunk:K:half",  # chunk K's temporary file half written
+    "chunk:K:part",  # chunk K's temporary file complete, not yet renamed
+    "chunks:N",  # N chunk files written by this call
+    "dataset",  # every chunk done, dataset not yet assembled
+    "netcdf",  # dataset assembled, not yet written
+    "done",  # dataset written (the command line then draws the chart)
+)
+
+
+def _pause_at(stage: str) -> None:
+    """Test hook: sleep at ``stage`` if ``POUND_MC_TEST_PAUSE_AT`` names it."""
+    if os.environ.get(PAUSE_ENV) != stage:
+        return
+    print(f"{PAUSE_ENV}: paused at {stage}", file=sys.stderr, flush=True)
+    time.sleep(float(os.environ.get("POUND_MC_TEST_PAUSE_S", "600")))
+
+
+@dataclass(frozen=True)
+class Chunk:
+    """One chunk of a study: simulations ``start .. stop-1``, stored in ``path``."""
+
+    index: int
+    start: int
+    stop: int
+    path: Path
+
+
+@dataclass
+class RunReport:
+    """What a run did."""
+
+    path: Path | None
+    n_simulations: int
+    chunks_total: int
+    chunks_run: int
+    seconds: float
+    complete: bool
+    interrupted: bool = False
+    simulations_run: int = 0
+
+    @property
+    def rate(self) -> float:
+        """Simulations per second over the chunks run in this call."""
+        return self.simulations_run / self.seconds if self.seconds > 0 else float("nan")
+
+
+def default_chunk_size(n: int) -> int:
+    """Simulations per chunk when the study does not say: about 50 chunks, 256 to 8192 each.
+
+    Small enough for a live progress bar and little work lost to an interruption, large
+    enough to keep every thread busy and the chunk files few.
+    """
+    return int(min(8192, max(256, -(-n // 50))))
+
+
+def chunk_ranges(n: int, chunk_size: int) -> list[tuple[int, int]]:
+    """Half-open index ranges ``[start, stop)`` covering ``range(n)``."""
+    return [(s, min(s + chunk_size, n)) for s in range(0, n, chunk_size)]
+
+
+@contextmanager
+def _stop_between_chunks():
+    """Turn the first Ctrl-C into a request to stop after the chunk in flight.
+
+    Yields a :class:`threading.Event` that is set on SIGINT; a second Ctrl-C raises
+    :class:`KeyboardInterrupt` at once.  Outside the main thread nothing is installed.
+    """
+    stop = threading.Event()
+    if threading.current_thread() is not threading.main_thread():
+        yield stop
+        return
+
+    def handler(signum, frame):
+        if stop.is_set():
+            raise KeyboardInterrupt
+        stop.set()
+        print(
+            "\nCtrl-C: stopping after the chunk in flight (press again to abort at once)",
+            file=sys.stderr,
+        )
+
+    old = signal.signal(signal.SIGINT, handler)
+    try:
+        yield stop
+    finally:
+        signal.signal(signal.SIGINT, old)
+
+
+def _atomic_write_bytes(path: Path, data: bytes, stage: str) -> None:
+    """Write ``data`` to a temporary file, flush it to disk and rename it to ``path``.
+
+    A reader sees either no ``path`` or the complete file, never a part of it; the temporary
+    ``.<name>.part`` an interrupted write leaves behind is never read and is overwritten by
+    the next write.
+    """
+    tmp = path.with_name(f".{path.name}.part")
+    with open(tmp, "wb") as fh:
+        half = len(data) // 2
+        fh.write(data[:half])
+        fh.flush()
+        _pause_at(f"{stage}:half")
+        fh.write(data[half:])
+        fh.flush()
+        os.fsync(fh.fileno())
+    _pause_at(f"{stage}:part")
+    os.replace(tmp, path)
+
+
+def _atomic_savez(path: Path, stage: str = "chunk", **arrays) -> None:
+    buffer = io.BytesIO()
+    np.savez(buffer, **arrays)
+    _atomic_write_bytes(path, buffer.getvalue(), stage)
+
+
+def _atomic_write_text(path: Path, text: str, stage: str = "text") -> None:
+    _atomic_write_bytes(path, text.encode(), stage)
+
+
+def plan_text(study, chunk_size: int | None = None, seconds_per_simulation: float | None = None):
+    """A human-readable plan: axes, counts, chunks and (optionally) the estimated time."""
+    chunk_size = chunk_size or study.chunk_size or default_chunk_size(study.n_simulations)
+    lines = [f"study {study.name!r} (seed {study.seed}, hash {study.hash[:12]})"]
+    lines.append(f"  records   : {len(study.records)} ({', '.join(study.record_names)})")
+    for key, values in study.grid.items():
+        lines.append(
+            f"  grid      : {key} = {values.size} values {values.min():g} .. {values.max():g}"
+        )
+    lines.append(f"  sampling  : n = {study.n}, method {study.method}, seed {study.sampling_seed}")
+    for v in study.variables:
+        lines.append(f"    {v.key}: {v.source}")
+    n = study.n_simulations
+    lines.append(
+        f"  simulations: {n:,} in {len(chunk_ranges(n, chunk_size))} chunks of {chunk_size}"
+    )
+    if seconds_per_simulation is not None:
+        total = n * seconds_per_simulation
+        lines.append(
+            f"  estimated : {seconds_per_simulation * 1e3:.3f} ms per simulation -> "
+            f"{total:.1f} s ({total / 3600:.2f} h) with the current threads"
+        )
+    return "\n".join(lines)
+
+
+def _check_manifest(work: Path, study, fresh: bool) -> None:
+    manifest = work / _MANIFEST
+    if manifest.exists():
+        try:
+            old = json.loads(manifest.read_text())
+        except (OSError, ValueError):
+            old = {}
+        if old.get("study_hash") != study.hash:
+            if not fresh:
+                raise InputError(
+                    f"the study changed since the results in {work} were started "
+                    "(hash differs); run with --fresh to discard them and start again",
+                    file=str(study.path) if study.path else None,
+                )
+            shutil.rmtree(work)
+        elif fresh:
+            shutil.rmtree(work)
+    elif fresh and work.exists():
+        shutil.rmtree(work)
+    work.mkdir(parents=True, exist_ok=True)
+    if not manifest.exists():
+        _atomic_write_text(
+            manifest,
+            json.dumps(
+                {
+                    "study_name": study.name,
+                    "study_hash": study.hash,
+                    "n_simulations": study.n_simulations,
+                    "shape": list(study.shape),
+                    "pound_mc_version": __version__,
+                },
+                indent=1,
+            ),
+            stage="manifest",
+        )
+
+
+def _load_chunk(path: Path, study, start: int, stop: int, layout: dict) -> dict | None:
+    """A finished chunk's arrays, or None if it is missing or not from this study."""
+    if not path.exists():
+        return None
+    try:
+        with open(path, "rb") as fh, np.load(fh, allow_pickle=False) as data:
+            if str(data["study_hash"]) != study.hash:
+                return None
+            if int(data["start"]) != start or int(data["stop"]) != stop:
+                return None
+            out = {name: data[name] for name in layout}
+    except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile):
+        return None  # unreadable or partial: run it again
+    if any(out[name].shape != (stop - start, *tail) for name, (tail, _) in layout.items()):
+        return None
+    return out
+
+
+#: Runs chunks and yields ``(chunk, result)`` pairs as they finish (in any order).
+Executor = Callable[[object, list[Chunk]], Iterator[tuple[Chunk, dict[str, np.ndarray]]]]
+
+
+def local_executor(threads: int | None = None) -> Executor:
+    """Executor that runs chunks one after the other in this process.
+
+    Parameters
+    ----------
+    threads : int, optional
+        Number of numba threads of the compiled kernels (default: numba's default); restored
+        when the run ends.
+    """
+    if threads is not None and threads < 1:
+        raise InputError(f"must be >= 1, got {threads}", key="--threads")
+
+    def run(engine, chunks: Iterable[Chunk]):
+        with numba_threads(threads):
+            for chunk in chunks:
+                yield chunk, engine.run_range(chunk.start, chunk.stop)
+
+    return run
+
+
+def run_study(
+    study,
+    out_dir: str | Path = "outputs",
+    *,
+    threads: int | None = None,
+    fresh: bool = False,
+    chunk_size: int | None = None,
+    progress: bool = True,
+    engine=None,
+    max_chunks: int | None = None,
+    executor: Executor | None = None,
+    on_chunk: Callable[[Chunk], None] | None = None,
+):
+    """Run every simulation of ``study`` and write ``<out_dir>/<name>.nc``.
+
+    Parameters
+    ----------
+    study : pound_mc.study.definition.Study
+        A validated study.
+    out_dir : str or Path
+        Output folder; chunk files go to ``<out_dir>/<name>/``.
+    threads : int, optional
+        Number of threads of the compiled kernels (default: numba's default); only for the
+        default executor.
+    fresh : bool
+        Discard earlier results of this study (needed after the study file changed).
+    chunk_size : int, optional
+        Simulations per chunk (default: the study's ``chunk_size``, else
+        :func:`default_chunk_size`).
+    progress : bool
+        Show a progress bar with rate and ETA.
+    engine : pound_mc.study.engine.StudyEngine, optional
+        Prepared engine (records loaded, samples drawn); made from ``study`` if not given.
+    max_chunks : int, optional
+        Stop after running this many chunks (the run stays resumable); for tests and drills.
+    executor : callable, optional
+        Runs the chunks still to do (:data:`Executor`); default :func:`local_executor`.
+    on_chunk : callable, optional
+        Called with each :class:`Chunk` once its file is written (for progress hooks and tests).
+
+    Returns
+    -------
+    RunReport
+        Counts, time and the dataset path (``None`` while incomplete).
+    """
+    from tqdm.auto import tqdm
+
+    from pound_mc.study.engine import StudyEngine
+
+    if executor is None:
+        executor = local_executor(threads)
+    elif threads is not None:
+        raise InputError("sets the threads of the local backend only", key="--threads")
+    out_dir = Path(out_dir)
+    chunk_size = chunk_size or study.chunk_size or default_chunk_size(study.n_simulations)
+    engine = engine or StudyEngine(study)
+    work = out_dir / study.name
+    _check_manifest(work, study, fresh)
+
+    n = study.n_simulations
+    ranges = chunk_ranges(n, chunk_size)
+    layout = engine.result_layout()  # {name: (shape after the simulation axis, dtype)}
+    flat = {name: np.empty((n, *tail), dtype=dtype) for name, (tail, dtype) in layout.items()}
+    todo = []
+    for k, (start, stop) in enumerate(ranges):
+        path = work / f"chunk_{chunk_size}_{k:06d}.npz"
+        done = _load_chunk(path, study, start, stop, layout)
+        if done is None:
+            todo.append(Chunk(k, start, stop, path))
+        else:
+            for name in layout:
+                flat[name][start:stop] = done[name]
+    if max_chunks is not None:
+        todo_now = todo[: max(0, max_chunks)]
+    else:
+        todo_now = todo
+
+    t0 = time.perf_counter()
+    ran = 0
+    simulations_run = 0
+    interrupted = False
+    bar = tqdm(
+        total=n,
+        initial=n - sum(c.stop - c.start for c in todo),
+        unit="sim",
+        unit_scale=True,
+        disable=not progress,
+        desc=study.name,
+        smoothing=0.1,
+    )
+    try:
+        with (
+            _stop_between_chunks() as stop_requested,
+            closing(iter(executor(engine, todo_now))) as results,
+        ):
+            for chunk, result in results:
+                _atomic_savez(
+                    chunk.path,
+                    stage=f"chunk:{chunk.index}",
+                    study_hash=np.array(study.hash),
+                    start=np.array(chunk.start),
+                    stop=np.array(chunk.stop),
+                    **{name: result[name] for name in layout},
+                )
+                for name in layout:
+                    flat[name][chunk.start : chunk.stop] = result[name]
+                ran += 1
+                simulations_run += chunk.stop - chunk.start
+                bar.update(chunk.stop - chunk.start)
+                _pause_at(f"chunks:{ran}")
+                if on_chunk is not None:
+                    on_chunk(chunk)
+                if stop_requested.is_set():
+                    interrupted = ran < len(todo)
+                    break
+    finally:
+        bar.close()
+    seconds = time.perf_counter() - t0
+    complete = ran == len(todo)
+    if not complete:
+        return RunReport(None, n, len(ranges), ran, seconds, False, interrupted, simulations_run)
+
+    _pause_at("dataset")
+    results = {name: a.reshape(study.shape + a.shape[1:]) for name, a in flat.items()}
+    ds = build_dataset(study, results, engine.dataset_parameters(), provenance=engine.provenance())
+    _pause_at("netcdf")
+    path = write_netcdf(ds, out_dir / f"{study.name}.nc")
+    _pause_at("done")
+    seconds = time.perf_counter() - t0
+    return RunReport(path, n, len(ranges), ran, seconds, True, False, simulations_run)
