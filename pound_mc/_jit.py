@@ -1,16 +1,101 @@
-"""One place that fixes the numba options of every compiled kernel.
+"""One place that fixes the numba options of every compiled kernel, and where they are cached.
 
-``cache=True`` keeps compiled machine code between processes, ``nogil=True`` lets the
-threaded runner call kernels concurrently, ``error_model="numpy"`` drops the per-division
-Python exception checks (a division by zero gives inf/nan, which the kernels flag).  No blanket
-``fastmath``: it would delete the NaN and infinity checks that flag unstable simulations.
+``nogil=True`` lets the threaded runner call kernels concurrently, ``error_model="numpy"``
+drops the per-division Python exception checks (a division by zero gives inf/nan, which the
+kernels flag).  No blanket ``fastmath``: it would delete the NaN and infinity checks that flag
+unstable simulations.
+
+Compiled machine code is cached on disk in a user cache directory shared by every checkout and
+installation of the same source: ``$POUND_MC_CACHE_DIR``, else ``$XDG_CACHE_HOME/pound-mc``,
+else ``~/.cache/pound-mc`` (numba's own ``NUMBA_CACHE_DIR``, when set, takes precedence).
+Entries are keyed by a hash of the package's compiled sources, so a fresh clone, a reinstall or
+a new Dask worker of the same version finds the kernels already compiled, while any edit of a
+kernel source compiles afresh.  Where that directory cannot be written, numba's default (a
+``__pycache__`` beside the source) is used.
 """
 
 from __future__ import annotations
 
-import numba
+import functools
+import hashlib
+import os
+from pathlib import Path
 
-_OPTIONS = {"cache": True, "nogil": True, "error_model": "numpy"}
+import numba
+from numba.core import caching, config
+
+_OPTIONS = {"nogil": True, "error_model": "numpy"}
+
+_PACKAGE = Path(__file__).resolve().parent
+
+
+def cache_root() -> Path:
+    """Directory of the shared kernel cache (see the module docstring)."""
+    explicit = os.environ.get("POUND_MC_CACHE_DIR")
+    if explicit:
+        return Path(explicit)
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    return Path(base) / "pound-mc"
+
+
+@functools.lru_cache(maxsize=1)
+def source_key() -> str:
+    """Hash of every package source that defines compiled functions (16 hex digits).
+
+    A kernel inlines helpers from other modules, so one hash over all of them keys the cache:
+    an edit anywhere in the compiled code invalidates every entry, never a stale mix.
+    """
+    digest = hashlib.sha256()
+    for path in sorted(_PACKAGE.rglob("*.py")):
+        text = path.read_bytes()
+        if b"pound_mc._jit import" in text or path.name == "_jit.py":
+            digest.update(str(path.relative_to(_PACKAGE)).encode())
+            digest.update(text)
+    return digest.hexdigest()[:16]
+
+
+class _SharedCacheLocator(caching._SourceFileBackedLocatorMixin, caching._CacheLocator):
+    """Cache files under ``cache_root()/numba/<source key>/<module folder>``."""
+
+    def __init__(self, py_func, py_file):
+        self._py_file = py_file
+        self._lineno = py_func.__code__.co_firstlineno
+        relative = Path(py_file).resolve().parent.relative_to(_PACKAGE)
+        self._cache_path = str(cache_root() / "numba" / source_key() / relative)
+
+    def get_cache_path(self):
+        return self._cache_path
+
+    def get_source_stamp(self):
+        return source_key()
+
+    @classmethod
+    def from_function(cls, py_func, py_file):
+        if config.CACHE_DIR:  # the user asked numba for a place of their own
+            return None
+        try:
+            Path(py_file).resolve().relative_to(_PACKAGE)
+        except ValueError:
+            return None
+        return super().from_function(py_func, py_file)
+
+
+class _SharedCacheImpl(caching.CompileResultCacheImpl):
+    _locator_classes = [_SharedCacheLocator, *caching.CompileResultCacheImpl._locator_classes]
+
+
+class _SharedFunctionCache(caching.FunctionCache):
+    _impl_class = _SharedCacheImpl
+
+
+def _enable_cache(dispatcher, func):
+    if not hasattr(dispatcher, "enable_caching"):  # NUMBA_DISABLE_JIT: a plain function
+        return dispatcher
+    try:
+        dispatcher._cache = _SharedFunctionCache(func)
+    except Exception:  # noqa: BLE001  (numba's own cache beside the source instead)
+        dispatcher.enable_caching()
+    return dispatcher
 
 
 def jit(func=None, *, parallel: bool = False, inline: bool = False):
@@ -26,7 +111,7 @@ def jit(func=None, *, parallel: bool = False, inline: bool = False):
         options["inline"] = "always"
 
     def decorate(f):
-        return numba.njit(**options)(f)
+        return _enable_cache(numba.njit(**options)(f), f)
 
     if func is None:
         return decorate
