@@ -101,7 +101,7 @@ def fragility_probability(x, theta, beta) -> np.ndarray:
     p = np.where(step, np.where(x > theta, 1.0, np.where(x < theta, 0.0, 0.5)), p)
     p = np.where(np.isposinf(theta), 0.0, p)
     p = np.where(theta == 0, 1.0, p)
-    return np.where(np.isposinf(beta) | np.isnan(theta) | np.isnan(beta), np.nan, p)
+    return np.where(np.isposinf(beta) | np.isnan(theta), np.nan, p)
 
 
 # --------------------------------------------------------------------------- probit MLE
@@ -150,7 +150,7 @@ def _newton(t, z, n, a, b):
         with np.errstate(divide="ignore", invalid="ignore"):
             step_a = -(h_bb * g_a - h_ab * g_b) / det
             step_b = -(-h_ab * g_a + h_aa * g_b) / det
-        decrement = -(step_a * g_a + step_b * g_b)  # g' H^-1 g >= 0, about 2 (lnL* - lnL)
+        decrement = step_a * g_a + step_b * g_b  # -g' H^-1 g >= 0, about 2 (lnL* - lnL)
         done = active & np.isfinite(decrement) & (decrement < _TOL * np.maximum(1.0, -ll))
         active &= np.isfinite(step_a) & np.isfinite(step_b)
         scale = np.ones_like(a)
