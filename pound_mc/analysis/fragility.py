@@ -1,0 +1,590 @@
+"""Lognormal fragility functions fitted to stripes, and the gap a target probability needs.
+
+Fragility (Baker 2015, eq. 1): the probability of an event (pounding, a peak force above a
+threshold, a ductility above a limit) at intensity ``x``
+
+    P(event | IM = x) = Phi(ln(x / theta) / beta),
+
+with median ``theta`` (same units as the IM) and dispersion ``beta`` [-].  Fitted by maximum
+likelihood to a multiple-stripe analysis: at stripe ``j`` (intensity ``x_j``) ``z_j`` of
+``n_j`` simulations have the event, and the likelihood is binomial (Baker 2015, eqs. 11-12)
+
+    ln L = sum_j [ z_j ln p_j + (n_j - z_j) ln(1 - p_j) ] + const,   p_j = Phi(ln(x_j/theta)/beta).
+
+The constant (the binomial coefficients) is left out of :attr:`FragilityFit.loglik`.  Written
+as a probit regression ``p_j = Phi(a + b ln x_j)`` with ``b = 1/beta`` and
+``a = -ln(theta)/beta``, ``ln L`` is concave in ``(a, b)``, so Newton's method with step halving
+finds the unique maximum whenever it exists.  It exists (finite ``theta``, ``beta > 0``) unless
+the stripes are *separated*: every stripe below some intensity has no event and every stripe
+above it has all events (then ``beta -> 0``), or the event fraction does not rise with the
+intensity (then ``beta -> infinity``), or no stripe (or every stripe) has the event.  Such data
+are refused with an :class:`~pound_mc.errors.InputError`.
+
+Confidence intervals come from a nonparametric bootstrap that resamples the simulations within
+each stripe (``z*_j ~ Binomial(n_j, z_j / n_j)``, the same as drawing ``n_j`` of the stripe's
+simulations with replacement), refitting each replicate, and taking percentiles.  A replicate
+without a finite fit keeps the limit its likelihood tends to (``beta = 0`` with ``theta`` at the
+separating intensity; ``beta = inf``; ``theta = inf`` or ``0`` when it has no or only events), so
+the intervals stay honest about the data's weakness; :attr:`FragilityFit.n_boot_degenerate`
+counts them.
+
+The required gap (:func:`required_gap`) reads the smallest gap from which on the pounding
+probability stays at or below a target, interpolating linearly between the gaps studied; its
+confidence interval is where the pointwise Wilson (1927) score bounds of the probability cross
+the target.
+
+References
+----------
+Baker, J. W. (2015). Efficient analytical fragility function fitting using dynamic structural
+analysis. Earthquake Spectra 31(1), 579-599.
+Wilson, E. B. (1927). Probable inference, the law of succession, and statistical inference.
+J. Am. Stat. Assoc. 22(158), 209-212.
+Brown, L. D., Cai, T. T., DasGupta, A. (2001). Interval estimation for a binomial proportion.
+Statistical Science 16(2), 101-133.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from scipy.special import log_ndtr, ndtr, ndtri
+
+from pound_mc.errors import InputError
+
+__all__ = [
+    "FragilityFit",
+    "RequiredGap",
+    "fit_fragility",
+    "fragility_probability",
+    "required_gap",
+    "wilson_interval",
+]
+
+#: Newton iterations before a fit is declared not converged.
+_MAX_ITER = 200
+#: Convergence: Newton decrement (twice the log-likelihood still to gain) below this times
+#: max(1, -lnL); one more Newton step is taken after it.
+_TOL = 1e-12
+
+
+# --------------------------------------------------------------------------- the curve
+
+
+def fragility_probability(x, theta, beta) -> np.ndarray:
+    """``Phi(ln(x / theta) / beta)``, with the limits of ``beta -> 0`` and ``theta -> 0, inf``.
+
+    Parameters
+    ----------
+    x : array_like
+        Intensity, > 0 (same units as ``theta``).
+    theta : array_like
+        Median [IM units]; ``inf`` gives 0, ``0`` gives 1.
+    beta : array_like
+        Dispersion [-]; ``0`` gives a step at ``theta`` (0.5 on it), ``inf`` gives NaN (the
+        curve is flat at a level the parameters do not carry).
+
+    Returns
+    -------
+    numpy.ndarray
+        Probability, broadcast over the inputs.
+    """
+    x, theta, beta = np.broadcast_arrays(
+        *(np.asarray(v, dtype=np.float64) for v in (x, theta, beta))
+    )
+    with np.errstate(divide="ignore", invalid="ignore"):
+        u = (np.log(x) - np.log(theta)) / beta
+    p = ndtr(u)
+    step = beta == 0
+    p = np.where(step, np.where(x > theta, 1.0, np.where(x < theta, 0.0, 0.5)), p)
+    p = np.where(np.isposinf(theta), 0.0, p)
+    p = np.where(theta == 0, 1.0, p)
+    return np.where(np.isposinf(beta) | np.isnan(theta), np.nan, p)
+
+
+# --------------------------------------------------------------------------- probit MLE
+
+
+def _loglik(a, b, t, z, n):
+    """Binomial log-likelihood (no constant) for rows of ``(a, b)``; ``t = ln x``."""
+    eta = a[:, None] + b[:, None] * t
+    return np.sum(z * log_ndtr(eta) + (n - z) * log_ndtr(-eta), axis=1)
+
+
+def _newton(t, z, n, a, b):
+    """Maximise the probit likelihood for every row of ``z`` at once.
+
+    Parameters
+    ----------
+    t : numpy.ndarray, shape (k,)
+        ``ln x`` of the stripes.
+    z, n : numpy.ndarray, shape (m, k)
+        Events and simulations per stripe, one fit per row.
+    a, b : numpy.ndarray, shape (m,)
+        Starting point.
+
+    Returns
+    -------
+    a, b, loglik : numpy.ndarray, shape (m,)
+    converged : numpy.ndarray of bool, shape (m,)
+    """
+    a, b = a.copy(), b.copy()
+    ll = _loglik(a, b, t, z, n)
+    converged = np.zeros(a.shape, dtype=bool)
+    for _ in range(_MAX_ITER):
+        active = ~converged
+        if not active.any():
+            break
+        eta = a[:, None] + b[:, None] * t
+        # inverse Mills ratios phi/Phi at +eta and -eta, computed in logs (no 0/0 in the tails)
+        log_phi = -0.5 * eta**2 - 0.5 * math.log(2.0 * math.pi)
+        lam_p = np.exp(log_phi - log_ndtr(eta))
+        lam_m = np.exp(log_phi - log_ndtr(-eta))
+        d1 = z * lam_p - (n - z) * lam_m  # d lnL / d eta
+        d2 = -z * lam_p * (eta + lam_p) - (n - z) * lam_m * (lam_m - eta)  # d2 lnL / d eta2 < 0
+        g_a, g_b = d1.sum(1), (d1 * t).sum(1)
+        h_aa, h_ab, h_bb = d2.sum(1), (d2 * t).sum(1), (d2 * t * t).sum(1)
+        det = h_aa * h_bb - h_ab**2
+        with np.errstate(divide="ignore", invalid="ignore"):
+            step_a = -(h_bb * g_a - h_ab * g_b) / det
+            step_b = -(-h_ab * g_a + h_aa * g_b) / det
+        decrement = step_a * g_a + step_b * g_b  # -g' H^-1 g >= 0, about 2 (lnL* - lnL)
+        done = active & np.isfinite(decrement) & (decrement < _TOL * np.maximum(1.0, -ll))
+        active &= np.isfinite(step_a) & np.isfinite(step_b)
+        scale = np.ones_like(a)
+        for _halving in range(60):
+            a_new = np.where(active, a + scale * step_a, a)
+            b_new = np.where(active, b + scale * step_b, b)
+            ll_new = _loglik(a_new, b_new, t, z, n)
+            worse = active & ~(ll_new >= ll)
+            if not worse.any():
+                break
+            scale = np.where(worse, 0.5 * scale, scale)
+        a, b, ll = a_new, b_new, np.where(active, ll_new, ll)
+        converged |= done  # after the last step: its error is of the order of the step squared
+    return a, b, ll, converged
+
+
+def _start(t, z, n):
+    """Starting ``(a, b)``: least squares of probit(smoothed fraction) on ``ln x``, per row."""
+    p = (z + 0.5) / (n + 1.0)
+    y = ndtri(p)
+    w = n / np.maximum(n.sum(1, keepdims=True), 1.0)
+    t_mean = (w * t).sum(1)
+    y_mean = (w * y).sum(1)
+    s_tt = (w * (t - t_mean[:, None]) ** 2).sum(1)
+    s_ty = (w * (t - t_mean[:, None]) * (y - y_mean[:, None])).sum(1)
+    b = np.where(s_tt > 0, s_ty / np.where(s_tt > 0, s_tt, 1.0), 0.0)
+    b = np.maximum(b, 0.1 / np.sqrt(np.maximum(s_tt, 1e-12)))
+    return y_mean - b * t_mean, b
+
+
+def _classify(t, z, n):
+    """Which rows have no finite fit with ``beta > 0``, and the limit each tends to.
+
+    Returns
+    -------
+    theta_lim, beta_lim : numpy.ndarray, shape (m,)
+        The limits (NaN where a finite fit exists).
+    kind : numpy.ndarray of object, shape (m,)
+        ``""`` (a finite fit exists, unless the fitted slope turns out <= 0), ``"none"``,
+        ``"all"``, ``"separated"`` or ``"decreasing"`` (separated the wrong way round).
+    """
+    m = z.shape[0]
+    has_event = z > 0
+    has_non = (n - z) > 0
+    used = n > 0
+    inf = np.inf
+    low_event = np.min(np.where(has_event, t, inf), axis=1)  # smallest ln x with an event
+    high_non = np.max(np.where(has_non, t, -inf), axis=1)  # largest ln x with a non-event
+    none = ~np.any(has_event & used, axis=1)
+    every = ~np.any(has_non & used, axis=1)
+    separated = ~none & ~every & (high_non <= low_event)
+    # events only at the lower intensities, non-events only at the higher: the curve falls
+    high_event = np.max(np.where(has_event, t, -inf), axis=1)
+    low_non = np.min(np.where(has_non, t, inf), axis=1)
+    falls = ~none & ~every & ~separated & (high_event <= low_non)
+    theta = np.full(m, np.nan)
+    beta = np.full(m, np.nan)
+    theta[none], theta[every] = inf, 0.0
+    theta[separated] = np.exp(0.5 * (high_non[separated] + low_event[separated]))
+    beta[separated] = 0.0
+    kind = np.full(m, "", dtype=object)
+    overall = z.sum(1) / np.maximum(n.sum(1), 1.0)
+    theta[falls] = np.where(overall[falls] < 0.5, inf, 0.0)
+    beta[falls] = inf
+    kind[none], kind[every], kind[separated] = "none", "all", "separated"
+    kind[falls] = "decreasing"
+    return theta, beta, kind
+
+
+def _fit_rows(t, z, n):
+    """Fit every row; ``(theta, beta, loglik, kind)`` with limits for rows without a fit."""
+    theta, beta, kind = _classify(t, z, n)
+    loglik = np.full(z.shape[0], np.nan)
+    rows = np.flatnonzero(kind == "")
+    if rows.size:
+        a0, b0 = _start(t, z[rows], n[rows])
+        a, b, ll, converged = _newton(t, z[rows], n[rows], a0, b0)
+        loglik[rows] = ll
+        good = converged & (b > 0)
+        theta[rows[good]] = np.exp(-a[good] / b[good])
+        beta[rows[good]] = 1.0 / b[good]
+        flat = converged & (b <= 0)
+        # the constrained maximum (beta > 0) is at b -> 0+: a level curve at Phi(a*), theta at
+        # +inf below one half and 0 above it
+        overall = z[rows].sum(1) / n[rows].sum(1)
+        theta[rows[flat]] = np.where(overall[flat] < 0.5, np.inf, 0.0)
+        beta[rows[flat]] = np.inf
+        kind[rows[flat]] = "decreasing"
+        kind[rows[~converged]] = "not converged"
+    return theta, beta, loglik, kind
+
+
+# --------------------------------------------------------------------------- public fit
+
+
+@dataclass(frozen=True)
+class FragilityFit:
+    """A lognormal fragility fitted to stripes (:func:`fit_fragility`).
+
+    Attributes
+    ----------
+    theta : float
+        Median [IM units].
+    beta : float
+        Dispersion (standard deviation of ln IM) [-].
+    theta_ci, beta_ci : tuple of float
+        Bootstrap percentile confidence intervals at level ``ci``.
+    loglik : float
+        Maximised binomial log-likelihood, without the binomial coefficients.
+    ci : float
+        Confidence level of the intervals.
+    n_boot : int
+        Bootstrap replicates.
+    n_boot_degenerate : int
+        Replicates with no finite fit (kept at their limits, see the module notes).
+    im, n_event, n_total : numpy.ndarray
+        The stripes fitted (intensity, events, simulations).
+    theta_boot, beta_boot : numpy.ndarray
+        The bootstrap replicates.
+    """
+
+    theta: float
+    beta: float
+    theta_ci: tuple[float, float]
+    beta_ci: tuple[float, float]
+    loglik: float
+    ci: float
+    n_boot: int
+    n_boot_degenerate: int
+    im: np.ndarray = field(repr=False)
+    n_event: np.ndarray = field(repr=False)
+    n_total: np.ndarray = field(repr=False)
+    theta_boot: np.ndarray = field(repr=False)
+    beta_boot: np.ndarray = field(repr=False)
+
+    def probability(self, x) -> np.ndarray:
+        """Fitted probability of the event at intensity ``x``."""
+        return fragility_probability(x, self.theta, self.beta)
+
+    def band(self, x, ci: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """Pointwise bootstrap band ``(lower, upper)`` of the curve at ``x`` (level ``ci``)."""
+        level = self.ci if ci is None else _level(ci)
+        x = np.atleast_1d(np.asarray(x, dtype=np.float64))
+        curves = fragility_probability(
+            x[None, :], self.theta_boot[:, None], self.beta_boot[:, None]
+        )
+        q = [(1 - level) / 2, (1 + level) / 2]
+        lower, upper = np.nanquantile(curves, q, axis=0, method="inverted_cdf")
+        return lower, upper
+
+    def to_dict(self) -> dict[str, Any]:
+        """The fit as JSON-serialisable values (keys ``theta``, ``beta``, ``theta_ci``, ...)."""
+        return {
+            "theta": self.theta,
+            "beta": self.beta,
+            "theta_ci": list(self.theta_ci),
+            "beta_ci": list(self.beta_ci),
+            "loglik": self.loglik,
+            "ci": self.ci,
+            "n_boot": self.n_boot,
+            "n_boot_degenerate": self.n_boot_degenerate,
+            "stripes": {
+                "im": self.im.tolist(),
+                "n_event": self.n_event.tolist(),
+                "n_total": self.n_total.tolist(),
+            },
+        }
+
+
+def _level(ci) -> float:
+    if not (isinstance(ci, int | float) and 0 < ci < 1):
+        raise InputError(f"ci must be a confidence level in (0, 1), got {ci!r}", key="ci")
+    return float(ci)
+
+
+def _stripes(im, n_event, n_total):
+    im = np.atleast_1d(np.asarray(im, dtype=np.float64))
+    z = np.atleast_1d(np.asarray(n_event, dtype=np.float64))
+    n = np.atleast_1d(np.asarray(n_total, dtype=np.float64))
+    if not (im.ndim == z.ndim == n.ndim == 1 and im.size == z.size == n.size):
+        raise InputError(
+            f"im, n_event and n_total must be 1-D and of one length, got shapes "
+            f"{im.shape}, {z.shape}, {n.shape}",
+            key="stripes",
+        )
+    if not np.all(np.isfinite(im) & (im > 0)):
+        raise InputError("intensities must be finite and > 0", key="im")
+    for name, v in (("n_event", z), ("n_total", n)):
+        if not np.all(np.isfinite(v) & (v >= 0) & (v == np.round(v))):
+            raise InputError(f"{name} must hold counts (integers >= 0)", key=name)
+    if np.any(z > n):
+        raise InputError("n_event exceeds n_total at some stripe", key="n_event")
+    return im, z, n
+
+
+def fit_fragility(
+    im,
+    n_event,
+    n_total,
+    *,
+    n_boot: int = 1000,
+    seed: int | np.random.SeedSequence | None = 0,
+    ci: float = 0.95,
+) -> FragilityFit:
+    """Fit a lognormal fragility to stripes by maximum likelihood (Baker 2015).
+
+    Parameters
+    ----------
+    im : array_like
+        Intensity of each stripe, > 0 (PGA [g], Sa [g], ...).
+    n_event : array_like of int
+        Simulations with the event at each stripe (0 and ``n_total`` are allowed).
+    n_total : array_like of int
+        Simulations at each stripe.
+    n_boot : int, default 1000
+        Bootstrap replicates (0: no intervals, they are NaN).
+    seed : int or numpy.random.SeedSequence, default 0
+        Seed of the bootstrap's :class:`numpy.random.Generator`.
+    ci : float, default 0.95
+        Confidence level of the percentile intervals.
+
+    Returns
+    -------
+    FragilityFit
+
+    Raises
+    ------
+    InputError
+        Malformed stripes, or data that cannot identify a fit: fewer than two intensities with
+        simulations, no event at all, events in every simulation, separated stripes (no overlap
+        between the intensities with and without the event), or an event fraction that falls
+        with the intensity.
+    """
+    im, z, n = _stripes(im, n_event, n_total)
+    level = _level(ci)
+    if not (isinstance(n_boot, int | np.integer) and n_boot >= 0):
+        raise InputError(f"n_boot must be an integer >= 0, got {n_boot!r}", key="n_boot")
+    used = n > 0
+    if np.unique(im[used]).size < 2:
+        raise InputError(
+            "a fragility needs stripes at two or more intensities with simulations", key="im"
+        )
+    t = np.log(im)
+    theta, beta, loglik, kind = _fit_rows(t, z[None, :], n[None, :])
+    reason = {
+        "none": "no simulation has the event: the median lies beyond the highest intensity; "
+        "add stronger stripes",
+        "all": "every simulation has the event: the median lies below the lowest intensity; "
+        "add weaker stripes",
+        "separated": "the stripes are separated (every stripe up to one intensity has no event "
+        "and every stripe above it has only events), so the dispersion cannot be identified "
+        "(it tends to 0); add stripes or simulations in the transition",
+        "decreasing": "the event fraction does not increase with the intensity, so no "
+        "lognormal fragility fits (the dispersion tends to infinity)",
+        "not converged": "the likelihood maximisation did not converge",
+    }.get(kind[0])
+    if reason:
+        raise InputError(f"cannot fit a fragility: {reason}", key="n_event")
+    if n_boot:
+        rng = np.random.default_rng(seed)
+        p_hat = np.divide(z, n, out=np.zeros_like(z), where=used)
+        z_boot = rng.binomial(n.astype(np.int64), p_hat, size=(int(n_boot), z.size))
+        z_boot = z_boot.astype(np.float64)
+        n_boot_rows = np.broadcast_to(n, z_boot.shape)
+        theta_b, beta_b, _ll, kind_b = _fit_rows(t, z_boot, n_boot_rows)
+        q = [(1 - level) / 2, (1 + level) / 2]
+        theta_ci = np.nanquantile(theta_b, q, method="inverted_cdf")
+        beta_ci = np.nanquantile(beta_b, q, method="inverted_cdf")
+        degenerate = int(np.count_nonzero(kind_b != ""))
+    else:
+        theta_b = beta_b = np.empty(0)
+        theta_ci = beta_ci = (np.nan, np.nan)
+        degenerate = 0
+    return FragilityFit(
+        theta=float(theta[0]),
+        beta=float(beta[0]),
+        theta_ci=(float(theta_ci[0]), float(theta_ci[1])),
+        beta_ci=(float(beta_ci[0]), float(beta_ci[1])),
+        loglik=float(loglik[0]),
+        ci=level,
+        n_boot=int(n_boot),
+        n_boot_degenerate=degenerate,
+        im=im,
+        n_event=z.astype(np.int64),
+        n_total=n.astype(np.int64),
+        theta_boot=theta_b,
+        beta_boot=beta_b,
+    )
+
+
+# --------------------------------------------------------------------------- required gap
+
+
+def wilson_interval(p_hat, n, ci: float = 0.95) -> tuple[np.ndarray, np.ndarray]:
+    """Wilson (1927) score interval of a binomial proportion.
+
+    ``(p + z^2/2n -/+ z sqrt(p(1-p)/n + z^2/4n^2)) / (1 + z^2/n)`` with ``z = Phi^-1((1+ci)/2)``
+    (Brown, Cai & DasGupta 2001, eq. 4).
+
+    Parameters
+    ----------
+    p_hat : array_like
+        Observed fraction(s) in [0, 1].
+    n : array_like
+        Number of trials, > 0.
+    ci : float, default 0.95
+        Confidence level.
+
+    Returns
+    -------
+    lower, upper : numpy.ndarray
+    """
+    level = _level(ci)
+    p = np.asarray(p_hat, dtype=np.float64)
+    n = np.asarray(n, dtype=np.float64)
+    zq = ndtri(0.5 + level / 2)
+    centre = p + zq**2 / (2 * n)
+    half = zq * np.sqrt(p * (1 - p) / n + zq**2 / (4 * n**2))
+    denominator = 1 + zq**2 / n
+    return (
+        np.clip((centre - half) / denominator, 0.0, 1.0),
+        np.clip((centre + half) / denominator, 0.0, 1.0),
+    )
+
+
+@dataclass(frozen=True)
+class RequiredGap:
+    """The gap a target pounding probability needs (:func:`required_gap`).
+
+    Attributes
+    ----------
+    gap : float
+        Smallest gap from which on the probability stays at or below ``target`` [m].
+    gap_ci : tuple of float
+        Where the Wilson bounds of the probability cross the target [m]; the upper end is
+        ``inf`` when the upper bound stays above the target over every gap studied.
+    target : float
+        Target probability [-].
+    ci : float
+        Confidence level.
+    method : str
+        ``"wilson"``.
+    """
+
+    gap: float
+    gap_ci: tuple[float, float]
+    target: float
+    ci: float
+    method: str = "wilson"
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-serialisable values."""
+        return {
+            "gap_m": self.gap,
+            "gap_ci_m": list(self.gap_ci),
+            "target": self.target,
+            "ci": self.ci,
+            "method": self.method,
+        }
+
+
+def _crossing(gaps: np.ndarray, p: np.ndarray, target: float) -> float:
+    """Smallest gap from which on the piecewise-linear ``p(gap)`` is <= target (inf if never)."""
+    above = np.flatnonzero(p > target)
+    if above.size == 0:
+        return float(gaps[0])
+    i = above[-1]  # the last gap above the target; the curve stays at or below after it
+    if i == gaps.size - 1:
+        return math.inf
+    g0, g1, p0, p1 = gaps[i], gaps[i + 1], p[i], p[i + 1]
+    return float(g0 + (p0 - target) / (p0 - p1) * (g1 - g0))
+
+
+def required_gap(gaps, probabilities, n_total, target: float, *, ci: float = 0.95) -> RequiredGap:
+    """The smallest gap whose pounding probability is at or below a target, with its interval.
+
+    The probabilities are joined linearly between the gaps studied; the gap is where that
+    curve last comes down to ``target`` (so a noisy rise above the target at a wider gap is
+    not overlooked).  The confidence interval inverts the pointwise Wilson score bounds of the
+    probability at each gap (:func:`wilson_interval`): the lower bound curve crosses the target
+    at the lower end, the upper bound curve at the upper end.  The bounds treat the ``n_total``
+    simulations at a gap as independent trials; where they share records, record-to-record
+    variability makes the true interval wider.
+
+    Parameters
+    ----------
+    gaps : array_like
+        Gaps studied [m], strictly increasing.
+    probabilities : array_like
+        Pounding probability at each gap [-] (fraction of the simulations that pound).
+    n_total : int or array_like
+        Simulations behind each probability.
+    target : float
+        Acceptable probability [-], in (0, 1).
+    ci : float, default 0.95
+        Confidence level.
+
+    Returns
+    -------
+    RequiredGap
+
+    Raises
+    ------
+    InputError
+        Malformed inputs, or a probability still above ``target`` at the widest gap studied
+        (widen the gap range).
+    """
+    level = _level(ci)
+    gaps = np.atleast_1d(np.asarray(gaps, dtype=np.float64))
+    p = np.atleast_1d(np.asarray(probabilities, dtype=np.float64))
+    n = np.broadcast_to(np.asarray(n_total, dtype=np.float64), p.shape)
+    if gaps.ndim != 1 or gaps.size < 2 or p.shape != gaps.shape:
+        raise InputError(
+            "gaps and probabilities must be 1-D, of one length, with two or more gaps", key="gaps"
+        )
+    if not (np.all(np.isfinite(gaps)) and np.all(np.diff(gaps) > 0)):
+        raise InputError("gaps must be finite and strictly increasing [m]", key="gaps")
+    if not np.all(np.isfinite(p) & (p >= 0) & (p <= 1)):
+        raise InputError("probabilities must lie in [0, 1]", key="probabilities")
+    if not np.all(np.isfinite(n) & (n > 0)):
+        raise InputError("n_total must be > 0 at every gap", key="n_total")
+    if not (isinstance(target, int | float) and 0 < target < 1):
+        raise InputError(f"target must be a probability in (0, 1), got {target!r}", key="target")
+    gap = _crossing(gaps, p, target)
+    if math.isinf(gap):
+        raise InputError(
+            f"the pounding probability is {p[-1]:.3g} > {target:g} at the widest gap studied "
+            f"({gaps[-1]:g} m): widen the gap range",
+            key="gaps",
+        )
+    lower, upper = wilson_interval(p, n, level)
+    return RequiredGap(
+        gap=gap,
+        gap_ci=(_crossing(gaps, lower, target), _crossing(gaps, upper, target)),
+        target=float(target),
+        ci=level,
+    )

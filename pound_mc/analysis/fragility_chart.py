@@ -1,0 +1,93 @@
+"""Fragility chart: the stripes' event fractions, the fitted lognormal curve and its band.
+
+Draws on a given :class:`matplotlib.axes.Axes` or on a new :class:`matplotlib.figure.Figure`
+(no pyplot state), and returns the Axes so tests can read the plotted data back from its
+artists.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
+
+from pound_mc.analysis.fragility import FragilityFit
+
+__all__ = ["fragility_chart"]
+
+
+def fragility_chart(
+    fit: FragilityFit,
+    *,
+    ax: Axes | None = None,
+    im_label: str = "intensity measure",
+    event_label: str = "event",
+    band: bool = True,
+    counts: bool = True,
+    num: int = 200,
+) -> Axes:
+    """Plot a fitted fragility: points per stripe, the fitted curve and the bootstrap band.
+
+    Parameters
+    ----------
+    fit : FragilityFit
+        From :func:`pound_mc.analysis.fragility.fit_fragility`.
+    ax : matplotlib.axes.Axes, optional
+        Where to draw; default a new figure's single Axes.
+    im_label : str, default "intensity measure"
+        x-axis label (name and units of the IM, e.g. ``"PGA [g]"``).
+    event_label : str, default "event"
+        What the probability is of (``"pounding"``).
+    band : bool, default True
+        Shade the pointwise bootstrap band of the curve at ``fit.ci`` (when there are
+        replicates).
+    counts : bool, default True
+        Write ``events/simulations`` beside each stripe's point.
+    num : int, default 200
+        Points along the curve.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        Artists, in order: the band (a ``PolyCollection``, if drawn), the curve (``lines[0]``)
+        and the stripes (``lines[1]``, markers only); the counts are ``ax.texts``.
+    """
+    if ax is None:
+        ax = Figure(figsize=(6.4, 4.2), layout="constrained").add_subplot()
+    im = fit.im
+    fraction = np.divide(
+        fit.n_event, fit.n_total, out=np.full(im.shape, np.nan), where=fit.n_total > 0
+    )
+    upper_im = max(float(im.max()), fit.theta * np.exp(2.5 * fit.beta))
+    x = np.linspace(0.0, 1.05 * upper_im, num)[1:]
+    percent = round(100 * fit.ci)
+    if band and fit.theta_boot.size:
+        lower, upper = fit.band(x)
+        ax.fill_between(
+            x, lower, upper, color="tab:blue", alpha=0.2, lw=0, label=f"{percent} % bootstrap band"
+        )
+    ax.plot(
+        x,
+        fit.probability(x),
+        color="tab:blue",
+        label=f"lognormal fit: theta = {fit.theta:.3g}, beta = {fit.beta:.3g}",
+    )
+    ax.plot(im, fraction, "o", color="black", ms=5, label="stripes (fraction of simulations)")
+    if counts:
+        for xi, fi, zi, ni in zip(im, fraction, fit.n_event, fit.n_total, strict=True):
+            if np.isfinite(fi):
+                ax.annotate(
+                    f"{zi}/{ni}",
+                    (xi, fi),
+                    textcoords="offset points",
+                    xytext=(4, -11 if fi > 0.9 else 5),
+                    fontsize=7,
+                )
+    ax.axvline(fit.theta, color="tab:blue", lw=0.8, ls=":")
+    ax.set_xlim(0.0, x[-1])
+    ax.set_ylim(-0.02, 1.02)
+    ax.set_xlabel(im_label)
+    ax.set_ylabel(f"P({event_label} | IM)")
+    ax.grid(alpha=0.3)
+    ax.legend(loc="lower right", fontsize=8)
+    return ax
