@@ -116,22 +116,24 @@ class RandomVariable:
         return self.a * np.exp(self.b * stats.norm.ppf(u))
 
 
-#: Parameters of each distribution, in the order of :class:`RandomVariable` ``a``, ``b``.
-DISTRIBUTIONS = {
-    "uniform": ("low", "high"),
-    "normal": ("mean", "std"),
-    "lognormal": ("median", "sigma_ln"),
-}
 #: The optional key of a material range, by the sampled key it applies to.
 MATERIAL_OPTIONS = {"contact.e": "velocity_m_s", "contact.beta": "mass_kg"}
 
 
-def _parameter(name: str, description: str, positive: bool = False) -> Field:
-    return Field(name, "number", description, unit="as the key", required=True,
-                 minimum=0.0 if positive else None, exclusive_minimum=positive)  # fmt: skip
+def _distribution(kind: str, description: str, a: tuple, b: tuple) -> Table:
+    """The table of ``{ distribution = kind, a = .., b = .. }``; ``a``, ``b``: (name, text, > 0)."""
+    params = [
+        Field(name, "number", text, unit="as the key", required=True,
+              minimum=0.0 if positive else None, exclusive_minimum=positive)
+        for name, text, positive in (a, b)
+    ]  # fmt: skip
+    kind_field = Field("distribution", "string", f"`{kind}`.", required=True, choices=(kind,))
+    return Table("sampling.vary.KEY", description, (kind_field, *params),
+                 variant=f"distribution = '{kind}'")  # fmt: skip
 
 
-#: ``[sampling.vary]`` entries: ``{ material = ... }`` and one table per distribution.
+#: ``[sampling.vary]`` entries: ``{ material = ... }`` and one table per distribution, whose
+#: two parameters are :class:`RandomVariable` ``a`` and ``b``.
 VARY_TABLES = {
     "material": Table(
         "sampling.vary.KEY",
@@ -149,38 +151,17 @@ VARY_TABLES = {
         ),
         variant="material",
     ),
-    "uniform": Table(
-        "sampling.vary.KEY",
-        "Uniform between `low` and `high` (> low).",
-        (
-            Field("distribution", "string", "`uniform`.", required=True, choices=("uniform",)),
-            _parameter("low", "Lower end."),
-            _parameter("high", "Upper end (> low)."),
-        ),
-        variant="distribution = 'uniform'",
-    ),
-    "normal": Table(
-        "sampling.vary.KEY",
-        "Normal with `mean` and standard deviation `std`.",
-        (
-            Field("distribution", "string", "`normal`.", required=True, choices=("normal",)),
-            _parameter("mean", "Mean."),
-            _parameter("std", "Standard deviation.", positive=True),
-        ),
-        variant="distribution = 'normal'",
-    ),
-    "lognormal": Table(
-        "sampling.vary.KEY",
-        "Lognormal with `median` and logarithmic standard deviation `sigma_ln`.",
-        (
-            Field("distribution", "string", "`lognormal`.", required=True,
-                  choices=("lognormal",)),
-            _parameter("median", "Median.", positive=True),
-            _parameter("sigma_ln", "Standard deviation of ln(value) [-].", positive=True),
-        ),
-        variant="distribution = 'lognormal'",
+    "uniform": _distribution("uniform", "Uniform between `low` and `high` (> low).",
+                             ("low", "Lower end.", False), ("high", "Upper end (> low).", False)),
+    "normal": _distribution("normal", "Normal with `mean` and standard deviation `std`.",
+                            ("mean", "Mean.", False), ("std", "Standard deviation.", True)),
+    "lognormal": _distribution(
+        "lognormal", "Lognormal with `median` and logarithmic standard deviation `sigma_ln`.",
+        ("median", "Median.", True), ("sigma_ln", "Standard deviation of ln(value) [-].", True),
     ),
 }  # fmt: skip
+#: Parameters of each distribution, in the order of :class:`RandomVariable` ``a``, ``b``.
+DISTRIBUTIONS = {kind: table.keys[1:] for kind, table in VARY_TABLES.items() if kind != "material"}
 
 
 def _material_variable(key: str, spec: dict, where: str, file, errors: list):
