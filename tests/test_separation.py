@@ -165,8 +165,9 @@ def test_study_gaps_match_required_gaps():
     study = study_from_text(STUDY)
     g = study_gaps(study)
     assert g["gap_abs"].shape == study.shape
-    periods = StudyEngine(study).samples["left.period_s"]
-    dt, acc = study.record_arrays[1]
+    engine = StudyEngine(study)
+    periods = engine.samples["left.period_s"]
+    dt, acc = engine.records[1]
     one = required_gaps(dt, acc, periods[2], 1.0, 0.05, 0.03)
     cell = g.isel(record=1, contact_gap_m=1, sample=2)
     for name, value in (("linear_disp_left", one.u1), ("linear_disp_right", one.u2),

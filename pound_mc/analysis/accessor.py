@@ -20,10 +20,13 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
+from pound_mc.errors import InputError
+from pound_mc.study.definition import grid_dim_name, study_from_text
+from pound_mc.study.engine import StudyEngine
+
 __all__ = ["PoundAccessor", "PoundPlot", "scene_at"]
 
 _OK = 0
-_MATERIAL_KEY = "contact.material"
 
 
 def _select(obj, ds: xr.Dataset, sel: dict):
@@ -40,13 +43,22 @@ def _select(obj, ds: xr.Dataset, sel: dict):
     return obj
 
 
+def _position(ds: xr.Dataset, dim: str, value) -> int:
+    """Position along ``dim`` of ``value``: the nearest for numbers, the equal one otherwise."""
+    method = "nearest" if ds[dim].dtype.kind in "fiu" else None
+    i = int(ds.indexes[dim].get_indexer([value], method=method)[0])
+    if i < 0:
+        raise ValueError(f"{dim} has no value {value!r}; it has {list(ds[dim].values)}")
+    return i
+
+
 def scene_at(ds: xr.Dataset, *, record=0, sample=0, study_path=None, **coords):
     """Rebuild the scene of one simulation of a study dataset.
 
-    The study is rebuilt from the dataset's ``study_text`` (its records read again), the grid
-    values are those at the given coordinates (nearest) and the sampled values those of
-    ``sample`` (the study's sampling is deterministic), so :func:`pound_mc.scene.simulate`
-    reproduces the dataset's numbers for that simulation.
+    The study is rebuilt from the dataset's ``study_text`` (its records read again) and the
+    scene is :meth:`~pound_mc.study.engine.StudyEngine.scene_of` the simulation at the given
+    coordinates (nearest) and ``sample`` (the study's sampling is deterministic), so
+    :func:`pound_mc.scene.simulate` reproduces the dataset's numbers for that simulation.
 
     Parameters
     ----------
@@ -70,42 +82,26 @@ def scene_at(ds: xr.Dataset, *, record=0, sample=0, study_path=None, **coords):
     index : dict
         The integer position of the simulation along every dimension of ``peak_force``.
     """
-    from pound_mc.errors import InputError
-    from pound_mc.scene import scene_from_dict
-    from pound_mc.study.definition import grid_dim_name, study_from_text
-
     text = ds.attrs.get("study_text")
     if not text:
         raise InputError("the dataset carries no study_text attribute; is it a pound-mc result?")
     study = study_from_text(text, file=study_path)
     if study.hash != ds.attrs.get("study_hash", study.hash):
         raise InputError("the dataset's study_text does not match its study_hash")
-    from pound_mc.analysis.plot import _nearest_index
-
     unknown = sorted(set(coords) - {grid_dim_name(k) for k in study.grid})
     if unknown:
         raise ValueError(f"{unknown[0]!r} is not a grid dimension of this study")
-    r = record if isinstance(record, int | np.integer) else _nearest_index(ds, "record", record)
+    r = record if isinstance(record, int | np.integer) else _position(ds, "record", record)
     if not 0 <= int(sample) < study.n:
         raise ValueError(f"sample must be in 0..{study.n - 1}, got {sample}")
     index = {"record": int(r)}
-    overrides = {}
-    for key, values in study.grid.items():
+    for key in study.grid:
         dim = grid_dim_name(key)
-        i = _nearest_index(ds, dim, coords[dim]) if dim in coords else 0
-        index[dim] = i
-        if key != _MATERIAL_KEY:  # the material axis is not a scene key: it picks ranges
-            overrides[key] = float(values[i])
+        index[dim] = _position(ds, dim, coords[dim]) if dim in coords else 0
     index["sample"] = int(sample)
-    for key, values in study.draw().items():
-        overrides[key] = float(values[int(sample)])
-    draw_materials = getattr(study, "draw_materials", None)
-    if draw_materials is not None:  # sampled keys that follow the material axis
-        m = index.get(grid_dim_name(_MATERIAL_KEY), 0)
-        for key, values in draw_materials().items():
-            overrides[key] = float(values[m, int(sample)])
-    scene = scene_from_dict(study.scene_dict(int(r), overrides), file=study_path)
-    return scene, study.record_arrays[int(r)], index
+    engine = StudyEngine(study)
+    flat = int(np.ravel_multi_index(tuple(index.values()), study.shape))
+    return engine.scene_of(flat), engine.records[int(r)], index
 
 
 class PoundPlot:

@@ -16,18 +16,24 @@ from __future__ import annotations
 
 import time
 
+import netCDF4
 import numba
 import numpy as np
+import scipy
 import xarray as xr
 
 from pound_mc._version import __version__
-from pound_mc.errors import InputError
+from pound_mc.errors import InputError, InputErrors
+from pound_mc.integrators import kernels as integrators
 from pound_mc.integrators.threads import numba_threads
+from pound_mc.motions.records import load_record, record_arrays
 from pound_mc.physics.relations import restitution_of_xi, xi_from_e
+from pound_mc.scene import Scene, scene_from_dict
+from pound_mc.scene.schema import default_relation
 from pound_mc.study.dataset import CONTACT_VARIABLES, RESULT_VARIABLES
 from pound_mc.study.definition import MATERIAL_KEY, grid_dim_name, scene_model
 
-__all__ = ["StudyEngine"]
+__all__ = ["StudyEngine", "load_records"]
 
 # Scene keys the SDOF-pair batch kernel takes per simulation (defaults: the scene's value);
 # ``contact.beta`` stands for the stiffness, ``contact.k_N_per_m`` for the linear laws.
@@ -56,45 +62,88 @@ def _dims_of(study, key: str) -> tuple[str, ...]:
     return ()
 
 
+def load_records(study) -> list[tuple[float, np.ndarray]]:
+    """Read and preprocess every record of ``study``: ``[(dt_s, acceleration), ...]``.
+
+    Raises
+    ------
+    InputError
+        Every record that cannot be read, keyed in the study file (``record.duration_s``,
+        ``records[2].source``); a problem inside a record file names that file too.
+    """
+    fname = None if study.path is None else str(study.path)
+    base_dir = None if study.path is None else study.path.parent
+    out, errors = [], []
+    for i, record in enumerate(study.records):
+        spec = dict(record)
+        spec.pop("name", None)
+        source = spec.pop("source")
+        where = study.record_table(i) + "."
+        try:
+            out.append(record_arrays(load_record(source, base_dir=base_dir, **spec)))
+        except InputError as exc:
+            key = exc.key or "record.source"
+            key = where + key.split(".", 1)[-1] if key.startswith("record") else key
+            detail = exc.message if not exc.file or exc.file == fname else f"{exc.file}: {exc}"
+            errors.append(InputError(detail, file=fname, key=key))
+        except (OSError, ValueError, TypeError) as exc:
+            errors.append(
+                InputError(f"cannot read {source!r}: {exc}", file=fname, key=where + "source")
+            )
+    if errors:
+        raise InputErrors(errors)
+    return out
+
+
 class StudyEngine:
     """Records, samples and base scene of a study, ready to run ranges of simulations.
 
     Parameters
     ----------
     study : pound_mc.study.definition.Study
-        A validated study (its records already read and preprocessed).
+        A validated study; its records are read and preprocessed here.
+
+    Raises
+    ------
+    InputError
+        A record that cannot be read or preprocessed, naming the study file and the key.
     """
 
     def __init__(self, study):
-        from pound_mc.motions.records import load_record, record_arrays
-        from pound_mc.scene import scene_from_dict
-
         self.study = study
-        overrides = {
-            key: float(values[0]) for key, values in study.grid.items() if key != MATERIAL_KEY
-        }
+        self.shape = study.shape
         self.samples = study.draw()
         #: Sampled keys that follow the material axis: ``{key: (n_materials, n)}``.
         self.material_samples = study.draw_materials()
-        overrides.update({key: float(values[0]) for key, values in self.samples.items()})
-        self.scene = scene_from_dict(study.scene_dict(0, overrides), file=study.path)
-        if study.record_arrays:
-            self.records = list(study.record_arrays)
-        else:  # a Study built by hand: read the records now
-            base_dir = None if study.path is None else study.path.parent
-            self.records = []
-            for spec in study.records:
-                spec = dict(spec)
-                spec.pop("name", None)
-                trace = load_record(spec.pop("source"), base_dir=base_dir, **spec)
-                self.records.append(record_arrays(trace))
-        self.shape = study.shape
+        #: The scene of the first simulation; its fixed values fill the keys nothing varies.
+        self.scene = self.scene_of(0)
+        #: ``(dt_s, acceleration)`` of every record, read and preprocessed.
+        self.records = load_records(study)
         self._base = self._base_values(study.scene, self.scene)
         #: Whether a building is a shear building: then every simulation runs the modes of
         #: :attr:`arrays` (computed once) through the general batch, and the outputs include
         #: the per-contact arrays of :data:`~pound_mc.study.dataset.CONTACT_VARIABLES`.
         self.mdof = any(scene_model(study.scene, side) == "shear" for side in ("left", "right"))
         self.arrays = self.scene.modal_arrays() if self.mdof else None
+
+    def varied(self, indices) -> dict[str, np.ndarray]:
+        """Values of the varied keys (grid axes, sampled keys) of the simulations ``indices``.
+
+        ``indices`` are flat (C order of :attr:`shape`); one index gives scalars.
+        """
+        idx = np.unravel_index(np.asarray(indices, dtype=np.int64), self.shape)
+        return self.study.values_at(idx, self.samples, self.material_samples)
+
+    def scene_of(self, index: int) -> Scene:
+        """The scene of simulation ``index`` (flat, C order of :attr:`shape`).
+
+        Grid values and sampled values replace the scene's own (a varied ``e`` drops a fixed
+        ``xi`` and vice versa); :func:`pound_mc.scene.simulate` of it with the record
+        :attr:`records` ``[r]`` reproduces the simulation.
+        """
+        record = int(np.unravel_index(int(index), self.shape)[0])
+        overrides = {key: float(value) for key, value in self.varied(int(index)).items()}
+        return scene_from_dict(self.study.scene_dict(record, overrides), file=self.study.path)
 
     # -- parameters -----------------------------------------------------------------------
     @staticmethod
@@ -119,27 +168,18 @@ class StudyEngine:
         elif "xi" in contact:
             out["contact.xi"] = contact["xi"]
         out = {k: v for k, v in out.items() if v is not None}
-        out["contact.relation"] = scene.relation or (
-            "kelvin" if scene.contact_model == "kelvin" else "jankowski2008"
-        )
+        out["contact.relation"] = scene.relation or default_relation(scene.contact_model)
         out["contact.model"] = scene.contact_model
         out["integrator.method"] = scene.method
         out["integrator.substeps"] = scene.substeps
         return out
 
-    def _values(self, key: str, idx: tuple[np.ndarray, ...]) -> np.ndarray | None:
-        """Per-simulation values of ``key`` at unravelled indices ``idx``."""
-        study = self.study
-        if key in study.grid:
-            axis = list(study.grid).index(key) + 1
-            return study.grid[key][idx[axis]]
-        if key in self.material_samples:
-            axis = list(study.grid).index(MATERIAL_KEY) + 1
-            return self.material_samples[key][idx[axis], idx[-1]]
-        if key in self.samples:
-            return self.samples[key][idx[-1]]
+    def _values(self, key: str, varied: dict, size: int) -> np.ndarray | None:
+        """Per-simulation values of ``key``: varied (:meth:`varied`) or the fixed value."""
+        if key in varied:
+            return varied[key]
         if key in self._base:
-            return np.full(idx[0].shape, float(self._base[key]))
+            return np.full(size, float(self._base[key]))
         return None
 
     @property
@@ -151,15 +191,20 @@ class StudyEngine:
             else "contact.beta"
         )
 
-    def contact_damping(self, idx) -> tuple[np.ndarray, np.ndarray | None]:
-        """Impact damping ratio per simulation (and the target ``e`` where one is given)."""
-        varied = set(self.study.grid) | set(self.samples)
-        e = None if "contact.xi" in varied else self._values("contact.e", idx)
+    def contact_damping(self, varied: dict, size: int) -> tuple[np.ndarray, np.ndarray | None]:
+        """Impact damping per simulation (and the target ``e`` where one is given).
+
+        The damping ratio ``xi`` from ``e`` through the study's relation; the Hertz-damp law
+        takes ``e`` itself (its damping follows each impact's velocity).
+        """
+        e = None if "contact.xi" in varied else self._values("contact.e", varied, size)
         if e is not None:
+            if self._base["contact.model"] == "hertzdamp":
+                return np.asarray(e, float), e
             return np.asarray(xi_from_e(e, self._base["contact.relation"]), float), e
-        xi = self._values("contact.xi", idx)
+        xi = self._values("contact.xi", varied, size)
         if xi is None:
-            xi = np.zeros(idx[0].shape)  # laws without damping (linear, hertz)
+            xi = np.zeros(size)  # laws without damping (linear, hertz)
         return xi, None
 
     def parameters(self, indices: np.ndarray) -> dict[str, np.ndarray]:
@@ -168,23 +213,22 @@ class StudyEngine:
         With a shear building (:attr:`mdof`) only the contact keys and the step: the gaps
         ``contact.gap_m`` are then ``(n, n_contacts)`` where the scene fixes them.
         """
-        idx = np.unravel_index(np.asarray(indices, dtype=np.int64), self.shape)
+        indices = np.asarray(indices, dtype=np.int64)
+        varied = self.varied(indices)
+        size = indices.size
         out = {}
         for key in _SCENE_KERNEL_KEYS if self.mdof else _KERNEL_KEYS:
             source = self.stiffness_key if key == "contact.beta" else key
-            if self.mdof and key == "contact.gap_m" and _dims_of(self.study, key) == ():
-                gaps = np.broadcast_to(self.scene.gap_m, (idx[0].size, self.scene.gap_m.size))
+            if self.mdof and key == "contact.gap_m" and key not in varied:
+                gaps = np.broadcast_to(self.scene.gap_m, (size, self.scene.gap_m.size))
                 out[key] = np.ascontiguousarray(gaps, float)  # one gap per contact (the scene's)
                 continue
-            values = self._values(source, idx)
+            values = self._values(source, varied, size)
             if values is None:
                 raise InputError("is required", file=self.study.path, key=source)
             out[key] = np.ascontiguousarray(values, float)
-        xi, e = self.contact_damping(idx)
-        if self._base["contact.model"] == "hertzdamp":
-            xi = e  # the Hertz-damp law takes the restitution coefficient itself
-        out["contact.xi"] = np.ascontiguousarray(xi, float)
-        out["record"] = idx[0]
+        out["contact.xi"] = np.ascontiguousarray(self.contact_damping(varied, size)[0], float)
+        out["record"] = np.unravel_index(indices, self.shape)[0]
         return out
 
     # -- running --------------------------------------------------------------------------
@@ -212,8 +256,6 @@ class StudyEngine:
 
     def run_indices(self, indices: np.ndarray) -> dict[str, np.ndarray]:
         """Run the simulations with flat ``indices``; the outputs of :meth:`result_layout`."""
-        from pound_mc.integrators import kernels as integrators
-
         p = self.parameters(indices)
         n = p["record"].size
         out = {
@@ -225,43 +267,26 @@ class StudyEngine:
             "contact_model": self._base["contact.model"],
             "substeps": self._base["integrator.substeps"],
         }
-        if self.mdof:
-            for r in np.unique(p["record"]):
-                sel = np.flatnonzero(p["record"] == r)
-                dt_rec, acc = self.records[r]
-                part, contacts = integrators.simulate_scene_batch(
-                    acc,
-                    dt_rec,
-                    self.arrays,
-                    gap_m=p["contact.gap_m"][sel],
-                    beta=p["contact.beta"][sel],
-                    xi=p["contact.xi"][sel],
-                    dt_s=p["integrator.dt_s"][sel],
-                    **settings,
-                )
-                for name in RESULT_VARIABLES:
-                    out[name][sel] = part[name]
-                for name in CONTACT_VARIABLES:
-                    out[name][sel] = contacts[name.removeprefix("contact_")]
-            return out
         for r in np.unique(p["record"]):
             sel = np.flatnonzero(p["record"] == r)
             dt_rec, acc = self.records[r]
-            part = integrators.simulate_sdof_pairs(
-                acc,
-                dt_rec,
-                left_period_s=p["left.period_s"][sel],
-                left_damping_ratio=p["left.damping_ratio"][sel],
-                left_mass_kg=p["left.mass_kg"][sel],
-                right_period_s=p["right.period_s"][sel],
-                right_damping_ratio=p["right.damping_ratio"][sel],
-                right_mass_kg=p["right.mass_kg"][sel],
-                gap_m=p["contact.gap_m"][sel],
-                beta=p["contact.beta"][sel],
-                xi=p["contact.xi"][sel],
-                dt_s=p["integrator.dt_s"][sel],
+            common = {
+                "gap_m": p["contact.gap_m"][sel],
+                "beta": p["contact.beta"][sel],
+                "xi": p["contact.xi"][sel],
+                "dt_s": p["integrator.dt_s"][sel],
                 **settings,
-            )
+            }
+            if self.mdof:
+                batch = integrators.simulate_scene_batch
+                part, contacts = batch(acc, dt_rec, self.arrays, **common)
+                for name in CONTACT_VARIABLES:
+                    out[name][sel] = contacts[name.removeprefix("contact_")]
+            else:
+                structure = {f"{side}_{name}": p[f"{side}.{name}"][sel]
+                             for side in ("left", "right")
+                             for name in ("period_s", "damping_ratio", "mass_kg")}  # fmt: skip
+                part = integrators.simulate_sdof_pairs(acc, dt_rec, **structure, **common)
             for name in RESULT_VARIABLES:
                 out[name][sel] = part[name]
         return out
@@ -305,7 +330,11 @@ class StudyEngine:
                 else self._sampled("contact.e", self._base.get("contact.e"))
             )
             e = np.asarray(e, float)
-            xi = np.asarray(xi_from_e(e, self._base["contact.relation"]), float)
+            if self._base["contact.model"] == "hertzdamp":
+                # no constant xi: the law's damping follows each impact's velocity from e
+                xi = np.full(e.shape, np.nan)
+            else:
+                xi = np.asarray(xi_from_e(e, self._base["contact.relation"]), float)
             out["e"] = (dims, e)
         else:
             dims = xi_dims
@@ -360,9 +389,6 @@ class StudyEngine:
 
     def provenance(self) -> dict:
         """Versions of the software that produced the numbers."""
-        import netCDF4
-        import scipy
-
         return {
             "pound_mc_version": __version__,
             "numba_version": numba.__version__,

@@ -37,8 +37,17 @@ from scipy.stats import qmc
 
 from pound_mc.errors import InputError
 from pound_mc.physics import materials
+from pound_mc.scene.schema import Field, Table, check_table
 
-__all__ = ["DESIGNS", "RandomVariable", "design", "parse_variable", "draw"]
+__all__ = [
+    "DESIGNS",
+    "DISTRIBUTIONS",
+    "VARY_TABLES",
+    "RandomVariable",
+    "design",
+    "parse_variable",
+    "draw",
+]
 
 
 def _random_design(n: int, d: int, seed: int) -> np.ndarray:
@@ -107,23 +116,112 @@ class RandomVariable:
         return self.a * np.exp(self.b * stats.norm.ppf(u))
 
 
-_DISTRIBUTION_KEYS = {
-    "uniform": ("low", "high"),
-    "normal": ("mean", "std"),
-    "lognormal": ("median", "sigma_ln"),
-}
+#: The optional key of a material range, by the sampled key it applies to.
+MATERIAL_OPTIONS = {"contact.e": "velocity_m_s", "contact.beta": "mass_kg"}
 
 
-def _number(spec, name, key, file, errors):
-    value = spec.get(name)
-    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
-        errors.append(InputError(f"needs a finite number {name!r}", file=file, key=key))
+def _distribution(kind: str, description: str, a: tuple, b: tuple) -> Table:
+    """The table of ``{ distribution = kind, a = .., b = .. }``; ``a``, ``b``: (name, text, > 0)."""
+    params = [
+        Field(name, "number", text, unit="as the key", required=True,
+              minimum=0.0 if positive else None, exclusive_minimum=positive)
+        for name, text, positive in (a, b)
+    ]  # fmt: skip
+    kind_field = Field("distribution", "string", f"`{kind}`.", required=True, choices=(kind,))
+    return Table("sampling.vary.KEY", description, (kind_field, *params),
+                 variant=f"distribution = '{kind}'")  # fmt: skip
+
+
+#: ``[sampling.vary]`` entries: ``{ material = ... }`` and one table per distribution, whose
+#: two parameters are :class:`RandomVariable` ``a`` and ``b``.
+VARY_TABLES = {
+    "material": Table(
+        "sampling.vary.KEY",
+        "Uniform over a material's measured range (Jankowski 2008): `contact.e` over Table 2, "
+        "`contact.beta` over Table 3.  `material = \"grid\"` follows a `contact.material` grid "
+        "axis.",
+        (
+            Field("material", "string", "Material of the seed's tables, or `grid`.",
+                  required=True, choices=(*materials.MATERIALS, "grid")),
+            Field("velocity_m_s", "number", "For `contact.e`: the range at this prior-impact "
+                  "velocity (default: all velocities).", unit="m/s", minimum=0.0,
+                  exclusive_minimum=True),
+            Field("mass_kg", "number", "For `contact.beta`: the range at this ball mass "
+                  "(default: all masses).", unit="kg", minimum=0.0, exclusive_minimum=True),
+        ),
+        variant="material",
+    ),
+    "uniform": _distribution("uniform", "Uniform between `low` and `high` (> low).",
+                             ("low", "Lower end.", False), ("high", "Upper end (> low).", False)),
+    "normal": _distribution("normal", "Normal with `mean` and standard deviation `std`.",
+                            ("mean", "Mean.", False), ("std", "Standard deviation.", True)),
+    "lognormal": _distribution(
+        "lognormal", "Lognormal with `median` and logarithmic standard deviation `sigma_ln`.",
+        ("median", "Median.", True), ("sigma_ln", "Standard deviation of ln(value) [-].", True),
+    ),
+}  # fmt: skip
+#: Parameters of each distribution, in the order of :class:`RandomVariable` ``a``, ``b``.
+DISTRIBUTIONS = {kind: table.keys[1:] for kind, table in VARY_TABLES.items() if kind != "material"}
+
+
+def _material_variable(key: str, spec: dict, where: str, file, errors: list):
+    """A ``{ material = ... }`` entry: uniform over the seed's measured range."""
+    material = spec["material"]
+    if material not in materials.MATERIALS:
+        errors.append(
+            InputError(
+                f"unknown material {material!r}; choose one of {list(materials.MATERIALS)}",
+                file=file,
+                key=f"{where}.material",
+            )
+        )
         return None
-    return float(value)
+    if key not in MATERIAL_OPTIONS:
+        errors.append(
+            InputError(
+                "material ranges exist only for 'contact.e' and 'contact.beta'",
+                file=file,
+                key=where,
+            )
+        )
+        return None
+    allowed = {"material", MATERIAL_OPTIONS[key]}
+    extra = set(spec) - allowed
+    if extra:
+        errors.append(
+            InputError(
+                f"unknown keys {sorted(extra)}; allowed {sorted(allowed)}", file=file, key=where
+            )
+        )
+        return None
+    local: list[InputError] = []
+    check_table(VARY_TABLES["material"], spec, file=file, prefix=f"{where}.", errors=local)
+    errors.extend(local)
+    if local:
+        return None
+    option = MATERIAL_OPTIONS[key]
+    try:
+        if key == "contact.e":
+            if option in spec:
+                lo, hi = materials.restitution_range(material, spec[option])
+                source = f"{material}, Jankowski (2008) Table 2 at {spec[option]} m/s"
+            else:
+                lo, hi = materials.material_ranges(material)["e"]
+                source = f"{material}, Jankowski (2008) Table 2, all velocities"
+        elif option in spec:
+            lo, hi, _ = materials.stiffness_range(material, spec[option])
+            source = f"{material}, Jankowski (2008) Table 3 at {spec[option]} kg"
+        else:
+            lo, hi = materials.material_ranges(material)["beta"]
+            source = f"{material}, Jankowski (2008) Table 3, all ball masses"
+    except (InputError, TypeError) as exc:
+        errors.append(InputError(str(getattr(exc, "message", exc)), file=file, key=where))
+        return None
+    return RandomVariable(key, "uniform", lo, hi, f"uniform over {source}")
 
 
 def parse_variable(key: str, spec, *, file=None) -> tuple[RandomVariable | None, list]:
-    """Validate one ``[sampling.vary]`` entry; returns the variable and a list of errors."""
+    """Validate one ``[sampling.vary]`` entry (:data:`VARY_TABLES`); the variable and errors."""
     errors: list[InputError] = []
     where = f"sampling.vary.{key}"
     if not isinstance(spec, dict):
@@ -132,89 +230,25 @@ def parse_variable(key: str, spec, *, file=None) -> tuple[RandomVariable | None,
         )
         return None, errors
     if "material" in spec:
-        material = spec["material"]
-        if material not in materials.MATERIALS:
-            errors.append(
-                InputError(
-                    f"unknown material {material!r}; choose one of {list(materials.MATERIALS)}",
-                    file=file,
-                    key=f"{where}.material",
-                )
-            )
-            return None, errors
-        allowed = {
-            "contact.e": {"material", "velocity_m_s"},
-            "contact.beta": {"material", "mass_kg"},
-        }
-        if key not in allowed:
-            errors.append(
-                InputError(
-                    "material ranges exist only for 'contact.e' and 'contact.beta'",
-                    file=file,
-                    key=where,
-                )
-            )
-            return None, errors
-        extra = set(spec) - allowed[key]
-        if extra:
-            errors.append(
-                InputError(
-                    f"unknown keys {sorted(extra)}; allowed {sorted(allowed[key])}",
-                    file=file,
-                    key=where,
-                )
-            )
-            return None, errors
-        try:
-            if key == "contact.e":
-                if "velocity_m_s" in spec:
-                    lo, hi = materials.restitution_range(material, spec["velocity_m_s"])
-                    source = f"{material}, Jankowski (2008) Table 2 at {spec['velocity_m_s']} m/s"
-                else:
-                    lo, hi = materials.material_ranges(material)["e"]
-                    source = f"{material}, Jankowski (2008) Table 2, all velocities"
-            else:
-                if "mass_kg" in spec:
-                    lo, hi, _ = materials.stiffness_range(material, spec["mass_kg"])
-                    source = f"{material}, Jankowski (2008) Table 3 at {spec['mass_kg']} kg"
-                else:
-                    lo, hi = materials.material_ranges(material)["beta"]
-                    source = f"{material}, Jankowski (2008) Table 3, all ball masses"
-        except (InputError, TypeError) as exc:
-            errors.append(InputError(str(getattr(exc, "message", exc)), file=file, key=where))
-            return None, errors
-        return RandomVariable(key, "uniform", lo, hi, f"uniform over {source}"), errors
-
+        return _material_variable(key, spec, where, file, errors), errors
     kind = spec.get("distribution")
-    if kind not in _DISTRIBUTION_KEYS:
+    if kind not in DISTRIBUTIONS:
         errors.append(
             InputError(
-                f"needs 'material' or 'distribution' (one of {sorted(_DISTRIBUTION_KEYS)}), "
+                f"needs 'material' or 'distribution' (one of {sorted(DISTRIBUTIONS)}), "
                 f"got {kind!r}",
                 file=file,
                 key=f"{where}.distribution",
             )
         )
         return None, errors
-    names = _DISTRIBUTION_KEYS[kind]
-    extra = set(spec) - {"distribution", *names}
-    if extra:
-        errors.append(
-            InputError(
-                f"unknown keys {sorted(extra)}; {kind} takes {list(names)}", file=file, key=where
-            )
-        )
-    a = _number(spec, names[0], f"{where}.{names[0]}", file, errors)
-    b = _number(spec, names[1], f"{where}.{names[1]}", file, errors)
-    if a is None or b is None or errors:
+    values = check_table(VARY_TABLES[kind], spec, file=file, prefix=f"{where}.", errors=errors)
+    if errors:
         return None, errors
+    names = DISTRIBUTIONS[kind]
+    a, b = float(values[names[0]]), float(values[names[1]])
     if kind == "uniform" and not b > a:
         errors.append(InputError("needs high > low", file=file, key=f"{where}.high"))
-    if kind in ("normal", "lognormal") and not b > 0:
-        errors.append(InputError("must be > 0", file=file, key=f"{where}.{names[1]}"))
-    if kind == "lognormal" and not a > 0:
-        errors.append(InputError("must be > 0", file=file, key=f"{where}.median"))
-    if errors:
         return None, errors
     text = ", ".join(f"{n} {v:g}" for n, v in zip(names, (a, b), strict=True))
     return RandomVariable(key, kind, a, b, f"{kind} ({text})"), errors

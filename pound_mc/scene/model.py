@@ -1,15 +1,15 @@
 """One deterministic simulation: a scene file (TOML) to a :class:`SimulationResult`.
 
 A scene holds ``[record]``, ``[left]``, ``[right]``, ``[contact]`` and ``[integrator]``
-(``../shared/DESIGN.md`` section 6).  :func:`simulate` runs it through the compiled kernels of
-:mod:`pound_mc.integrators.kernels`.
+(``../shared/DESIGN.md`` section 6), declared in :mod:`pound_mc.scene.schema`.
+:func:`simulate` runs it through the compiled kernels of :mod:`pound_mc.integrators.kernels`.
 """
 
 from __future__ import annotations
 
 import math
 import tomllib
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -17,21 +17,16 @@ import numpy as np
 
 from pound_mc.errors import InputError
 from pound_mc.integrators.kernels import CONTACT_OUTPUTS, METHODS, OUTPUTS, run_kernel
+from pound_mc.motions.records import load_record, record_arrays
 from pound_mc.physics.contact import CONTACT_MODELS
-from pound_mc.physics.relations import RELATIONS, xi_from_e
-from pound_mc.physics.structures import Building, Contact, building_from_dict, contacts_between
+from pound_mc.physics.relations import xi_from_e
+from pound_mc.physics.structures import Building, Contact, contacts_between, sdof, shear_building
+from pound_mc.scene import schema
 
 __all__ = ["Scene", "SimulationResult", "scene_from_dict", "load_scene", "simulate"]
 
-_SCENE_TABLES = {"record", "left", "right", "contact", "integrator"}
-_CONTACT_KEYS = {"model", "gap_m", "beta", "k_N_per_m", "xi", "e", "relation"}
-_INTEGRATOR_KEYS = {"method", "dt_s", "substeps"}
-_RECORD_KEYS = {
-    "source", "name", "demean", "duration_s", "pga_g", "units", "component", "seed", "params",
-    "resample_hz", "filter",
-}  # fmt: skip
-#: Contact laws whose stiffness is ``k_N_per_m`` [N/m] (the others take ``beta`` [N/m^1.5]).
-_LINEAR_LAWS = {"linear", "kelvin"}
+#: Tables a study adds to a scene (checked by :mod:`pound_mc.study.definition`).
+_STUDY_TABLES = {"study", "grid", "sampling", "records"}
 
 
 @dataclass
@@ -82,8 +77,6 @@ class Scene:
 
     def load_record(self):
         """The scene's record as an obspy Trace [m/s^2], preprocessed."""
-        from pound_mc.motions.records import load_record
-
         spec = dict(self.record)
         spec.pop("name", None)
         source = spec.pop("source")
@@ -158,148 +151,141 @@ class SimulationResult:
         }
 
 
-def _number(table: dict, key: str, *, file, prefix: str, positive=False, default=None):
-    value = table.get(key, default)
-    if value is None:
+def _building(spec, side: str, file, errors: list) -> Building | None:
+    """Check ``[left]`` or ``[right]`` against its model's table and build it."""
+    model = spec.get("model", "sdof")
+    table = schema.BUILDINGS.get(model) if isinstance(model, str) else None
+    if table is None:
+        problem = schema.SDOF["model"].problem(model)
+        errors.append(InputError(problem, file=file, key=f"{side}.model"))
         return None
-    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
-        raise InputError(f"must be a finite number, got {value!r}", file=file, key=prefix + key)
-    if positive and value <= 0:
-        raise InputError(f"must be > 0, got {value!r}", file=file, key=prefix + key)
-    return float(value)
+    local: list[InputError] = []
+    v = schema.check_table(table, spec, file=file, prefix=f"{side}.", errors=local)
+    errors.extend(local)
+    if local:
+        return None
+    try:
+        if model == "sdof":
+            return sdof(v["period_s"], v["mass_kg"], v["damping_ratio"], v.get("height_m"),
+                        file=file, prefix=f"{side}.")  # fmt: skip
+        return shear_building(v["storey_mass_kg"], v["storey_stiffness_N_per_m"],
+                              v["storey_height_m"], v["damping_ratio"], file=file,
+                              prefix=f"{side}.")  # fmt: skip
+    except InputError as exc:  # rules across keys: storey lists of equal length
+        errors.append(exc)
+        return None
+
+
+def _contact(ct: dict, n_contacts: int | None, file, errors: list) -> dict:
+    """Check ``[contact]``: the table, then the rules that tie its keys together."""
+    local: list[InputError] = []
+    v = schema.check_table(schema.CONTACT, ct, file=file, prefix="contact.", errors=local)
+    errors.extend(local)
+    model = v.get("model")
+    if model is None:
+        return v
+    skey = "k_N_per_m" if model in schema.LINEAR_LAWS else "beta"
+    other = "beta" if skey == "k_N_per_m" else "k_N_per_m"
+    if other in ct:
+        errors.append(
+            InputError(f"the {model!r} law takes {skey!r}, not {other!r}", file=file,
+                       key=f"contact.{other}")
+        )  # fmt: skip
+    v["stiffness"] = v.get(skey)
+    if "xi" in ct and "e" in ct:
+        errors.append(InputError("give either xi or e, not both", file=file, key="contact.xi"))
+    elif "e" not in ct and "xi" not in ct and model in ("jankowski", "kelvin"):
+        errors.append(InputError(f"the {model!r} law needs xi or e", file=file, key="contact.xi"))
+    if model == "hertzdamp" and "e" not in ct:
+        errors.append(InputError("the 'hertzdamp' law needs e", file=file, key="contact.e"))
+    if "e" in v:
+        v.setdefault("relation", schema.default_relation(model))
+        if model != "hertzdamp" and "relation" in v:
+            # hertzdamp takes e itself (its damping follows each impact's velocity)
+            v["xi"] = float(xi_from_e(v["e"], v["relation"]))
+    elif "relation" in ct:
+        v.pop("relation", None)  # without e the relation says nothing
+    if "gap_m" in v and n_contacts is not None:
+        gaps = np.atleast_1d(np.asarray(v["gap_m"], dtype=float))
+        if gaps.size == 1:
+            gaps = np.full(n_contacts, gaps[0])
+        elif gaps.size != n_contacts:
+            errors.append(
+                InputError(f"gives {gaps.size} gaps for {n_contacts} contacts", file=file,
+                           key="contact.gap_m")
+            )  # fmt: skip
+        v["gap_m"] = gaps
+    return v
 
 
 def scene_from_dict(data: dict, *, file: str | Path | None = None) -> Scene:
-    """Validate a scene (the parsed TOML tables) and build a :class:`Scene`.
+    """Validate a scene (the parsed TOML tables) against :mod:`pound_mc.scene.schema`.
+
+    Every table is checked, and every problem reported at once.  A record's source must exist
+    (a file, a built-in record, a synthetic model); it is read when the scene is simulated.
 
     Raises
     ------
     InputError
-        Naming the file and the key of the first problem found.
+        Naming the file and the key of the problem (:class:`~pound_mc.errors.InputErrors`
+        when there are several).
     """
     file_s = None if file is None else str(file)
-    extra = sorted(set(data) - _SCENE_TABLES - {"study", "grid", "sampling", "records"})
-    if extra:
-        raise InputError(
-            f"unknown table(s) {', '.join(extra)}; allowed: {', '.join(sorted(_SCENE_TABLES))}",
-            file=file_s,
-            key=extra[0],
-        )
+    base_dir = None if file is None else Path(file).parent
+    errors: list[InputError] = []
+    extra = sorted(set(data) - set(schema.SCENE_TABLES) - _STUDY_TABLES)
+    for key in extra:
+        errors.append(
+            InputError(f"unknown table; allowed: {', '.join(schema.SCENE_TABLES)}", file=file_s,
+                       key=key)
+        )  # fmt: skip
     for table in ("record", "left", "right"):
         if not isinstance(data.get(table), dict):
-            raise InputError("is required (a table)", file=file_s, key=table)
-    record = dict(data["record"])
-    unknown = sorted(set(record) - _RECORD_KEYS)
-    if unknown:
-        raise InputError(f"unknown key {unknown[0]!r}", file=file_s, key=f"record.{unknown[0]}")
-    if "source" not in record:
-        raise InputError("is required", file=file_s, key="record.source")
-    left = building_from_dict(data["left"], file=file_s, side="left")
-    right = building_from_dict(data["right"], file=file_s, side="right")
-    contacts = contacts_between(left, right, file=file_s)
-
+            errors.append(InputError("is required (a table)", file=file_s, key=table))
     for table in ("contact", "integrator"):
         if table in data and not isinstance(data[table], dict):
-            raise InputError(f"must be a table, got {data[table]!r}", file=file_s, key=table)
-    ct = dict(data.get("contact", {}))
-    unknown = sorted(set(ct) - _CONTACT_KEYS)
-    if unknown:
-        raise InputError(
-            f"unknown key; allowed: {', '.join(sorted(_CONTACT_KEYS))}",
-            file=file_s,
-            key=f"contact.{unknown[0]}",
-        )
-    model = ct.get("model", "jankowski")
-    if not isinstance(model, str) or model not in CONTACT_MODELS:
-        raise InputError(
-            f"unknown contact model {model!r}; allowed: {', '.join(CONTACT_MODELS)}",
-            file=file_s,
-            key="contact.model",
-        )
-    gap = ct.get("gap_m", 0.0)
-    gaps = np.atleast_1d(np.asarray(gap, dtype=float)) if _numeric_list(gap) else None
-    if gaps is None or not np.all(np.isfinite(gaps)) or np.any(gaps < 0):
-        raise InputError(
-            f"must be a number >= 0 or one per contact, got {gap!r}",
-            file=file_s,
-            key="contact.gap_m",
-        )
-    if gaps.size == 1:
-        gaps = np.full(len(contacts), gaps[0])
-    elif gaps.size != len(contacts):
-        raise InputError(
-            f"gives {gaps.size} gaps for {len(contacts)} contacts", file=file_s, key="contact.gap_m"
-        )
-    skey = "k_N_per_m" if model in _LINEAR_LAWS else "beta"
-    other = "beta" if skey == "k_N_per_m" else "k_N_per_m"
-    if other in ct:
-        raise InputError(
-            f"the {model!r} law takes {skey!r}, not {other!r}", file=file_s, key=f"contact.{other}"
-        )
-    stiffness = _number(ct, skey, file=file_s, prefix="contact.", positive=True, default=2.75e9)
-    xi = e = relation = None
-    if "xi" in ct and "e" in ct:
-        raise InputError("give either xi or e, not both", file=file_s, key="contact.xi")
-    if "e" in ct:
-        e = _number(ct, "e", file=file_s, prefix="contact.")
-        if not 0.0 < e <= 1.0:
-            raise InputError(f"must be in (0, 1], got {e!r}", file=file_s, key="contact.e")
-        relation = ct.get("relation", "kelvin" if model == "kelvin" else "jankowski2008")
-        if not isinstance(relation, str) or relation not in RELATIONS:
-            raise InputError(
-                f"unknown relation {relation!r}; allowed: {', '.join(RELATIONS)}",
-                file=file_s,
-                key="contact.relation",
+            errors.append(
+                InputError(f"must be a table, got {data[table]!r}", file=file_s, key=table)
             )
-        xi = float(xi_from_e(e, relation))
-    elif "xi" in ct:
-        xi = _number(ct, "xi", file=file_s, prefix="contact.")
-        if xi < 0:
-            raise InputError(f"must be >= 0, got {xi!r}", file=file_s, key="contact.xi")
-    elif model in ("jankowski", "kelvin"):
-        raise InputError(f"the {model!r} law needs xi or e", file=file_s, key="contact.xi")
-    if model == "hertzdamp" and e is None:
-        raise InputError("the 'hertzdamp' law needs e", file=file_s, key="contact.e")
-
-    it = dict(data.get("integrator", {}))
-    unknown = sorted(set(it) - _INTEGRATOR_KEYS)
-    if unknown:
-        raise InputError(f"unknown key {unknown[0]!r}", file=file_s, key=f"integrator.{unknown[0]}")
-    method = it.get("method", "adaptive")
-    if not isinstance(method, str) or method not in METHODS:
-        raise InputError(
-            f"unknown method {method!r}; allowed: {', '.join(METHODS)}",
-            file=file_s,
-            key="integrator.method",
-        )
-    dt_s = _number(it, "dt_s", file=file_s, prefix="integrator.", positive=True, default=0.001)
-    substeps = it.get("substeps", 16)
-    if isinstance(substeps, bool) or not isinstance(substeps, int) or substeps < 4:
-        raise InputError(
-            f"must be an integer >= 4, got {substeps!r}", file=file_s, key="integrator.substeps"
-        )
+    if errors:
+        schema.raise_all(errors)
+    record = dict(data["record"])
+    checked = schema.check_table(schema.RECORD, record, file=file_s, prefix="record.",
+                                 errors=errors)  # fmt: skip
+    if "source" in checked:
+        problem = schema.source_problem(checked["source"], base_dir)
+        if problem is not None:
+            errors.append(InputError(problem, file=file_s, key="record.source"))
+    left = _building(data["left"], "left", file_s, errors)
+    right = _building(data["right"], "right", file_s, errors)
+    contacts = None
+    if left is not None and right is not None:
+        try:
+            contacts = contacts_between(left, right, file=file_s)
+        except InputError as exc:
+            errors.append(exc)
+    ct = _contact(dict(data.get("contact", {})), None if contacts is None else len(contacts),
+                  file_s, errors)  # fmt: skip
+    it = schema.check_table(schema.INTEGRATOR, dict(data.get("integrator", {})), file=file_s,
+                            prefix="integrator.", errors=errors)  # fmt: skip
+    schema.raise_all(errors)
     return Scene(
         record=record,
         left=left,
         right=right,
         contacts=contacts,
-        gap_m=gaps,
-        contact_model=model,
-        stiffness=stiffness,
-        xi=xi,
-        e=e,
-        relation=relation,
-        method=method,
-        dt_s=dt_s,
-        substeps=substeps,
+        gap_m=ct["gap_m"],
+        contact_model=ct["model"],
+        stiffness=float(ct["stiffness"]),
+        xi=None if ct.get("xi") is None else float(ct["xi"]),
+        e=None if ct.get("e") is None else float(ct["e"]),
+        relation=ct.get("relation"),
+        method=it["method"],
+        dt_s=float(it["dt_s"]),
+        substeps=it["substeps"],
         file=file_s,
-        base_dir=None if file is None else Path(file).parent,
+        base_dir=base_dir,
     )
-
-
-def _numeric_list(value) -> bool:
-    vals = value if isinstance(value, list) else [value]
-    return bool(vals) and all(isinstance(v, int | float) and not isinstance(v, bool) for v in vals)
 
 
 def load_scene(path: str | Path) -> Scene:
@@ -336,8 +322,6 @@ def simulate(
     method, dt_s, substeps : optional
         Override the scene's integrator settings.
     """
-    from pound_mc.motions.records import record_arrays
-
     if record is None:
         record = record_arrays(scene.load_record())
     dt_rec, acc = record
@@ -356,8 +340,6 @@ def simulate(
     outputs = {name: float(out[k]) for k, name in enumerate(OUTPUTS)}
     contacts = {name: cout[:, k].copy() for k, name in enumerate(CONTACT_OUTPUTS)}
     if m != scene.method or dt_s or substeps:
-        from dataclasses import replace
-
         scene = replace(
             scene, method=m, dt_s=dt_s or scene.dt_s, substeps=substeps or scene.substeps
         )

@@ -1,0 +1,442 @@
+"""The scene tables declared once: each key's type, bounds, default, unit and description.
+
+A scene file (``../shared/DESIGN.md`` section 6) holds ``[record]``, ``[left]`` and ``[right]``
+(``model = "sdof"`` or ``"shear"``), ``[contact]`` and ``[integrator]``.  Each table is a
+:class:`Table` of :class:`Field` entries; :func:`check_table` walks one and reports every
+problem it finds (unknown keys, missing keys, wrong types, values out of bounds or not among
+the choices), each naming the file and the dotted key.  The same declarations generate the
+reference page ``studies/SCHEMA.md`` and the JSON Schema ``studies/pound-mc.schema.json``
+(:mod:`pound_mc.study.schema`), so the documentation cannot drift from the validator.
+
+Rules that tie several keys together (``beta`` or ``k_N_per_m`` by law, ``xi`` or ``e``, the
+number of gaps) are checked by :func:`pound_mc.scene.model.scene_from_dict`.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from pound_mc.errors import InputError, InputErrors
+from pound_mc.integrators.kernels import METHODS
+from pound_mc.motions import synthetic
+from pound_mc.motions.records import UNITS, builtin_catalogue
+from pound_mc.physics.contact import CONTACT_MODELS
+from pound_mc.physics.relations import HERTZDAMP_RELATIONS, RELATIONS
+
+__all__ = [
+    "Field",
+    "Table",
+    "check_table",
+    "raise_all",
+    "allowed_relations",
+    "default_relation",
+    "source_problem",
+    "RECORD",
+    "SDOF",
+    "SHEAR",
+    "BUILDINGS",
+    "CONTACT",
+    "INTEGRATOR",
+    "SCENE_TABLES",
+    "LINEAR_LAWS",
+    "varied_keys",
+]
+
+#: Type names of :class:`Field` and what they accept (``numbers``: a number or a list of them).
+TYPES = ("number", "integer", "boolean", "string", "table", "numbers")
+
+
+@dataclass(frozen=True)
+class Field:
+    """One key of a TOML table.
+
+    Attributes
+    ----------
+    name : str
+        The key.
+    type : str
+        One of :data:`TYPES`.
+    description : str
+        What it means (one sentence or two).
+    unit : str
+        SI unit of a number (``"s"``, ``"N/m^1.5"``); empty when dimensionless or not a number.
+    default : object
+        Value taken when the key is absent (``None``: no default).
+    required : bool
+        Whether the key must be given.
+    minimum, maximum : float, optional
+        Bounds of a number (every element of a list); ``exclusive_*`` makes them strict.
+    choices : tuple or callable, optional
+        Allowed values; a callable takes the table's values checked so far (keys earlier in
+        the table) and returns them, for choices that depend on another key.
+    choices_doc : str
+        How dependent choices are described in the reference (default: the choices listed).
+    pattern : str, optional
+        Regular expression a string must match (JSON Schema syntax).
+    varied : bool
+        Whether a study may make the key a grid axis or a sampled variable.
+    """
+
+    name: str
+    type: str
+    description: str
+    unit: str = ""
+    default: Any = None
+    required: bool = False
+    minimum: float | None = None
+    exclusive_minimum: bool = False
+    maximum: float | None = None
+    exclusive_maximum: bool = False
+    choices: tuple | Callable[[dict], tuple] | None = None
+    choices_doc: str = ""
+    pattern: str | None = None
+    varied: bool = False
+
+    def bounds_text(self) -> str:
+        """The bounds as text (``"> 0"``, ``"[0, 1)"``), empty without bounds."""
+        lo, hi = self.minimum, self.maximum
+        if lo is not None and hi is not None:
+            left = "(" if self.exclusive_minimum else "["
+            right = ")" if self.exclusive_maximum else "]"
+            return f"{left}{lo:g}, {hi:g}{right}"
+        if lo is not None:
+            return f"{'>' if self.exclusive_minimum else '>='} {lo:g}"
+        if hi is not None:
+            return f"{'<' if self.exclusive_maximum else '<='} {hi:g}"
+        return ""
+
+    def choices_for(self, values: dict) -> tuple | None:
+        """Allowed values given the table's other values (``None``: any value of the type)."""
+        return self.choices(values) if callable(self.choices) else self.choices
+
+    def problem(self, value, values: dict | None = None) -> str | None:
+        """What is wrong with ``value`` for this key, or ``None`` if nothing is."""
+        kind = self.type
+        if kind in ("number", "numbers"):
+            items = value if (kind == "numbers" and isinstance(value, list)) else [value]
+            if kind == "numbers" and not items:
+                return "must be a number or a non-empty list of numbers, got []"
+            if not all(_is_number(x) for x in items):
+                what = "a finite number" + (" or a list of them" if kind == "numbers" else "")
+                return f"must be {what}, got {value!r}"
+            bounds = self.bounds_text()
+            if bounds and not all(self._within(float(x)) for x in items):
+                return f"must be {_bounds_phrase(self)}, got {value!r}"
+            return None
+        if kind == "integer":
+            if not (isinstance(value, int) and not isinstance(value, bool)):
+                return f"must be an integer, got {value!r}"
+            if not self._within(value):
+                return f"must be an integer {_bounds_phrase(self)}, got {value!r}"
+            return None
+        checks = {"boolean": (bool, "true or false"), "string": (str, "a string"),
+                  "table": (dict, "a table")}  # fmt: skip
+        python_type, what = checks[kind]
+        if not isinstance(value, python_type):
+            return f"must be {what}, got {value!r}"
+        choices = self.choices_for(values or {})
+        if choices is not None and value not in choices:
+            return f"unknown value {value!r}; allowed: {', '.join(map(str, choices))}"
+        if self.pattern is not None and not _matches(self.pattern, value):
+            return f"must match {self.pattern} ({self.description.lower().rstrip('.')})"
+        return None
+
+    def _within(self, x: float) -> bool:
+        if self.minimum is not None:
+            if x < self.minimum or (self.exclusive_minimum and x == self.minimum):
+                return False
+        if self.maximum is not None:
+            if x > self.maximum or (self.exclusive_maximum and x == self.maximum):
+                return False
+        return True
+
+
+@dataclass(frozen=True)
+class Table:
+    """One TOML table: its name (``"contact"``), a description and its fields, in order."""
+
+    name: str
+    description: str
+    fields: tuple[Field, ...]
+    #: For the reference page: a variant of a table chosen by a key (``model = "shear"``).
+    variant: str = ""
+    #: An array of tables (``[[records]]``) rather than one table.
+    array: bool = False
+    _by_name: dict = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self):
+        object.__setattr__(self, "_by_name", {f.name: f for f in self.fields})
+
+    @property
+    def keys(self) -> tuple[str, ...]:
+        """The allowed keys, in declaration order."""
+        return tuple(self._by_name)
+
+    def __getitem__(self, name: str) -> Field:
+        return self._by_name[name]
+
+
+def _is_number(x) -> bool:
+    return isinstance(x, int | float) and not isinstance(x, bool) and math.isfinite(x)
+
+
+def _matches(pattern: str, value: str) -> bool:
+    return re.match(pattern, value) is not None
+
+
+def _bounds_phrase(f: Field) -> str:
+    lo, hi = f.minimum, f.maximum
+    if lo is not None and hi is not None:
+        return f"in {f.bounds_text()}"
+    return f.bounds_text()
+
+
+def check_table(
+    table: Table, data: dict, *, file: str | None, prefix: str, errors: list[InputError]
+) -> dict:
+    """Check one table against its declaration; problems are appended to ``errors``.
+
+    Parameters
+    ----------
+    table : Table
+        The declaration.
+    data : dict
+        The table as read.
+    file : str, optional
+        The file, named in every message.
+    prefix : str
+        Dotted prefix of the keys in messages (``"left."``, ``"records[1]."``).
+    errors : list of InputError
+        Where problems go.
+
+    Returns
+    -------
+    dict
+        The values that passed, defaults filled in for absent keys that have one.
+    """
+    for key in sorted(set(data) - set(table.keys), key=str):
+        errors.append(
+            InputError(
+                f"unknown key; allowed: {', '.join(table.keys)}", file=file, key=prefix + key
+            )
+        )
+    out: dict = {}
+    for f in table.fields:
+        if f.name not in data:
+            if f.required:
+                note = f" for {table.variant}" if table.variant else ""
+                errors.append(InputError(f"is required{note}", file=file, key=prefix + f.name))
+            elif f.default is not None:
+                out[f.name] = f.default
+            continue
+        problem = f.problem(data[f.name], out)
+        if problem is None:
+            out[f.name] = data[f.name]
+        else:
+            errors.append(InputError(problem, file=file, key=prefix + f.name))
+    return out
+
+
+def raise_all(errors: list[InputError]) -> None:
+    """Raise the one problem in ``errors`` as it is, several as :class:`InputErrors`."""
+    if len(errors) == 1:
+        raise errors[0]
+    if errors:
+        raise InputErrors(errors)
+
+
+# --------------------------------------------------------------------------- contact relations
+
+#: Contact laws whose stiffness is ``k_N_per_m`` [N/m] (the others take ``beta`` [N/m^1.5]).
+LINEAR_LAWS = ("linear", "kelvin")
+
+
+def allowed_relations(model: str) -> tuple[str, ...]:
+    """Names of the e-to-damping relations the contact law ``model`` takes.
+
+    The Hertz-damp law turns ``e`` into its damping constant with
+    :data:`~pound_mc.physics.relations.HERTZDAMP_RELATIONS`; the other laws into ``xi`` with
+    :data:`~pound_mc.physics.relations.RELATIONS`.
+    """
+    return tuple(HERTZDAMP_RELATIONS if model == "hertzdamp" else RELATIONS)
+
+
+def default_relation(model: str) -> str:
+    """The relation a law uses when ``contact.relation`` is not given."""
+    return {"kelvin": "kelvin", "hertzdamp": "ye2009"}.get(model, "jankowski2008")
+
+
+# --------------------------------------------------------------------------- record sources
+
+
+def source_problem(source: str, base_dir: str | Path | None) -> str | None:
+    """Why a ``record.source`` cannot be read (an unknown name, a missing file), or ``None``.
+
+    Only existence is checked here; reading and preprocessing happen when a study engine or
+    :func:`pound_mc.scene.simulate` loads the record.
+    """
+    kind, sep, rest = source.partition(":")
+    kind = kind.strip().lower()
+    if sep and kind == "builtin":
+        names = builtin_catalogue()
+        if rest.strip().lower() not in names:
+            return f"unknown built-in record {rest!r}; choose one of {', '.join(names)}"
+        return None
+    if sep and kind == "synthetic":
+        if rest.strip().lower() not in synthetic.SYNTHETIC_MODELS:
+            return (
+                f"unknown synthetic model {rest!r}; choose one of "
+                f"{', '.join(synthetic.SYNTHETIC_MODELS)}"
+            )
+        return None
+    path = Path(source).expanduser()
+    if not path.is_absolute() and base_dir is not None:
+        path = Path(base_dir) / path
+    if not path.exists():
+        if re.match(r"^[A-Za-z][\w-]+:", source):
+            return (
+                f"unknown source kind {kind + ':'!r} (and no such file); use a path, "
+                "'builtin:NAME' or 'synthetic:MODEL'"
+            )
+        return f"file not found: {path}"
+    if not path.is_file():
+        return f"not a file (a directory?): {path}"
+    return None
+
+
+# --------------------------------------------------------------------------- the tables
+
+RECORD = Table(
+    "record",
+    "The ground motion: one `[record]` table, or several `[[records]]` tables in a study "
+    "(each a record axis entry, with the same keys).  Steps in order: read, demean, filter, "
+    "resample, truncate to `duration_s`, scale to `pga_g`.",
+    (
+        Field("source", "string", "A file path (AT2, MiniSEED, SAC, K-NET, EVT, ...; relative "
+              "to the file that names it), `builtin:NAME` (`pound-mc records`) or "
+              "`synthetic:clough-penzien`.", required=True),
+        Field("name", "string", "Label of the record in the dataset (default: the source)."),
+        Field("demean", "boolean", "Remove the mean of the whole record as read.",
+              default=True),
+        Field("duration_s", "number", "Keep the samples with t <= duration_s.", unit="s",
+              minimum=0.0, exclusive_minimum=True),
+        Field("pga_g", "number", "Scale so that max |a| of the kept samples is pga_g * g.",
+              unit="g", minimum=0.0, exclusive_minimum=True),
+        Field("units", "string", "Units of the file's values where the format does not say: "
+              + ", ".join(f"`{u}`" for u in UNITS) + " (or `cm/s^2`)."),
+        Field("component", "string", "Trace of a multi-trace file (e.g. `EW`, `HNE`)."),
+        Field("seed", "integer", "Realisation of a synthetic motion (required for "
+              "`synthetic:`).", minimum=0),
+        Field("params", "table", "Parameters of a synthetic motion "
+              "(`pound_mc.motions.synthetic`)."),
+        Field("resample_hz", "number", "New sampling rate (Fourier resampling), before "
+              "truncation.", unit="Hz", minimum=0.0, exclusive_minimum=True),
+        Field("filter", "table", "Arguments of obspy's `Trace.filter`, e.g. "
+              "`{ type = \"bandpass\", freqmin = 0.1, freqmax = 25.0 }`."),
+    ),
+)  # fmt: skip
+
+_BUILDING_DAMPING = Field(
+    "damping_ratio", "number", "Viscous damping ratio of every mode (classical damping).",
+    default=0.05, minimum=0.0, maximum=1.0, exclusive_maximum=True, varied=True,
+)  # fmt: skip
+
+SDOF = Table(
+    "sdof",
+    "A single-degree-of-freedom building (`[left]` or `[right]` with `model = \"sdof\"`, the "
+    "default).",
+    (
+        Field("model", "string", "Building model.", default="sdof", choices=("sdof", "shear")),
+        Field("period_s", "number", "Natural period.", unit="s", required=True, minimum=0.0,
+              exclusive_minimum=True, varied=True),
+        Field("mass_kg", "number", "Mass.", unit="kg", required=True, minimum=0.0,
+              exclusive_minimum=True, varied=True),
+        _BUILDING_DAMPING,
+        Field("height_m", "number", "Height of the mass; needed only to pair it with a shear "
+              "building's floors.", unit="m", minimum=0.0, exclusive_minimum=True),
+    ),
+    variant="model = 'sdof'",
+)  # fmt: skip
+
+SHEAR = Table(
+    "shear",
+    "A shear building (`[left]` or `[right]` with `model = \"shear\"`): storey lists bottom to "
+    "top, of equal length; floors of the two buildings at equal height can pound.  Its modes "
+    "are computed once per study, so a study varies only `contact.*` keys and "
+    "`integrator.dt_s` with it.",
+    (
+        Field("model", "string", "Building model.", required=True, choices=("sdof", "shear")),
+        Field("storey_mass_kg", "numbers", "Floor masses, bottom to top.", unit="kg",
+              required=True, minimum=0.0, exclusive_minimum=True),
+        Field("storey_stiffness_N_per_m", "numbers", "Storey shear stiffnesses, bottom to top.",
+              unit="N/m", required=True, minimum=0.0, exclusive_minimum=True),
+        Field("storey_height_m", "numbers", "Storey heights, bottom to top (floor elevations "
+              "are their cumulative sums).", unit="m", required=True, minimum=0.0,
+              exclusive_minimum=True),
+        _BUILDING_DAMPING,
+    ),
+    variant="model = 'shear'",
+)  # fmt: skip
+
+#: Building tables by ``model``.
+BUILDINGS = {"sdof": SDOF, "shear": SHEAR}
+
+CONTACT = Table(
+    "contact",
+    "The impact law between the buildings (Jankowski 2008 and the laws compared with it).  "
+    "Give the damping as `xi` or as a restitution coefficient `e` (with `relation`), not "
+    "both; `jankowski` and `kelvin` need one of them, `hertzdamp` needs `e`.",
+    (
+        Field("model", "string", "Contact law.", default="jankowski",
+              choices=tuple(CONTACT_MODELS)),
+        Field("gap_m", "numbers", "Initial separation: one value, or one per contact (pair of "
+              "floors at equal height, bottom to top).", unit="m", default=0.0, minimum=0.0,
+              varied=True),
+        Field("beta", "number", "Impact stiffness parameter of the Hertz-type laws "
+              "(jankowski, hertz, hertzdamp).", unit="N/m^1.5", default=2.75e9, minimum=0.0,
+              exclusive_minimum=True, varied=True),
+        Field("k_N_per_m", "number", "Linear impact stiffness of the linear and kelvin laws.",
+              unit="N/m", default=2.75e9, minimum=0.0, exclusive_minimum=True, varied=True),
+        Field("xi", "number", "Impact damping ratio.", minimum=0.0, varied=True),
+        Field("e", "number", "Coefficient of restitution; the damping follows from it through "
+              "`relation`.", minimum=0.0, exclusive_minimum=True, maximum=1.0, varied=True),
+        Field("relation", "string", "Relation from e to the damping (default: jankowski2008; "
+              "kelvin for the kelvin law; ye2009 for hertzdamp).",
+              choices=lambda values: allowed_relations(values.get("model", "jankowski")),
+              choices_doc=f"{', '.join(RELATIONS)}; for hertzdamp "
+              f"{', '.join(HERTZDAMP_RELATIONS)}"),
+    ),
+)  # fmt: skip
+
+INTEGRATOR = Table(
+    "integrator",
+    "The time integration (DESIGN.md section 4).",
+    (
+        Field("method", "string", "Integration method.", default="adaptive",
+              choices=tuple(METHODS)),
+        Field("dt_s", "number", "Step of the fixed-step methods, or the bound on steps between "
+              "contacts (adaptive).", unit="s", default=0.001, minimum=0.0,
+              exclusive_minimum=True, varied=True),
+        Field("substeps", "integer", "Sub-steps per contact-duration estimate while in contact "
+              "(adaptive).", default=16, minimum=4),
+    ),
+)  # fmt: skip
+
+#: Scene tables by name (``left`` and ``right`` are :data:`BUILDINGS` chosen by ``model``).
+SCENE_TABLES = {"record": RECORD, "left": BUILDINGS, "right": BUILDINGS, "contact": CONTACT,
+                "integrator": INTEGRATOR}  # fmt: skip
+
+
+def varied_keys() -> tuple[str, ...]:
+    """Scene keys a study may vary (``"left.period_s"``): the numeric fields marked ``varied``."""
+    out = []
+    for side in ("left", "right"):
+        out += [f"{side}.{f.name}" for f in SDOF.fields if f.varied]
+    for table in (CONTACT, INTEGRATOR):
+        out += [f"{table.name}.{f.name}" for f in table.fields if f.varied]
+    return tuple(out)
