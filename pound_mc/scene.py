@@ -82,7 +82,7 @@ class Scene:
 
     def load_record(self):
         """The scene's record as an obspy Trace [m/s^2], preprocessed."""
-        from pound_mc.motions.records import load_record
+        from pound_mc.motions import load_record
 
         spec = dict(self.record)
         spec.pop("name", None)
@@ -336,7 +336,7 @@ def simulate(
     method, dt_s, substeps : optional
         Override the scene's integrator settings.
     """
-    from pound_mc.motions.records import record_arrays
+    from pound_mc.motions import record_arrays
 
     if record is None:
         record = record_arrays(scene.load_record())

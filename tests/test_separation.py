@@ -101,7 +101,7 @@ def test_substeps_catch_the_peak_between_samples():
 
 
 def test_required_gaps_for_a_record():
-    from pound_mc.motions.records import load_record, record_arrays
+    from pound_mc.motions import load_record, record_arrays
 
     dt, acc = record_arrays(load_record("builtin:elcentro", duration_s=20.0))
     g = required_gaps(dt, acc, 0.5, 1.0)

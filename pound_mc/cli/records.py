@@ -40,7 +40,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _list(args) -> int:
-    from pound_mc.motions.records import builtin_catalogue
+    from pound_mc.motions import builtin_catalogue
 
     catalogue = builtin_catalogue()
     if args.json:
@@ -63,7 +63,7 @@ def _resolve(source: str) -> str:
     """A bare catalogue name means ``builtin:NAME`` unless a file of that name exists."""
     from pathlib import Path
 
-    from pound_mc.motions.records import BUILTIN_RECORDS
+    from pound_mc.motions import BUILTIN_RECORDS
 
     if ":" not in source and source.lower() in BUILTIN_RECORDS and not Path(source).exists():
         return f"builtin:{source.lower()}"
@@ -71,7 +71,7 @@ def _resolve(source: str) -> str:
 
 
 def _info(args) -> int:
-    from pound_mc.motions.records import load_record, record_arrays, record_info
+    from pound_mc.motions import load_record, record_arrays, record_info
 
     source = _resolve(args.source)
     seed = args.seed if source.lower().startswith("synthetic:") else None
@@ -101,7 +101,7 @@ def _plot(trace, info: dict, path: str) -> None:
     from matplotlib.figure import Figure
 
     from pound_mc.analysis.plot import save
-    from pound_mc.motions.records import G, record_arrays
+    from pound_mc.motions import G, record_arrays
     from pound_mc.physics.spectra import response_spectrum
 
     if not str(path).lower().endswith(".png"):

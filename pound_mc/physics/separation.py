@@ -233,7 +233,7 @@ def required_gaps(
     dt : float
         Sampling interval of ``acc`` [s].
     acc : array_like
-        Ground acceleration [m/s^2] (e.g. from :func:`pound_mc.motions.records.record_arrays`).
+        Ground acceleration [m/s^2] (e.g. from :func:`pound_mc.motions.record_arrays`).
     period1_s, period2_s : float
         Natural periods of building 1 (left) and 2 (right) [s].
     damping1, damping2 : float, default 0.05

@@ -279,7 +279,7 @@ def _validate_scene(data: dict, file, prefix: str, errors: list) -> None:
 
 def _load_records(records: list[dict], prefixes: list[str], file, errors: list) -> list:
     """Read and preprocess every record; problems go to ``errors`` keyed in the study file."""
-    from pound_mc.motions.records import load_record, record_arrays
+    from pound_mc.motions import load_record, record_arrays
 
     fname = None if file is None else str(file)
     base_dir = None if file is None else Path(file).parent

@@ -66,7 +66,7 @@ class StudyEngine:
     """
 
     def __init__(self, study):
-        from pound_mc.motions.records import load_record, record_arrays
+        from pound_mc.motions import load_record, record_arrays
         from pound_mc.scene import scene_from_dict
 
         self.study = study
