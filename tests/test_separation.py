@@ -5,6 +5,7 @@ import math
 import numpy as np
 import pytest
 
+from pound_mc.analysis.gaps import study_gaps
 from pound_mc.errors import InputError
 from pound_mc.physics.separation import (
     cqc_correlation,
@@ -13,7 +14,6 @@ from pound_mc.physics.separation import (
     gap_srss,
     peak_displacements,
     required_gaps,
-    study_gaps,
 )
 from pound_mc.study.definition import study_from_text
 

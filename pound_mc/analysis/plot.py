@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
+from pound_mc.analysis.gaps import study_gaps
 from pound_mc.physics import materials, relations
 from pound_mc.physics.droptest import DropTestResult, drop_test
 
@@ -250,7 +251,7 @@ def rule_gaps(ds, rules="auto", *, base_dir=None) -> dict:
         ``{label: gap}``: a number [m], an array with one value per value of the chart's line
         axis, or an :class:`xarray.DataArray` (reduced as below).  ``"auto"``: the dataset's
         attributes :data:`RULE_ATTRS` when it has any, else the gaps
-        :func:`pound_mc.physics.separation.study_gaps` computes for every simulation of the study
+        :func:`pound_mc.analysis.gaps.study_gaps` computes for every simulation of the study
         (ABS, SRSS, DDC from the linear responses of the two buildings alone).  None: no rules.
     base_dir : str or Path, optional
         Folder of relative record paths, for ``"auto"`` (default the working directory).
@@ -269,10 +270,6 @@ def rule_gaps(ds, rules="auto", *, base_dir=None) -> dict:
     found = {label: ds.attrs[attr] for label, attr in RULE_ATTRS.items() if attr in ds.attrs}
     if found or "study_text" not in ds.attrs:
         return found
-    try:
-        from pound_mc.physics.separation import study_gaps
-    except ImportError:  # pragma: no cover - part of the package from 0.1
-        return {}
     gaps = study_gaps(ds, base_dir=base_dir)
     return {"ABS": gaps["gap_abs"], "SRSS": gaps["gap_srss"], "DDC": gaps["gap_ddc"]}
 
