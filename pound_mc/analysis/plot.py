@@ -10,6 +10,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import xarray as xr
 from matplotlib.figure import Figure
 
 from pound_mc.analysis.gaps import study_gaps
@@ -281,8 +282,6 @@ def _reduce_rule(value, ds, line, record, hold):
     ``record=None``) and held dims, and its median over the samples (and over the gaps: the
     rules do not depend on the gap) is drawn.
     """
-    import xarray as xr
-
     if isinstance(value, xr.DataArray):
         if "record" in value.dims and record is not None:
             value = value.isel(record=record)
