@@ -48,6 +48,31 @@ def save(fig: Figure, path: str | Path | None) -> Figure:
     return fig
 
 
+def finish_axes(ax, *, title: str, title_size=9, legend_size=8, grid="major", **props) -> None:
+    """Title, labels, grid and legend of one chart's axes, alike on every chart.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        The axes.
+    title : str
+        Axes title.
+    title_size : float or None
+        Title font size [pt]; None keeps matplotlib's default.
+    legend_size : float
+        Legend font size [pt].
+    grid : {"major", "minor", "both"}
+        Grid lines drawn (30 % opaque).
+    **props
+        More :meth:`matplotlib.axes.Axes.set` properties (``xlabel``, ``ylabel``, ``ylim``, ...).
+    """
+    ax.set(title=title, **props)
+    if title_size is not None:
+        ax.title.set_fontsize(title_size)
+    ax.grid(True, which=grid, alpha=0.3)
+    ax.legend(fontsize=legend_size)
+
+
 def restitution_curves(targets=None) -> dict[str, tuple[np.ndarray, np.ndarray]]:
     """Restitution each xi-e relation really produces against its target.
 
@@ -215,7 +240,8 @@ def spectrum_chart(ds, path: str | Path | None = None, *, x=None, line=None, rec
             lw=0,
         )
     xattrs = ds[x].attrs
-    ax.set(
+    finish_axes(
+        ax,
         xlabel=f"{xattrs.get('long_name', x)} [{xattrs.get('units', '')}]",
         ylabel="peak impact force [MN]",
         title=(
@@ -223,9 +249,6 @@ def spectrum_chart(ds, path: str | Path | None = None, *, x=None, line=None, rec
             f"{ds['record'].values[record]}): median and 5-95 % over {ds.sizes['sample']} samples"
         ),
     )
-    ax.title.set_fontsize(9)
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=8)
     return save(fig, path)
 
 
@@ -440,7 +463,8 @@ def probability_chart(
                 rule_label = f"{label} rule (in each line's colour)" if first else None
                 ax.axvline(arr[i] * 1e3, color=colours[i], ls=style, lw=1.1, label=rule_label)
                 first = False
-    ax.set(
+    finish_axes(
+        ax,
         xlabel="initial gap [mm]",
         ylabel="pounding probability [-]",
         ylim=(-0.03, 1.03),
@@ -450,9 +474,6 @@ def probability_chart(
             f"(median over samples)"
         ),
     )
-    ax.title.set_fontsize(9)
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=8)
     return save(fig, path)
 
 

@@ -60,30 +60,31 @@ def bench_command(args) -> int:
         if s not in SCENES:
             raise InputError(f"unknown scene {s!r}; allowed: {', '.join(SCENES)}", key="--scenes")
     table = benchmark(args.scenes, args.methods, repeats=args.repeats, progress=not args.json)
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    table.to_csv(out / "bench.csv", index=False)
-    work_precision_chart(table, out / "work_precision.png")
-    if args.json:
-        print(table.to_json(orient="records", indent=1))
-    else:
-        cols = ["scene", "method", "dt_s", "substeps", "seconds", "impacts", "err_peak_force",
-                "err_peak_disp_left", "err_peak_disp_right", "status"]  # fmt: skip
-        print(table[cols].to_string(index=False, float_format=lambda x: f"{x:.3g}"))
-        print(f"wrote {out / 'bench.csv'} and {out / 'work_precision.png'}")
+    cols = ["scene", "method", "dt_s", "substeps", "seconds", "impacts", "err_peak_force",
+            "err_peak_disp_left", "err_peak_disp_right", "status"]  # fmt: skip
+    _write_table(args, table, "bench.csv", work_precision_chart, "work_precision.png", ".3g", cols)
     return 0
 
 
 def stability_command(args) -> int:
     """``pound-mc stability``: the largest stable step against contact stiffness."""
     table = stability_map()
+    _write_table(args, table, "stability.csv", stability_map_chart, "stability_map.png", ".4g")
+    return 0
+
+
+def _write_table(args, table, csv_name, chart, png_name, number_format, columns=None) -> None:
+    """Write ``table`` as CSV and its chart into ``args.out``; print it as JSON or as text.
+
+    The text shows ``columns`` (default all), numbers in ``number_format``.
+    """
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    table.to_csv(out / "stability.csv", index=False)
-    stability_map_chart(table, out / "stability_map.png")
+    table.to_csv(out / csv_name, index=False)
+    chart(table, out / png_name)
     if args.json:
         print(table.to_json(orient="records", indent=1))
     else:
-        print(table.to_string(index=False, float_format=lambda x: f"{x:.4g}"))
-        print(f"wrote {out / 'stability.csv'} and {out / 'stability_map.png'}")
-    return 0
+        shown = table if columns is None else table[columns]
+        print(shown.to_string(index=False, float_format=lambda x: f"{x:{number_format}}"))
+        print(f"wrote {out / csv_name} and {out / png_name}")

@@ -81,15 +81,8 @@ def gap_abs(u1, u2):
 def gap_srss(u1, u2):
     """Square-root-of-sum-of-squares separation rule ``sqrt(u1^2 + u2^2)``.
 
-    Parameters
-    ----------
-    u1, u2 : float or array_like
-        Peak displacements of the two buildings [m].
-
-    Returns
-    -------
-    float or numpy.ndarray
-        Required gap [m].
+    Takes the peak displacements ``u1``, ``u2`` [m] and returns the required gap [m] as
+    :func:`gap_abs` does.
     """
     return np.hypot(u1, u2)
 
