@@ -20,6 +20,7 @@ import pytest
 import xarray as xr
 
 import pound_mc  # noqa: F401  (registers ds.pound)
+from pound_mc.analysis.gaps import study_gaps
 from pound_mc.cli import main
 from pound_mc.cli.analysis import draw
 
@@ -156,10 +157,9 @@ def test_probability_rules_from_attributes_and_from_separation(ds, tiny):
     ax = marked.pound.plot.probability().axes[0]
     ddc = [ln for ln in ax.lines if ln.get_linestyle() == ":"]
     assert [ln.get_xdata()[0] for ln in ddc] == [pytest.approx(7.5)]
-    # by default: ABS, SRSS, DDC of every simulation (pound_mc.physics.separation),
+    # by default: ABS, SRSS, DDC of every simulation (pound_mc.analysis.gaps),
     # median over samples
-    separation = pytest.importorskip("pound_mc.physics.separation")
-    gaps = separation.study_gaps(ds)
+    gaps = study_gaps(ds)
     ax = draw(tiny, "probability").axes[0]
     for style, name in (("--", "gap_abs"), ("-.", "gap_srss"), (":", "gap_ddc")):
         drawn = [ln.get_xdata()[0] for ln in ax.lines if ln.get_linestyle() == style]

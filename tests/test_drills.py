@@ -430,7 +430,7 @@ def test_bad_input_drill(case):
 def test_huge_record_dt_is_refused(tmp_path):
     """A record with DT = 1e60 s is no accelerogram (a study on it would never end)."""
     from pound_mc.errors import InputError
-    from pound_mc.motions.records import load_record
+    from pound_mc.motions import load_record
 
     record = tmp_path / "quake.at2"
     record.write_text(_at2_text().replace("DT=   0.0100", "DT=   1e60"))
@@ -458,7 +458,7 @@ def robustness_counts() -> dict[str, dict[str, int]]:
 
     Also the source of the counts quoted in the reports (run this module's function).
     """
-    from pound_mc.motions.records import load_record, record_arrays
+    from pound_mc.motions import load_record, record_arrays
 
     grids = np.meshgrid(*_EXTREMES.values(), indexing="ij")
     p = {key: g.ravel() for key, g in zip(_EXTREMES, grids, strict=True)}

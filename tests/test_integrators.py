@@ -20,7 +20,7 @@ from scipy.linalg import expm
 
 from pound_mc.integrators.kernels import METHODS, OUTPUTS, run_kernel
 from pound_mc.integrators.reference import reference_solution
-from pound_mc.motions.records import record_arrays
+from pound_mc.motions import record_arrays
 from pound_mc.scene import load_scene, scene_from_dict, simulate
 
 ROOT = Path(__file__).resolve().parents[1]

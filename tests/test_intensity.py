@@ -8,8 +8,7 @@ import numpy as np
 import pytest
 
 from pound_mc.errors import InputError
-from pound_mc.motions import intensity
-from pound_mc.motions.records import G, make_trace
+from pound_mc.motions import G, intensity, make_trace
 from pound_mc.motions.suites import suite_records
 
 

@@ -22,7 +22,7 @@ def scene(**contact):
 
 @pytest.fixture(scope="module")
 def record():
-    from pound_mc.motions.records import record_arrays
+    from pound_mc.motions import record_arrays
 
     return record_arrays(scene().load_record())
 

@@ -8,10 +8,10 @@ from scipy.integrate import solve_ivp
 
 from pound_mc.cli import main
 from pound_mc.errors import InputError
-from pound_mc.motions import records
-from pound_mc.motions.records import (
+from pound_mc.motions import (
     G,
     builtin_catalogue,
+    catalogue,
     load_record,
     make_trace,
     preprocess,
@@ -19,14 +19,15 @@ from pound_mc.motions.records import (
     read_record,
     record_arrays,
     record_info,
+    traces,
 )
 from pound_mc.physics.spectra import response_spectrum
 
-# obspy is imported through pound_mc.motions.records, which silences its import-time deprecation
+# obspy is imported through pound_mc.motions.traces, which silences its import-time deprecation
 # warning (filterwarnings = error)
-obspy = records.obspy
-ELCENTRO = records._builtin_path("elcentro")
-KNET = records._builtin_path("knet-akt013")
+obspy = traces.obspy
+ELCENTRO = catalogue._builtin_path("elcentro")
+KNET = catalogue._builtin_path("knet-akt013")
 
 
 # ----------------------------------------------------------------------------- real records
@@ -77,7 +78,7 @@ def test_knet_pga_matches_the_header_after_demeaning():
 
 def test_evt_builtins_calibrated_and_channels_selected():
     tr = load_record("builtin:evt-mola-2012", component="2", demean=False)
-    path = records._builtin_path("evt-mola-2012")
+    path = catalogue._builtin_path("evt-mola-2012")
     # obspy's EVT calibration uses g = 9.81; ours uses the standard gravity
     with pytest.warns(UserWarning, match="Unmatched raw value"):
         raw = obspy.read(str(path)).select(channel="2")[0]

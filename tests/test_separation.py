@@ -5,6 +5,7 @@ import math
 import numpy as np
 import pytest
 
+from pound_mc.analysis.gaps import study_gaps
 from pound_mc.errors import InputError
 from pound_mc.physics.separation import (
     cqc_correlation,
@@ -13,7 +14,6 @@ from pound_mc.physics.separation import (
     gap_srss,
     peak_displacements,
     required_gaps,
-    study_gaps,
 )
 from pound_mc.study.definition import study_from_text
 
@@ -101,7 +101,7 @@ def test_substeps_catch_the_peak_between_samples():
 
 
 def test_required_gaps_for_a_record():
-    from pound_mc.motions.records import load_record, record_arrays
+    from pound_mc.motions import load_record, record_arrays
 
     dt, acc = record_arrays(load_record("builtin:elcentro", duration_s=20.0))
     g = required_gaps(dt, acc, 0.5, 1.0)

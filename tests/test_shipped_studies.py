@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 import xarray as xr
 
+from pound_mc.analysis.gaps import study_gaps
 from pound_mc.cli import main
 from pound_mc.errors import InputErrors
 from pound_mc.physics import materials
-from pound_mc.physics.separation import study_gaps
 from pound_mc.study.definition import load_study, study_from_text
 from pound_mc.study.runner import run_study
 

@@ -8,8 +8,7 @@ import numpy as np
 import pytest
 
 from pound_mc.errors import InputError
-from pound_mc.motions import suites
-from pound_mc.motions.records import G
+from pound_mc.motions import G, suites
 
 
 def _package_set(record_set):

@@ -5,8 +5,7 @@ import pytest
 from scipy.integrate import quad
 
 from pound_mc.errors import InputError
-from pound_mc.motions import synthetic
-from pound_mc.motions.records import G, load_record, record_arrays
+from pound_mc.motions import G, load_record, record_arrays, synthetic
 
 
 def _binned_ratio(params, seeds, width_hz=1.0, band_hz=(0.5, 15.0), target_params=None):

@@ -20,7 +20,16 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
+from pound_mc.analysis.plot import (
+    distribution_chart,
+    probability_chart,
+    restitution_chart,
+    save,
+    spectrum_chart,
+)
+from pound_mc.analysis.plot_numerics import time_history_chart
 from pound_mc.errors import InputError
+from pound_mc.scene import simulate as simulate_scene
 from pound_mc.study.definition import grid_dim_name, study_from_text
 from pound_mc.study.engine import StudyEngine
 
@@ -112,26 +121,18 @@ class PoundPlot:
 
     def spectrum(self, path=None, **kwargs):
         """Impact force spectrum (:func:`pound_mc.analysis.plot.spectrum_chart`)."""
-        from pound_mc.analysis.plot import spectrum_chart
-
         return spectrum_chart(self._ds, path, **kwargs)
 
     def probability(self, path=None, **kwargs):
         """Pounding probability against gap (:func:`pound_mc.analysis.plot.probability_chart`)."""
-        from pound_mc.analysis.plot import probability_chart
-
         return probability_chart(self._ds, path, **kwargs)
 
     def distribution(self, path=None, **kwargs):
         """Peak force distribution (:func:`pound_mc.analysis.plot.distribution_chart`)."""
-        from pound_mc.analysis.plot import distribution_chart
-
         return distribution_chart(self._ds, path, **kwargs)
 
     def restitution(self, path=None, **kwargs):
         """Restitution relations with the study's sampled ``e`` and ``e_effective`` marked."""
-        from pound_mc.analysis.plot import restitution_chart
-
         ds = self._ds
         samples = None
         if "e" in ds and "e_effective" in ds:
@@ -146,9 +147,6 @@ class PoundPlot:
 
         See :func:`scene_at` for the arguments; the figure's title names the simulation.
         """
-        from pound_mc.analysis.plot import save
-        from pound_mc.analysis.plot_numerics import time_history_chart
-
         result, index = self._ds.pound.simulate(
             record=record, sample=sample, study_path=study_path, **coords
         )
@@ -278,9 +276,7 @@ class PoundAccessor:
             Integer position of the simulation along every dimension of ``peak_force``
             (``ds.peak_force[index]`` is the stored result).
         """
-        from pound_mc.scene import simulate
-
         scene, rec, index = scene_at(
             self._ds, record=record, sample=sample, study_path=study_path, **coords
         )
-        return simulate(scene, record=rec, history=history), index
+        return simulate_scene(scene, record=rec, history=history), index

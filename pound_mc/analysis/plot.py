@@ -10,8 +10,10 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import xarray as xr
 from matplotlib.figure import Figure
 
+from pound_mc.analysis.gaps import study_gaps
 from pound_mc.physics import materials, relations
 from pound_mc.physics.droptest import DropTestResult, drop_test
 
@@ -44,6 +46,31 @@ def save(fig: Figure, path: str | Path | None) -> Figure:
         fig.savefig(tmp, dpi=130, format="png")
         tmp.replace(path)
     return fig
+
+
+def finish_axes(ax, *, title: str, title_size=9, legend_size=8, grid="major", **props) -> None:
+    """Title, labels, grid and legend of one chart's axes, alike on every chart.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        The axes.
+    title : str
+        Axes title.
+    title_size : float or None
+        Title font size [pt]; None keeps matplotlib's default.
+    legend_size : float
+        Legend font size [pt].
+    grid : {"major", "minor", "both"}
+        Grid lines drawn (30 % opaque).
+    **props
+        More :meth:`matplotlib.axes.Axes.set` properties (``xlabel``, ``ylabel``, ``ylim``, ...).
+    """
+    ax.set(title=title, **props)
+    if title_size is not None:
+        ax.title.set_fontsize(title_size)
+    ax.grid(True, which=grid, alpha=0.3)
+    ax.legend(fontsize=legend_size)
 
 
 def restitution_curves(targets=None) -> dict[str, tuple[np.ndarray, np.ndarray]]:
@@ -213,7 +240,8 @@ def spectrum_chart(ds, path: str | Path | None = None, *, x=None, line=None, rec
             lw=0,
         )
     xattrs = ds[x].attrs
-    ax.set(
+    finish_axes(
+        ax,
         xlabel=f"{xattrs.get('long_name', x)} [{xattrs.get('units', '')}]",
         ylabel="peak impact force [MN]",
         title=(
@@ -221,9 +249,6 @@ def spectrum_chart(ds, path: str | Path | None = None, *, x=None, line=None, rec
             f"{ds['record'].values[record]}): median and 5-95 % over {ds.sizes['sample']} samples"
         ),
     )
-    ax.title.set_fontsize(9)
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=8)
     return save(fig, path)
 
 
@@ -250,7 +275,7 @@ def rule_gaps(ds, rules="auto", *, base_dir=None) -> dict:
         ``{label: gap}``: a number [m], an array with one value per value of the chart's line
         axis, or an :class:`xarray.DataArray` (reduced as below).  ``"auto"``: the dataset's
         attributes :data:`RULE_ATTRS` when it has any, else the gaps
-        :func:`pound_mc.physics.separation.study_gaps` computes for every simulation of the study
+        :func:`pound_mc.analysis.gaps.study_gaps` computes for every simulation of the study
         (ABS, SRSS, DDC from the linear responses of the two buildings alone).  None: no rules.
     base_dir : str or Path, optional
         Folder of relative record paths, for ``"auto"`` (default the working directory).
@@ -269,10 +294,6 @@ def rule_gaps(ds, rules="auto", *, base_dir=None) -> dict:
     found = {label: ds.attrs[attr] for label, attr in RULE_ATTRS.items() if attr in ds.attrs}
     if found or "study_text" not in ds.attrs:
         return found
-    try:
-        from pound_mc.physics.separation import study_gaps
-    except ImportError:  # pragma: no cover - part of the package from 0.1
-        return {}
     gaps = study_gaps(ds, base_dir=base_dir)
     return {"ABS": gaps["gap_abs"], "SRSS": gaps["gap_srss"], "DDC": gaps["gap_ddc"]}
 
@@ -284,8 +305,6 @@ def _reduce_rule(value, ds, line, record, hold):
     ``record=None``) and held dims, and its median over the samples (and over the gaps: the
     rules do not depend on the gap) is drawn.
     """
-    import xarray as xr
-
     if isinstance(value, xr.DataArray):
         if "record" in value.dims and record is not None:
             value = value.isel(record=record)
@@ -444,7 +463,8 @@ def probability_chart(
                 rule_label = f"{label} rule (in each line's colour)" if first else None
                 ax.axvline(arr[i] * 1e3, color=colours[i], ls=style, lw=1.1, label=rule_label)
                 first = False
-    ax.set(
+    finish_axes(
+        ax,
         xlabel="initial gap [mm]",
         ylabel="pounding probability [-]",
         ylim=(-0.03, 1.03),
@@ -454,9 +474,6 @@ def probability_chart(
             f"(median over samples)"
         ),
     )
-    ax.title.set_fontsize(9)
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=8)
     return save(fig, path)
 
 

@@ -6,7 +6,7 @@ import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.ticker import NullFormatter
 
-from pound_mc.analysis.plot import save
+from pound_mc.analysis.plot import finish_axes, save
 
 __all__ = ["work_precision_chart", "stability_map_chart", "time_history_chart"]
 
@@ -38,13 +38,16 @@ def work_precision_chart(table, path=None, *, quantity: str = "err_peak_force") 
             err = np.maximum(rows[quantity].to_numpy(), 1e-16)
             ax.loglog(rows["seconds"] * 1e3, err, marker=marker, color=colour, label=method)
         ax.axhline(1e-4, color="0.5", lw=0.8, ls="--")
-        ax.set_xlabel("time per simulation [ms] (one core, median)")
-        ax.set_ylabel("relative error of peak force [-]")
         ref = part["reference"].iloc[0] if "reference" in part else "reference"
-        ax.set_title(f"{label}: work-precision (against {ref})", fontsize=10)
         ax.xaxis.set_minor_formatter(NullFormatter())
-        ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=8)
+        finish_axes(
+            ax,
+            xlabel="time per simulation [ms] (one core, median)",
+            ylabel="relative error of peak force [-]",
+            title=f"{label}: work-precision (against {ref})",
+            title_size=10,
+            grid="both",
+        )
     return save(fig, path)
 
 
@@ -71,12 +74,16 @@ def stability_map_chart(table, path=None) -> Figure:
         pred = rows["predicted"].to_numpy(dtype=float)
         if np.isfinite(pred).all():
             ax.semilogx(rows["beta"], pred, color=colour, ls="--", label=f"{method}, predicted")
-    ax.set_yscale("log")
-    ax.set_xlabel("impact stiffness beta [N/m^1.5]")
-    ax.set_ylabel("largest stable dt * omega_c [-]")
-    ax.set_title("Stability at an impact (v0 = 0.5 m/s, m = 1e6 kg)")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=7)
+    finish_axes(
+        ax,
+        yscale="log",
+        xlabel="impact stiffness beta [N/m^1.5]",
+        ylabel="largest stable dt * omega_c [-]",
+        title="Stability at an impact (v0 = 0.5 m/s, m = 1e6 kg)",
+        title_size=None,
+        legend_size=7,
+        grid="both",
+    )
     return save(fig, path)
 
 

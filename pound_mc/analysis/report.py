@@ -16,6 +16,12 @@ from pathlib import Path
 
 import numpy as np
 
+from pound_mc.analysis import (
+    accessor,  # noqa: F401  (registers ds.pound)
+    plot,
+)
+from pound_mc.errors import InputError
+
 __all__ = ["chart_png", "report_html", "write_report"]
 
 _CSS = """
@@ -120,10 +126,6 @@ def report_html(ds, *, base_dir=None, history: bool = True) -> str:
         Include the time history of the simulation with the largest peak force (rebuilt from
         the study text and run again).
     """
-    import pound_mc  # noqa: F401  (registers ds.pound)
-    from pound_mc.analysis import plot
-    from pound_mc.errors import InputError
-
     name = ds.attrs.get("study_name", "study")
     description = ""
     figures = []

@@ -1,8 +1,9 @@
 """The ``pound-mc`` command line.
 
-Each group of subcommands lives next to the code it drives (``pound_mc.cli_*`` modules with a
-``register(subparsers)`` function); this module only assembles them and turns input errors into
-exit status 2.
+The arguments of every sub-command and the function that runs it are declared in
+:mod:`pound_mc.cli.commands`; the functions live in ``pound_mc.cli.physics``, ``.records``,
+``.scene``, ``.study`` and ``.analysis``, and only the module of the command given is imported.
+This module builds the parser, dispatches, and turns input errors into exit status 2.
 """
 
 from __future__ import annotations
@@ -13,16 +14,8 @@ import os
 import sys
 
 from pound_mc._version import __version__
+from pound_mc.cli.commands import COMMANDS, add_commands
 from pound_mc.errors import InputError
-
-# Modules that contribute subcommands, in the order they appear in ``--help``.
-_SUBCOMMAND_MODULES = [
-    "pound_mc.cli.physics",
-    "pound_mc.cli.records",
-    "pound_mc.cli.scene",
-    "pound_mc.cli.study",
-    "pound_mc.cli.analysis",
-]
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -36,9 +29,14 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"pound-mc {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     sub.required = True
-    for name in _SUBCOMMAND_MODULES:
-        importlib.import_module(name).register(sub)
+    add_commands(sub)
     return parser
+
+
+def command_function(name: str):
+    """The function that runs sub-command ``name`` (a key of :data:`COMMANDS`), imported now."""
+    module, function = COMMANDS[name]
+    return getattr(importlib.import_module(module), function)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -46,7 +44,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
-        status = args.func(args)
+        status = command_function(args.handler)(args)
     except InputError as exc:
         print(f"pound-mc {args.command}: error: {exc}", file=sys.stderr)
         return 2

@@ -1,71 +1,23 @@
-"""Subcommands that look at results: ``plot`` and ``report``.
+"""Sub-commands that look at results: ``plot`` and ``report``.
 
-``pound-mc plot FILE --kind KIND`` draws one chart.  What ``FILE`` is depends on the kind:
-
-==================  ======================================================================
-kind                file
-==================  ======================================================================
-``spectrum``        a study dataset (``pound-mc run``'s ``.nc``)
-``probability``     a study dataset with the gap on its grid
-``distribution``    a study dataset
-``restitution``     a study dataset (its sampled ``e`` marked) or nothing: ``-``
-``work-precision``  ``pound-mc bench``'s CSV (``outputs/bench.csv``)
-``stability``       ``pound-mc stability``'s CSV (``outputs/stability.csv``)
-``history``         a scene file (``.toml``), or a study dataset with ``--sel``/``--sample``:
-                    that simulation is rebuilt from the dataset's study text and run again
-==================  ======================================================================
+Their arguments are declared in :mod:`pound_mc.cli.commands` (``pound-mc plot --help`` lists
+what ``FILE`` is for each chart kind); :func:`draw` is ``pound-mc plot`` as a function.
 """
 
 from __future__ import annotations
 
-import argparse
 from pathlib import Path
 
-#: Chart kinds of ``pound-mc plot``.
-KINDS = (
-    "spectrum",
-    "probability",
-    "distribution",
-    "restitution",
-    "work-precision",
-    "stability",
-    "history",
-)
+import pandas as pd
+import xarray as xr
 
-
-def register(sub: argparse._SubParsersAction) -> None:
-    """Add ``plot`` and ``report`` to the ``pound-mc`` parser."""
-    p = sub.add_parser(
-        "plot",
-        help="draw a chart of a study dataset, a bench/stability CSV or a scene",
-        description=__doc__.split("\n\n", 1)[1],
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-    )
-    p.add_argument("file", metavar="FILE", help="RESULT.nc, bench.csv, stability.csv or SCENE.toml")
-    p.add_argument("--kind", required=True, choices=KINDS, help="which chart")
-    p.add_argument("--out", metavar="FILE.png", help="PNG to write (default next to FILE)")
-    p.add_argument(
-        "--sel",
-        action="append",
-        default=[],
-        metavar="DIM=VALUE",
-        help="hold a grid dimension at a value (nearest); repeatable",
-    )
-    p.add_argument("--record", metavar="N|NAME", help="record index or name")
-    p.add_argument("--sample", type=int, default=0, metavar="N", help="sample (history; 0)")
-    p.add_argument("--line", metavar="DIM", help="dimension drawn as one line per value")
-    p.add_argument("--by", metavar="DIM", help="dimension of the distribution chart's groups")
-    p.set_defaults(func=_plot)
-
-    p = sub.add_parser("report", help="write a self-contained HTML results page of a study")
-    p.add_argument("file", metavar="RESULT.nc")
-    p.add_argument("--out", metavar="FILE.html", help="page to write (default next to RESULT.nc)")
-    p.set_defaults(func=_report)
+from pound_mc.analysis import plot, plot_numerics
+from pound_mc.analysis.report import write_report
+from pound_mc.errors import InputError
+from pound_mc.scene import load_scene, simulate
 
 
 def _parse_sel(items) -> dict:
-    from pound_mc.errors import InputError
-
     out = {}
     for item in items:
         dim, sep, value = item.partition("=")
@@ -85,10 +37,6 @@ def _record(value):
 
 
 def _open_dataset(path: Path):
-    import xarray as xr
-
-    from pound_mc.errors import InputError
-
     if not path.is_file():
         raise InputError("no such file", file=str(path))
     try:
@@ -98,10 +46,6 @@ def _open_dataset(path: Path):
 
 
 def _read_csv(path: Path, columns):
-    import pandas as pd
-
-    from pound_mc.errors import InputError
-
     if not path.is_file():
         raise InputError("no such file", file=str(path))
     table = pd.read_csv(path)
@@ -112,14 +56,14 @@ def _read_csv(path: Path, columns):
 
 
 def draw(path: str | Path, kind: str, *, out=None, sel=None, record=None, sample=0, **kwargs):
-    """Draw chart ``kind`` of the file at ``path`` (see the module docstring).
+    """Draw chart ``kind`` of the file at ``path``.
+
+    ``pound-mc plot --help`` says which file each kind reads.
 
     Returns
     -------
     matplotlib.figure.Figure
     """
-    from pound_mc.analysis import plot, plot_numerics
-
     path = Path(path)
     sel = dict(sel or {})
     if kind == "work-precision":
@@ -133,8 +77,6 @@ def draw(path: str | Path, kind: str, *, out=None, sel=None, record=None, sample
     if kind == "restitution" and str(path) == "-":
         return plot.restitution_chart(out)
     if kind == "history" and path.suffix == ".toml":
-        from pound_mc.scene import load_scene, simulate
-
         return plot_numerics.time_history_chart(simulate(load_scene(path), history=True), out)
     ds = _open_dataset(path)
     with ds:
@@ -164,14 +106,11 @@ def draw(path: str | Path, kind: str, *, out=None, sel=None, record=None, sample
 
 def _hold_first(ds, sel):
     """``ds`` with the dims in ``sel`` reduced to the value nearest ``sel[dim]`` (kept as dims)."""
-    from pound_mc.analysis.plot import _nearest_index
-
-    return ds.isel({dim: [_nearest_index(ds, dim, v)] for dim, v in sel.items()})
+    return ds.isel({dim: [plot._nearest_index(ds, dim, v)] for dim, v in sel.items()})
 
 
-def _plot(args) -> int:
-    from pound_mc.errors import InputError
-
+def plot_command(args) -> int:
+    """``pound-mc plot``: draw one chart (:func:`draw`)."""
     path = Path(args.file)
     if args.out:
         out = Path(args.out)
@@ -195,9 +134,8 @@ def _plot(args) -> int:
     return 0
 
 
-def _report(args) -> int:
-    from pound_mc.analysis.report import write_report
-
+def report_command(args) -> int:
+    """``pound-mc report``: the HTML results page of a study dataset."""
     path = Path(args.file)
     out = Path(args.out) if args.out else path.with_name(f"{path.stem}_report.html")
     ds = _open_dataset(path)

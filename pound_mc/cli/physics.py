@@ -1,58 +1,25 @@
-"""Subcommands about the impact physics: ``materials``, ``calibrate`` and ``droptest``."""
+"""Sub-commands about the impact physics: ``materials``, ``calibrate`` and ``droptest``.
+
+Their arguments are declared in :mod:`pound_mc.cli.commands`.
+"""
 
 from __future__ import annotations
 
-import argparse
 import json
 import math
 from pathlib import Path
 
 import numpy as np
 
+from pound_mc.analysis.plot import droptest_chart, restitution_chart, restitution_ranges_chart
 from pound_mc.errors import InputError
 from pound_mc.physics import materials
+from pound_mc.physics.droptest import drop_test
 from pound_mc.physics.relations import RELATIONS, effective_restitution, xi_from_e
 
 
-def register(sub: argparse._SubParsersAction) -> None:
-    """Add the physics subcommands to the ``pound-mc`` parser."""
-    p = sub.add_parser("materials", help="the seed paper's Tables 1-3 (measured e and beta)")
-    p.add_argument("--table", type=int, choices=(1, 2, 3), help="only this table")
-    p.add_argument("--json", action="store_true", help="print the tables as JSON")
-    p.add_argument("--plot", metavar="FILE.png", help="chart of Table 2 against impact velocity")
-    p.set_defaults(func=_materials)
-
-    p = sub.add_parser("calibrate", help="impact damping ratio xi for a restitution e")
-    p.add_argument("--e", type=float, required=True, help="coefficient of restitution (0, 1]")
-    p.add_argument(
-        "--relation",
-        default="jankowski2008",
-        help=f"relation for 'xi' in --json ({', '.join(RELATIONS)}; default jankowski2008)",
-    )
-    p.add_argument("--json", action="store_true", help="print one JSON object")
-    p.set_defaults(func=_calibrate)
-
-    p = sub.add_parser("droptest", help="virtual drop test of the seed's experiment")
-    p.add_argument("--material", default="concrete", choices=materials.MATERIALS)
-    p.add_argument("--mass", type=float, help="ball mass [kg] (default: middle ball of Table 1)")
-    p.add_argument("--velocity", type=float, default=1.0, help="impact velocity [m/s]")
-    p.add_argument("--beta", type=float, help="impact stiffness (default: Table 3 mean)")
-    group = p.add_mutually_exclusive_group()
-    group.add_argument("--e", type=float, help="target restitution (default: Table 2 mid-range)")
-    group.add_argument("--xi", type=float, help="impact damping ratio")
-    p.add_argument("--relation", default=None, help="xi-e relation (default jankowski2008)")
-    p.add_argument("--model", default="jankowski", help="contact law (default jankowski)")
-    p.add_argument("--json", action="store_true", help="print one JSON object")
-    p.add_argument("--plot", metavar="FILE.png", help="write the force time history chart")
-    p.add_argument(
-        "--out",
-        metavar="DIR",
-        help="write the drop-test, relations and Table 2 charts into DIR",
-    )
-    p.set_defaults(func=_droptest)
-
-
-def _materials(args) -> int:
+def materials_command(args) -> int:
+    """``pound-mc materials``: the seed's Tables 1-3."""
     numbers = (args.table,) if args.table else (1, 2, 3)
     if args.json:
         out = {f"table{n}": materials.table(n).to_dict(orient="records") for n in numbers}
@@ -68,16 +35,13 @@ def _materials(args) -> int:
             print(materials.table(n).to_string(index=False))
             print()
     if args.plot:
-        from pound_mc.analysis.plot import restitution_ranges_chart
-
         restitution_ranges_chart(args.plot)
         print(f"wrote {args.plot}")
     return 0
 
 
-def _calibrate(args) -> int:
-    from pound_mc.physics.droptest import drop_test
-
+def calibrate_command(args) -> int:
+    """``pound-mc calibrate``: xi for a restitution e under every relation."""
     e = args.e
     if args.relation not in RELATIONS:
         raise InputError(
@@ -120,10 +84,8 @@ def _calibrate(args) -> int:
     return 0
 
 
-def _droptest(args) -> int:
-    from pound_mc.analysis.plot import droptest_chart, restitution_chart, restitution_ranges_chart
-    from pound_mc.physics.droptest import drop_test
-
+def droptest_command(args) -> int:
+    """``pound-mc droptest``: the virtual drop test of the seed's experiment."""
     t1 = materials.table(1)
     balls = t1[t1["material"] == args.material]
     if args.mass is None:

@@ -1,47 +1,31 @@
-"""Subcommands about ground motions: ``records list`` and ``records info``."""
+"""Sub-commands about ground motions: ``records list`` and ``records info``.
+
+Their arguments are declared in :mod:`pound_mc.cli.commands`.
+"""
 
 from __future__ import annotations
 
-import argparse
 import json
+from pathlib import Path
 
 import numpy as np
+from matplotlib.figure import Figure
 
+from pound_mc.analysis.plot import save
 from pound_mc.errors import InputError
+from pound_mc.motions import (
+    BUILTIN_RECORDS,
+    G,
+    builtin_catalogue,
+    load_record,
+    record_arrays,
+    record_info,
+)
+from pound_mc.physics.spectra import response_spectrum
 
 
-def register(sub: argparse._SubParsersAction) -> None:
-    """Add ``records list`` and ``records info`` to the ``pound-mc`` parser."""
-    p = sub.add_parser("records", help="ground motions: the built-in catalogue, record summaries")
-    actions = p.add_subparsers(dest="records_command", metavar="ACTION")
-    actions.required = True
-
-    q = actions.add_parser("list", help="the built-in records (builtin:NAME)")
-    q.add_argument("--json", action="store_true", help="print the catalogue as JSON")
-    q.set_defaults(func=_list)
-
-    q = actions.add_parser("info", help="PGA, duration and step of a record")
-    q.add_argument(
-        "source",
-        metavar="NAME|PATH",
-        help="builtin:NAME, synthetic:MODEL, a bare builtin name or a file",
-    )
-    q.add_argument("--json", action="store_true", help="print one JSON object")
-    q.add_argument("--plot", metavar="FILE.png", help="acceleration and 5%%-damped PSA chart")
-    q.add_argument("--units", help="units of the file's values: g, gal or m/s^2")
-    q.add_argument("--component", help="component of a multi-trace file")
-    q.add_argument("--seed", type=int, default=0, help="realisation of a synthetic motion")
-    q.add_argument(
-        "--raw",
-        action="store_true",
-        help="keep the record's mean (default: demeaned as in studies)",
-    )
-    q.set_defaults(func=_info)
-
-
-def _list(args) -> int:
-    from pound_mc.motions.records import builtin_catalogue
-
+def list_command(args) -> int:
+    """``pound-mc records list``: the built-in records."""
     catalogue = builtin_catalogue()
     if args.json:
         print(json.dumps(catalogue, indent=1))
@@ -61,18 +45,13 @@ def _list(args) -> int:
 
 def _resolve(source: str) -> str:
     """A bare catalogue name means ``builtin:NAME`` unless a file of that name exists."""
-    from pathlib import Path
-
-    from pound_mc.motions.records import BUILTIN_RECORDS
-
     if ":" not in source and source.lower() in BUILTIN_RECORDS and not Path(source).exists():
         return f"builtin:{source.lower()}"
     return source
 
 
-def _info(args) -> int:
-    from pound_mc.motions.records import load_record, record_arrays, record_info
-
+def info_command(args) -> int:
+    """``pound-mc records info``: PGA, duration and step of a record."""
     source = _resolve(args.source)
     seed = args.seed if source.lower().startswith("synthetic:") else None
     trace = load_record(
@@ -98,12 +77,6 @@ def _info(args) -> int:
 
 
 def _plot(trace, info: dict, path: str) -> None:
-    from matplotlib.figure import Figure
-
-    from pound_mc.analysis.plot import save
-    from pound_mc.motions.records import G, record_arrays
-    from pound_mc.physics.spectra import response_spectrum
-
     if not str(path).lower().endswith(".png"):
         raise InputError(
             f"the chart is written as PNG; give a .png file, got {path!r}", key="--plot"

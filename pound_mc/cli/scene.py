@@ -1,41 +1,27 @@
-"""Subcommands for single scenes and the numerics: ``simulate``, ``bench``, ``stability``."""
+"""Sub-commands for single scenes and the numerics: ``simulate``, ``bench``, ``stability``.
+
+Their arguments are declared in :mod:`pound_mc.cli.commands`.
+"""
 
 from __future__ import annotations
 
-import argparse
 import json
 from pathlib import Path
 
-
-def register(sub: argparse._SubParsersAction) -> None:
-    """Add ``simulate``, ``bench`` and ``stability`` to the ``pound-mc`` parser."""
-    p = sub.add_parser("simulate", help="run one scene (TOML) and print its results")
-    p.add_argument("scene", metavar="SCENE.toml")
-    p.add_argument("--json", action="store_true", help="print one JSON object")
-    p.add_argument("--plot", metavar="FILE.png", help="chart of displacements, penetration, force")
-    p.add_argument("--method", help="override [integrator] method")
-    p.add_argument("--dt", type=float, metavar="S", help="override [integrator] dt_s")
-    p.set_defaults(func=_simulate)
-
-    p = sub.add_parser("bench", help="speed against accuracy of every method (B1 and MDOF)")
-    p.add_argument("--json", action="store_true", help="print the table as JSON records")
-    p.add_argument("--out", default="outputs", metavar="DIR", help="folder for CSV and PNG")
-    p.add_argument("--repeats", type=int, default=7, help="timed runs per point (median)")
-    p.add_argument("--methods", nargs="+", metavar="METHOD", help="methods to run (all)")
-    p.add_argument("--scenes", nargs="+", metavar="SCENE", default=["B1", "shear-3-5"])
-    p.set_defaults(func=_bench)
-
-    p = sub.add_parser("stability", help="map the largest stable step against contact stiffness")
-    p.add_argument("--out", default="outputs", metavar="DIR", help="folder for CSV and PNG")
-    p.add_argument("--json", action="store_true", help="print the table as JSON records")
-    p.set_defaults(func=_stability)
+from pound_mc.analysis.plot_numerics import (
+    stability_map_chart,
+    time_history_chart,
+    work_precision_chart,
+)
+from pound_mc.errors import InputError
+from pound_mc.integrators.kernels import METHODS
+from pound_mc.numerics.bench import SCENES, benchmark
+from pound_mc.numerics.stability import stability_map
+from pound_mc.scene import load_scene, simulate
 
 
-def _simulate(args) -> int:
-    from pound_mc.errors import InputError
-    from pound_mc.integrators.kernels import METHODS
-    from pound_mc.scene import load_scene, simulate
-
+def simulate_command(args) -> int:
+    """``pound-mc simulate``: one scene; exit status 1 unless it ends ok."""
     scene = load_scene(args.scene)
     if args.method is not None and args.method not in METHODS:
         raise InputError(f"unknown method {args.method!r}; allowed: {', '.join(METHODS)}",
@@ -44,8 +30,6 @@ def _simulate(args) -> int:
         raise InputError(f"must be > 0, got {args.dt}", key="--dt")
     res = simulate(scene, history=args.plot is not None, method=args.method, dt_s=args.dt)
     if args.plot:
-        from pound_mc.analysis.plot_numerics import time_history_chart
-
         time_history_chart(res, args.plot)
     info = res.to_json()
     if args.json:
@@ -65,12 +49,8 @@ def _simulate(args) -> int:
     return 0 if info["status"] == "ok" else 1
 
 
-def _bench(args) -> int:
-    from pound_mc.analysis.plot_numerics import work_precision_chart
-    from pound_mc.errors import InputError
-    from pound_mc.integrators.kernels import METHODS
-    from pound_mc.numerics.bench import SCENES, benchmark
-
+def bench_command(args) -> int:
+    """``pound-mc bench``: speed against accuracy of every method."""
     for m in args.methods or []:
         if m not in METHODS:
             raise InputError(
@@ -80,32 +60,31 @@ def _bench(args) -> int:
         if s not in SCENES:
             raise InputError(f"unknown scene {s!r}; allowed: {', '.join(SCENES)}", key="--scenes")
     table = benchmark(args.scenes, args.methods, repeats=args.repeats, progress=not args.json)
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    table.to_csv(out / "bench.csv", index=False)
-    work_precision_chart(table, out / "work_precision.png")
-    if args.json:
-        print(table.to_json(orient="records", indent=1))
-    else:
-        cols = ["scene", "method", "dt_s", "substeps", "seconds", "impacts", "err_peak_force",
-                "err_peak_disp_left", "err_peak_disp_right", "status"]  # fmt: skip
-        print(table[cols].to_string(index=False, float_format=lambda x: f"{x:.3g}"))
-        print(f"wrote {out / 'bench.csv'} and {out / 'work_precision.png'}")
+    cols = ["scene", "method", "dt_s", "substeps", "seconds", "impacts", "err_peak_force",
+            "err_peak_disp_left", "err_peak_disp_right", "status"]  # fmt: skip
+    _write_table(args, table, "bench.csv", work_precision_chart, "work_precision.png", ".3g", cols)
     return 0
 
 
-def _stability(args) -> int:
-    from pound_mc.analysis.plot_numerics import stability_map_chart
-    from pound_mc.numerics.stability import stability_map
-
+def stability_command(args) -> int:
+    """``pound-mc stability``: the largest stable step against contact stiffness."""
     table = stability_map()
+    _write_table(args, table, "stability.csv", stability_map_chart, "stability_map.png", ".4g")
+    return 0
+
+
+def _write_table(args, table, csv_name, chart, png_name, number_format, columns=None) -> None:
+    """Write ``table`` as CSV and its chart into ``args.out``; print it as JSON or as text.
+
+    The text shows ``columns`` (default all), numbers in ``number_format``.
+    """
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    table.to_csv(out / "stability.csv", index=False)
-    stability_map_chart(table, out / "stability_map.png")
+    table.to_csv(out / csv_name, index=False)
+    chart(table, out / png_name)
     if args.json:
         print(table.to_json(orient="records", indent=1))
     else:
-        print(table.to_string(index=False, float_format=lambda x: f"{x:.4g}"))
-        print(f"wrote {out / 'stability.csv'} and {out / 'stability_map.png'}")
-    return 0
+        shown = table if columns is None else table[columns]
+        print(shown.to_string(index=False, float_format=lambda x: f"{x:{number_format}}"))
+        print(f"wrote {out / csv_name} and {out / png_name}")

@@ -1,50 +1,26 @@
-"""Subcommands that run studies: ``run`` and ``check``."""
+"""Sub-commands that run studies: ``run`` and ``check``.
+
+Their arguments are declared in :mod:`pound_mc.cli.commands`.
+"""
 
 from __future__ import annotations
 
-import argparse
 import sys
 import time
 from pathlib import Path
 
+import xarray as xr
 
-def register(sub: argparse._SubParsersAction) -> None:
-    """Add ``run`` and ``check`` to the ``pound-mc`` parser."""
-    p = sub.add_parser("run", help="run a study and write <out>/<name>.nc and a spectrum chart")
-    p.add_argument("study", metavar="STUDY.toml")
-    p.add_argument("--out", default="outputs", metavar="DIR", help="output folder (outputs)")
-    p.add_argument("--threads", type=int, metavar="N", help="numba threads (in-process run)")
-    p.add_argument(
-        "--workers",
-        type=int,
-        metavar="N",
-        help="run on a local Dask cluster of N worker processes (one thread each)",
-    )
-    p.add_argument(
-        "--scheduler", metavar="ADDRESS", help="run on the Dask cluster of this scheduler"
-    )
-    p.add_argument("--fresh", action="store_true", help="discard earlier results of this study")
-    p.add_argument("--chunk-size", type=int, metavar="N", help="simulations per chunk file")
-    p.add_argument("--no-progress", action="store_true", help="no progress bar")
-    p.add_argument("--no-plot", action="store_true", help="do not draw the spectrum chart")
-    p.set_defaults(func=_run)
-
-    p = sub.add_parser("check", help="validate a study and print its plan; writes nothing")
-    p.add_argument("study", metavar="STUDY.toml")
-    p.add_argument("--threads", type=int, metavar="N", help="threads for the estimate")
-    p.add_argument("--chunk-size", type=int, metavar="N", help="simulations per chunk file")
-    p.add_argument(
-        "--calibrate", type=int, default=64, metavar="N", help="simulations timed for the estimate"
-    )
-    p.set_defaults(func=_check)
+from pound_mc.analysis.plot import spectrum_chart
+from pound_mc.errors import InputError
+from pound_mc.study.definition import load_study
+from pound_mc.study.distributed import _import_distributed, run_study_distributed
+from pound_mc.study.engine import StudyEngine
+from pound_mc.study.runner import plan_text, run_study
 
 
-def _run(args) -> int:
-    from pound_mc.errors import InputError
-    from pound_mc.study.definition import load_study
-    from pound_mc.study.engine import StudyEngine
-    from pound_mc.study.runner import run_study
-
+def run_command(args) -> int:
+    """``pound-mc run``: run a study (threads or Dask), write its dataset and chart."""
     for key in ("chunk_size", "threads", "workers"):
         value = getattr(args, key)
         if value is not None and value < 1:
@@ -58,8 +34,6 @@ def _run(args) -> int:
             key="--threads",
         )
     if dask:
-        from pound_mc.study.distributed import _import_distributed
-
         _import_distributed()  # a missing optional dependency is reported before any work
     study = load_study(args.study)
     engine = StudyEngine(study)
@@ -72,8 +46,6 @@ def _run(args) -> int:
     )
     try:
         if dask:
-            from pound_mc.study.distributed import run_study_distributed
-
             report = run_study_distributed(
                 study, args.out, scheduler=args.scheduler, workers=args.workers, **common
             )
@@ -101,10 +73,6 @@ def _run(args) -> int:
     )
     print(f"wrote {report.path}")
     if not args.no_plot:
-        import xarray as xr
-
-        from pound_mc.analysis.plot import spectrum_chart
-
         png = Path(args.out) / f"{study.name}_spectrum.png"
         with xr.open_dataset(report.path) as ds:
             spectrum_chart(ds, png)
@@ -112,12 +80,8 @@ def _run(args) -> int:
     return 0
 
 
-def _check(args) -> int:
-    from pound_mc.errors import InputError
-    from pound_mc.study.definition import load_study
-    from pound_mc.study.engine import StudyEngine
-    from pound_mc.study.runner import plan_text
-
+def check_command(args) -> int:
+    """``pound-mc check``: validate a study, print its plan and cost; write nothing."""
     study = load_study(args.study)
     if args.threads is not None and args.threads < 1:
         raise InputError(f"must be >= 1, got {args.threads}", key="--threads")

@@ -126,7 +126,7 @@ def reference_solution(
     if model not in _MODELS:
         raise ValueError(f"unsupported contact model {model!r}")
     if record is None:
-        from pound_mc.motions.records import record_arrays
+        from pound_mc.motions import record_arrays
 
         record = record_arrays(scene.load_record())
     dt_rec, acc = record

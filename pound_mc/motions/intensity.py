@@ -12,7 +12,7 @@ ratio of the target to the record's own value (:func:`scale_factor`); the study 
 ``record.pga_g`` and ``record.sa_g`` (DESIGN.md section 9) scale every record this way.
 
 Acceleration is in m/s^2 and intensities in g, with the standard gravity
-:data:`pound_mc.motions.records.G`.
+:data:`pound_mc.motions.G`.
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ import math
 import numpy as np
 
 from pound_mc.errors import InputError
-from pound_mc.motions.records import G, record_arrays
+from pound_mc.motions import G, record_arrays
 from pound_mc.physics.spectra import response_spectrum
 
 __all__ = ["pga_g", "sa_g", "scale_factor"]

@@ -44,7 +44,7 @@ from typing import Any
 import numpy as np
 
 from pound_mc.errors import InputError
-from pound_mc.motions.records import G, make_trace
+from pound_mc.motions.traces import G, make_trace
 
 __all__ = [
     "SOIL_PARAMETERS",

@@ -94,7 +94,7 @@ def benchmark(scenes=("B1", "shear-3-5"), methods=None, *, repeats: int = 7, pro
     import numba
     from tqdm import tqdm
 
-    from pound_mc.motions.records import record_arrays
+    from pound_mc.motions import record_arrays
 
     methods = list(LADDER) if methods is None else list(methods)
     rows = []

@@ -26,10 +26,9 @@ is one of
     periods (DDC -> SRSS).  ``0 <= rho <= 1`` for positive damping, so DDC <= SRSS <= ABS.
 
 :func:`required_gaps` computes the three from a record and two SDOF oscillators (the exact
-linear response of :mod:`pound_mc.physics.spectra`); :func:`study_gaps` does so for every
-simulation of
-a study (or of the dataset it wrote), so that a chart of pounding probability against gap can
-mark the three rules.
+linear response of :mod:`pound_mc.physics.spectra`);
+:func:`pound_mc.analysis.gaps.study_gaps` does so for every simulation of a study (or of the
+dataset it wrote), so that a chart of pounding probability against gap can mark the three rules.
 
 References
 ----------
@@ -60,7 +59,6 @@ __all__ = [
     "SeparationGaps",
     "peak_displacements",
     "required_gaps",
-    "study_gaps",
 ]
 
 
@@ -83,15 +81,8 @@ def gap_abs(u1, u2):
 def gap_srss(u1, u2):
     """Square-root-of-sum-of-squares separation rule ``sqrt(u1^2 + u2^2)``.
 
-    Parameters
-    ----------
-    u1, u2 : float or array_like
-        Peak displacements of the two buildings [m].
-
-    Returns
-    -------
-    float or numpy.ndarray
-        Required gap [m].
+    Takes the peak displacements ``u1``, ``u2`` [m] and returns the required gap [m] as
+    :func:`gap_abs` does.
     """
     return np.hypot(u1, u2)
 
@@ -233,7 +224,7 @@ def required_gaps(
     dt : float
         Sampling interval of ``acc`` [s].
     acc : array_like
-        Ground acceleration [m/s^2] (e.g. from :func:`pound_mc.motions.records.record_arrays`).
+        Ground acceleration [m/s^2] (e.g. from :func:`pound_mc.motions.record_arrays`).
     period1_s, period2_s : float
         Natural periods of building 1 (left) and 2 (right) [s].
     damping1, damping2 : float, default 0.05
@@ -258,94 +249,3 @@ def required_gaps(
         srss=float(gap_srss(u1, u2)),
         ddc=float(gap_ddc(u1, u2, rho)),
     )
-
-
-def _linear_peaks(records, rec_idx, periods, dampings, substeps) -> np.ndarray:
-    """Peak displacement for each (record index, period, damping) triple, computed once each."""
-    out = np.empty(rec_idx.size)
-    triples = np.stack([rec_idx.astype(float), periods, dampings], axis=1)
-    unique, inverse = np.unique(triples, axis=0, return_inverse=True)
-    inverse = inverse.reshape(-1)
-    peaks = np.empty(len(unique))
-    for r in np.unique(unique[:, 0]).astype(int):
-        for z in np.unique(unique[unique[:, 0] == r, 2]):
-            sel = np.flatnonzero((unique[:, 0] == r) & (unique[:, 2] == z))
-            dt, acc = records[r]
-            peaks[sel] = peak_displacements(dt, acc, unique[sel, 1], z, substeps=substeps)
-    out[:] = peaks[inverse]
-    return out
-
-
-def study_gaps(study_or_dataset, *, base_dir=None, substeps: int = 8):
-    """The three required gaps for every simulation of a study.
-
-    The periods and damping ratios of each simulation (fixed, grid axes or sampled) are those
-    the study runs; each record's linear peak displacements are computed once per distinct
-    period and damping ratio.
-
-    Parameters
-    ----------
-    study_or_dataset : pound_mc.study.definition.Study or xarray.Dataset
-        A validated study, or a dataset written by ``pound-mc run`` (the study is rebuilt from
-        its ``study_text`` attribute).
-    base_dir : str or Path, optional
-        Folder for relative record paths when a dataset is given (default: the working
-        directory).
-    substeps : int, default 8
-        Evaluation points per sample interval (:func:`peak_displacements`).
-
-    Returns
-    -------
-    xarray.Dataset
-        Dims ``(record, *grid axes, sample)`` and coordinates as in the study's dataset:
-        ``linear_disp_left``, ``linear_disp_right`` [m] (peak linear displacements),
-        ``rho`` [-], ``gap_abs``, ``gap_srss``, ``gap_ddc`` [m].  Summaries over records and
-        samples (e.g. ``ds.gap_abs.mean(("record", "sample"))``) are what a chart of
-        pounding probability against ``contact_gap_m`` marks.
-    """
-    import xarray as xr
-
-    from pound_mc.study.definition import Study, grid_dim_name, study_from_text
-    from pound_mc.study.engine import StudyEngine
-
-    if isinstance(study_or_dataset, Study):
-        study = study_or_dataset
-    else:
-        text = study_or_dataset.attrs.get("study_text")
-        if not text:
-            raise InputError("the dataset has no study_text attribute", key="study_text")
-        file = None if base_dir is None else str(base_dir) + "/dataset-study.toml"
-        study = study_from_text(text, file=file)
-    engine = StudyEngine(study)
-    p = engine.parameters(np.arange(study.n_simulations))
-    u1 = _linear_peaks(
-        engine.records, p["record"], p["left.period_s"], p["left.damping_ratio"], substeps
-    )
-    u2 = _linear_peaks(
-        engine.records, p["record"], p["right.period_s"], p["right.damping_ratio"], substeps
-    )
-    rho = cqc_correlation(
-        p["left.period_s"], p["right.period_s"], p["left.damping_ratio"], p["right.damping_ratio"]
-    )
-    dims = ("record", *(grid_dim_name(k) for k in study.grid), "sample")
-    coords = {"record": np.asarray(study.record_names, dtype=object), "sample": np.arange(study.n)}
-    for key, values in study.grid.items():
-        coords[grid_dim_name(key)] = values
-    shape = study.shape
-    variables = {
-        "linear_disp_left": (u1, "m", "peak linear displacement of the left building alone"),
-        "linear_disp_right": (u2, "m", "peak linear displacement of the right building alone"),
-        "rho": (rho, "1", "CQC correlation of the two linear responses (Der Kiureghian 1981)"),
-        "gap_abs": (gap_abs(u1, u2), "m", "required gap, absolute sum rule (ABS)"),
-        "gap_srss": (gap_srss(u1, u2), "m", "required gap, square root of sum of squares (SRSS)"),
-        "gap_ddc": (
-            gap_ddc(u1, u2, rho),
-            "m",
-            "required gap, double difference combination (DDC; Jeng et al. 1992, Penzien 1997)",
-        ),
-    }
-    data_vars = {
-        name: (dims, np.asarray(values).reshape(shape), {"units": units, "long_name": long})
-        for name, (values, units, long) in variables.items()
-    }
-    return xr.Dataset(data_vars, coords=coords, attrs={"study_name": study.name})

@@ -17,7 +17,7 @@ import numpy as np
 
 from pound_mc.errors import InputError
 from pound_mc.integrators.kernels import CONTACT_OUTPUTS, METHODS, OUTPUTS, run_kernel
-from pound_mc.motions.records import load_record, record_arrays
+from pound_mc.motions import load_record, record_arrays
 from pound_mc.physics.contact import CONTACT_MODELS
 from pound_mc.physics.relations import xi_from_e
 from pound_mc.physics.structures import Building, Contact, contacts_between, sdof, shear_building

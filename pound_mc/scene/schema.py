@@ -23,8 +23,7 @@ from typing import Any
 
 from pound_mc.errors import InputError, InputErrors
 from pound_mc.integrators.kernels import METHODS
-from pound_mc.motions import synthetic
-from pound_mc.motions.records import UNITS, builtin_catalogue
+from pound_mc.motions import UNITS, builtin_catalogue, synthetic
 from pound_mc.physics.contact import CONTACT_MODELS
 from pound_mc.physics.relations import HERTZDAMP_RELATIONS, RELATIONS
 

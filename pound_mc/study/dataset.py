@@ -26,6 +26,8 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from pound_mc.study.definition import grid_dim_name
+
 __all__ = [
     "RESULT_VARIABLES",
     "CONTACT_VARIABLES",
@@ -114,8 +116,6 @@ def build_dataset(
     provenance : dict, optional
         Extra global attributes.
     """
-    from pound_mc.study.definition import grid_dim_name
-
     dims = ("record", *(grid_dim_name(k) for k in study.grid), "sample")
     coords = {
         "record": ("record", np.asarray(study.record_names, dtype=object), {

@@ -26,7 +26,7 @@ from pound_mc._version import __version__
 from pound_mc.errors import InputError, InputErrors
 from pound_mc.integrators import kernels as integrators
 from pound_mc.integrators.threads import numba_threads
-from pound_mc.motions.records import load_record, record_arrays
+from pound_mc.motions import load_record, record_arrays
 from pound_mc.physics.relations import restitution_of_xi, xi_from_e
 from pound_mc.scene import Scene, scene_from_dict
 from pound_mc.scene.schema import default_relation

@@ -40,11 +40,13 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from tqdm.auto import tqdm
 
 from pound_mc._version import __version__
 from pound_mc.errors import InputError
 from pound_mc.integrators.threads import numba_threads
 from pound_mc.study.dataset import build_dataset, write_netcdf
+from pound_mc.study.engine import StudyEngine
 
 __all__ = [
     "Chunk",
@@ -331,10 +333,6 @@ def run_study(
     RunReport
         Counts, time and the dataset path (``None`` while incomplete).
     """
-    from tqdm.auto import tqdm
-
-    from pound_mc.study.engine import StudyEngine
-
     if executor is None:
         executor = local_executor(threads)
     elif threads is not None:

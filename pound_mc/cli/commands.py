@@ -1,0 +1,217 @@
+"""The command table: every sub-command's arguments and the function that runs it.
+
+Building the parser imports no command's code: :data:`COMMANDS` names, for each sub-command, the
+module and function that run it, and :func:`pound_mc.cli.main` imports that one module when
+the command is dispatched, so ``pound-mc --help`` stays fast.
+"""
+
+from __future__ import annotations
+
+import argparse
+
+from pound_mc.physics.materials import MATERIALS
+from pound_mc.physics.relations import RELATIONS
+
+__all__ = ["COMMANDS", "KINDS", "add_commands"]
+
+#: Sub-command -> (module, function) that runs it, called with the parsed arguments.
+COMMANDS: dict[str, tuple[str, str]] = {
+    "materials": ("pound_mc.cli.physics", "materials_command"),
+    "calibrate": ("pound_mc.cli.physics", "calibrate_command"),
+    "droptest": ("pound_mc.cli.physics", "droptest_command"),
+    "records list": ("pound_mc.cli.records", "list_command"),
+    "records info": ("pound_mc.cli.records", "info_command"),
+    "simulate": ("pound_mc.cli.scene", "simulate_command"),
+    "bench": ("pound_mc.cli.scene", "bench_command"),
+    "stability": ("pound_mc.cli.scene", "stability_command"),
+    "run": ("pound_mc.cli.study", "run_command"),
+    "check": ("pound_mc.cli.study", "check_command"),
+    "plot": ("pound_mc.cli.analysis", "plot_command"),
+    "report": ("pound_mc.cli.analysis", "report_command"),
+}
+
+#: Chart kinds of ``pound-mc plot``.
+KINDS = (
+    "spectrum",
+    "probability",
+    "distribution",
+    "restitution",
+    "work-precision",
+    "stability",
+    "history",
+)
+
+PLOT_DESCRIPTION = """\
+``pound-mc plot FILE --kind KIND`` draws one chart.  What ``FILE`` is depends on the kind:
+
+==================  ======================================================================
+kind                file
+==================  ======================================================================
+``spectrum``        a study dataset (``pound-mc run``'s ``.nc``)
+``probability``     a study dataset with the gap on its grid
+``distribution``    a study dataset
+``restitution``     a study dataset (its sampled ``e`` marked) or nothing: ``-``
+``work-precision``  ``pound-mc bench``'s CSV (``outputs/bench.csv``)
+``stability``       ``pound-mc stability``'s CSV (``outputs/stability.csv``)
+``history``         a scene file (``.toml``), or a study dataset with ``--sel``/``--sample``:
+                    that simulation is rebuilt from the dataset's study text and run again
+==================  ======================================================================
+"""
+
+
+def add_commands(sub: argparse._SubParsersAction) -> None:
+    """Add every sub-command to the ``pound-mc`` parser, in the order of ``--help``."""
+    for group in (_physics, _records, _scene, _study, _analysis):
+        group(sub)
+
+
+def _physics(sub: argparse._SubParsersAction) -> None:
+    """The physics sub-commands: ``materials``, ``calibrate``, ``droptest``."""
+    p = sub.add_parser("materials", help="the seed paper's Tables 1-3 (measured e and beta)")
+    p.add_argument("--table", type=int, choices=(1, 2, 3), help="only this table")
+    p.add_argument("--json", action="store_true", help="print the tables as JSON")
+    p.add_argument("--plot", metavar="FILE.png", help="chart of Table 2 against impact velocity")
+    p.set_defaults(handler="materials")
+
+    p = sub.add_parser("calibrate", help="impact damping ratio xi for a restitution e")
+    p.add_argument("--e", type=float, required=True, help="coefficient of restitution (0, 1]")
+    p.add_argument(
+        "--relation",
+        default="jankowski2008",
+        help=f"relation for 'xi' in --json ({', '.join(RELATIONS)}; default jankowski2008)",
+    )
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(handler="calibrate")
+
+    p = sub.add_parser("droptest", help="virtual drop test of the seed's experiment")
+    p.add_argument("--material", default="concrete", choices=MATERIALS)
+    p.add_argument("--mass", type=float, help="ball mass [kg] (default: middle ball of Table 1)")
+    p.add_argument("--velocity", type=float, default=1.0, help="impact velocity [m/s]")
+    p.add_argument("--beta", type=float, help="impact stiffness (default: Table 3 mean)")
+    group = p.add_mutually_exclusive_group()
+    group.add_argument("--e", type=float, help="target restitution (default: Table 2 mid-range)")
+    group.add_argument("--xi", type=float, help="impact damping ratio")
+    p.add_argument("--relation", default=None, help="xi-e relation (default jankowski2008)")
+    p.add_argument("--model", default="jankowski", help="contact law (default jankowski)")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.add_argument("--plot", metavar="FILE.png", help="write the force time history chart")
+    p.add_argument(
+        "--out",
+        metavar="DIR",
+        help="write the drop-test, relations and Table 2 charts into DIR",
+    )
+    p.set_defaults(handler="droptest")
+
+
+def _records(sub: argparse._SubParsersAction) -> None:
+    """``records list`` and ``records info``."""
+    p = sub.add_parser("records", help="ground motions: the built-in catalogue, record summaries")
+    actions = p.add_subparsers(dest="records_command", metavar="ACTION")
+    actions.required = True
+
+    q = actions.add_parser("list", help="the built-in records (builtin:NAME)")
+    q.add_argument("--json", action="store_true", help="print the catalogue as JSON")
+    q.set_defaults(handler="records list")
+
+    q = actions.add_parser("info", help="PGA, duration and step of a record")
+    q.add_argument(
+        "source",
+        metavar="NAME|PATH",
+        help="builtin:NAME, synthetic:MODEL, a bare builtin name or a file",
+    )
+    q.add_argument("--json", action="store_true", help="print one JSON object")
+    q.add_argument("--plot", metavar="FILE.png", help="acceleration and 5%%-damped PSA chart")
+    q.add_argument("--units", help="units of the file's values: g, gal or m/s^2")
+    q.add_argument("--component", help="component of a multi-trace file")
+    q.add_argument("--seed", type=int, default=0, help="realisation of a synthetic motion")
+    q.add_argument(
+        "--raw",
+        action="store_true",
+        help="keep the record's mean (default: demeaned as in studies)",
+    )
+    q.set_defaults(handler="records info")
+
+
+def _scene(sub: argparse._SubParsersAction) -> None:
+    """Single scenes and the numerics: ``simulate``, ``bench``, ``stability``."""
+    p = sub.add_parser("simulate", help="run one scene (TOML) and print its results")
+    p.add_argument("scene", metavar="SCENE.toml")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.add_argument("--plot", metavar="FILE.png", help="chart of displacements, penetration, force")
+    p.add_argument("--method", help="override [integrator] method")
+    p.add_argument("--dt", type=float, metavar="S", help="override [integrator] dt_s")
+    p.set_defaults(handler="simulate")
+
+    p = sub.add_parser("bench", help="speed against accuracy of every method (B1 and MDOF)")
+    p.add_argument("--json", action="store_true", help="print the table as JSON records")
+    p.add_argument("--out", default="outputs", metavar="DIR", help="folder for CSV and PNG")
+    p.add_argument("--repeats", type=int, default=7, help="timed runs per point (median)")
+    p.add_argument("--methods", nargs="+", metavar="METHOD", help="methods to run (all)")
+    p.add_argument("--scenes", nargs="+", metavar="SCENE", default=["B1", "shear-3-5"])
+    p.set_defaults(handler="bench")
+
+    p = sub.add_parser("stability", help="map the largest stable step against contact stiffness")
+    p.add_argument("--out", default="outputs", metavar="DIR", help="folder for CSV and PNG")
+    p.add_argument("--json", action="store_true", help="print the table as JSON records")
+    p.set_defaults(handler="stability")
+
+
+def _study(sub: argparse._SubParsersAction) -> None:
+    """Studies: ``run`` and ``check``."""
+    p = sub.add_parser("run", help="run a study and write <out>/<name>.nc and a spectrum chart")
+    p.add_argument("study", metavar="STUDY.toml")
+    p.add_argument("--out", default="outputs", metavar="DIR", help="output folder (outputs)")
+    p.add_argument("--threads", type=int, metavar="N", help="numba threads (in-process run)")
+    p.add_argument(
+        "--workers",
+        type=int,
+        metavar="N",
+        help="run on a local Dask cluster of N worker processes (one thread each)",
+    )
+    p.add_argument(
+        "--scheduler", metavar="ADDRESS", help="run on the Dask cluster of this scheduler"
+    )
+    p.add_argument("--fresh", action="store_true", help="discard earlier results of this study")
+    p.add_argument("--chunk-size", type=int, metavar="N", help="simulations per chunk file")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("--no-plot", action="store_true", help="do not draw the spectrum chart")
+    p.set_defaults(handler="run")
+
+    p = sub.add_parser("check", help="validate a study and print its plan; writes nothing")
+    p.add_argument("study", metavar="STUDY.toml")
+    p.add_argument("--threads", type=int, metavar="N", help="threads for the estimate")
+    p.add_argument("--chunk-size", type=int, metavar="N", help="simulations per chunk file")
+    p.add_argument(
+        "--calibrate", type=int, default=64, metavar="N", help="simulations timed for the estimate"
+    )
+    p.set_defaults(handler="check")
+
+
+def _analysis(sub: argparse._SubParsersAction) -> None:
+    """Results: ``plot`` and ``report``."""
+    p = sub.add_parser(
+        "plot",
+        help="draw a chart of a study dataset, a bench/stability CSV or a scene",
+        description=PLOT_DESCRIPTION,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    p.add_argument("file", metavar="FILE", help="RESULT.nc, bench.csv, stability.csv or SCENE.toml")
+    p.add_argument("--kind", required=True, choices=KINDS, help="which chart")
+    p.add_argument("--out", metavar="FILE.png", help="PNG to write (default next to FILE)")
+    p.add_argument(
+        "--sel",
+        action="append",
+        default=[],
+        metavar="DIM=VALUE",
+        help="hold a grid dimension at a value (nearest); repeatable",
+    )
+    p.add_argument("--record", metavar="N|NAME", help="record index or name")
+    p.add_argument("--sample", type=int, default=0, metavar="N", help="sample (history; 0)")
+    p.add_argument("--line", metavar="DIM", help="dimension drawn as one line per value")
+    p.add_argument("--by", metavar="DIM", help="dimension of the distribution chart's groups")
+    p.set_defaults(handler="plot")
+
+    p = sub.add_parser("report", help="write a self-contained HTML results page of a study")
+    p.add_argument("file", metavar="RESULT.nc")
+    p.add_argument("--out", metavar="FILE.html", help="page to write (default next to RESULT.nc)")
+    p.set_defaults(handler="report")
