@@ -226,6 +226,7 @@ def test_shear_study_refuses_a_structural_axis():
     assert "structural" in errors["grid.left.period_s"]
 
 
+@pytest.mark.nojit  # the threaded batch kernel on four simulations
 def test_grid_study_without_base_value(tmp_path):
     # the grid axis supplies a value the scene does not give itself
     text = STUDY.replace("period_s = 0.5\n", "", 1)
