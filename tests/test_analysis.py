@@ -237,6 +237,7 @@ def test_plot_errors_are_input_errors(tiny, tmp_path, capsys):
 
 
 # -- notebook ----------------------------------------------------------------------------------
+@pytest.mark.slow
 def test_analysis_notebook_runs_headless(tiny, monkeypatch):
     nbformat = pytest.importorskip("nbformat")
     nbclient = pytest.importorskip("nbclient")

@@ -379,6 +379,7 @@ SCENES = {
 }
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", list(SCENES))
 def test_adaptive_matches_reference_on_scenes(name):
     scene = make_scene(*SCENES[name])

@@ -118,6 +118,7 @@ run_study(study, sys.argv[2], chunk_size=4, engine=engine, progress=False)
 """
 
 
+@pytest.mark.slow
 def test_killed_process_resumes_identically(study_file, reference, tmp_path):
     out = tmp_path / "killed"
     log = open(tmp_path / "killed.log", "wb")  # noqa: SIM115

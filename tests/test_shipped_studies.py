@@ -63,6 +63,7 @@ def _shrunken_separation_study() -> str:
     return text
 
 
+@pytest.mark.slow
 def test_separation_study_shrunken_runs_and_obeys_the_abs_bound(tmp_path, capsys):
     study = study_from_text(_shrunken_separation_study(), file=STUDIES / "separation_gap.toml")
     report = run_study(study, tmp_path, progress=False)
