@@ -98,8 +98,9 @@ def test_each_simulation_matches_its_scene(shear_run):
             assert float(point["peak_force"]) == pytest.approx(res.outputs["peak_force"], rel=1e-12)
 
 
-def test_chunk_files_carry_the_contacts_and_resume(tmp_path):
-    study = study_from_text(_study_text(name="shear_chunks"), file=tmp_path / "s.toml")
+def test_chunk_files_carry_the_contacts_and_resume(tmp_path, make_shear_study):
+    path = make_shear_study(study={"name": "shear_chunks"})
+    study = study_from_text(path.read_text(), file=path)
     engine = StudyEngine(study)
     layout = engine.result_layout()
     assert layout["contact_peak_force"] == ((3,), "f8")
