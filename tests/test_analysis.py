@@ -23,53 +23,15 @@ import pound_mc  # noqa: F401  (registers ds.pound)
 from pound_mc.analysis.gaps import study_gaps
 from pound_mc.cli import main
 from pound_mc.cli.analysis import draw
+from studies import study_text
 
 ROOT = Path(__file__).resolve().parent.parent
 
-TINY = """
-[study]
-name = "tiny-analysis"
-seed = 11
-description = "Small study for the analysis tests"
-
-[record]
-source = "builtin:knet-akt013"
-duration_s = 4.0
-pga_g = 0.3
-
-[left]
-model = "sdof"
-period_s = 0.5
-damping_ratio = 0.05
-mass_kg = 1.0e6
-
-[right]
-model = "sdof"
-period_s = 1.0
-damping_ratio = 0.05
-mass_kg = 1.0e6
-
-[contact]
-model = "jankowski"
-gap_m = 0.002
-beta = 2.75e9
-e = 0.65
-
-[integrator]
-method = "adaptive"
-dt_s = 0.01
-
-[grid]
-"left.period_s" = [0.3, 0.6, 0.9]
-"contact.gap_m" = [0.0, 0.002, 0.01]
-
-[sampling]
-n = 6
-method = "sobol"
-[sampling.vary]
-"contact.e" = { material = "concrete" }
-"contact.beta" = { material = "concrete" }
-"""
+TINY = study_text(
+    study={"name": "tiny-analysis", "description": "Small study for the analysis tests"},
+    grid={"left.period_s": [0.3, 0.6, 0.9], "contact.gap_m": [0.0, 0.002, 0.01]},
+    sampling={"n": 6},
+)
 
 
 @pytest.fixture(scope="module")
@@ -275,6 +237,7 @@ def test_plot_errors_are_input_errors(tiny, tmp_path, capsys):
 
 
 # -- notebook ----------------------------------------------------------------------------------
+@pytest.mark.slow
 def test_analysis_notebook_runs_headless(tiny, monkeypatch):
     nbformat = pytest.importorskip("nbformat")
     nbclient = pytest.importorskip("nbclient")

@@ -4,6 +4,9 @@ import pytest
 
 from pound_mc.physics import contact
 
+# scalar contact laws: also run as plain Python (NUMBA_DISABLE_JIT=1)
+pytestmark = pytest.mark.nojit
+
 
 def test_jankowski_force_phases():
     beta, xi, m1, m2 = 2.75e9, 0.35, 1.0e6, 1.0e6

@@ -32,6 +32,7 @@ from pound_mc.cli import main
 from pound_mc.integrators import kernels as integrators
 from pound_mc.physics.relations import xi_from_e
 from pound_mc.study.runner import PAUSE_ENV
+from studies import study_text
 
 # ------------------------------------------------------------------------- interrupt drill
 
@@ -169,47 +170,13 @@ def test_torn_chunk_file_is_run_again(tmp_path):
 
 # ------------------------------------------------------------------------- bad-input drill
 
-_TINY = """\
-[study]
-name = "tiny"
-seed = 3
-
-[record]
-source = "quake.at2"
-pga_g = 0.3
-
-[left]
-model = "sdof"
-period_s = 0.5
-damping_ratio = 0.05
-mass_kg = 1.0e6
-
-[right]
-model = "sdof"
-period_s = 1.0
-damping_ratio = 0.05
-mass_kg = 1.0e6
-
-[contact]
-model = "jankowski"
-gap_m = 0.001
-beta = 2.75e9
-e = 0.65
-
-[integrator]
-method = "adaptive"
-dt_s = 0.01
-
-[grid]
-"left.period_s" = [0.3, 0.6]
-
-[sampling]
-n = 2
-method = "sobol"
-
-[sampling.vary]
-"contact.e" = { material = "concrete" }
-"""
+_TINY = study_text(
+    study={"name": "tiny", "seed": 3},
+    record={"source": "quake.at2", "duration_s": None},  # the AT2 file the drill writes
+    contact={"gap_m": 0.001},
+    grid={"left.period_s": [0.3, 0.6], "contact.gap_m": None},
+    sampling={"n": 2, "vary": {"contact.e": {"material": "concrete"}}},
+)
 
 
 def _at2_text(npts: int = 100, dt: float = 0.01) -> str:

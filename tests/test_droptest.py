@@ -9,6 +9,9 @@ from pound_mc.physics.contact import HERTZ_DURATION_INTEGRAL, contact_duration_h
 from pound_mc.physics.droptest import drop_test
 from pound_mc.physics.relations import restitution_of_xi
 
+# single impacts through the contact laws: also run with NUMBA_DISABLE_JIT=1
+pytestmark = pytest.mark.nojit
+
 
 def test_elastic_peak_penetration_eq_2_5_and_duration():
     m, v0, beta = 1.35, 1.0, 7.9e9  # Table 1/3: 103 mm concrete ball, mean beta

@@ -193,6 +193,7 @@ def free_closed_form(scene, t):
     return np.array(xs).T, peaks
 
 
+@pytest.mark.nojit
 @pytest.mark.parametrize("dt_s", [0.01, 0.003])
 def test_adaptive_free_vibration_matches_closed_form(dt_s):
     scene = sdof_pair_linear()
@@ -220,6 +221,7 @@ def test_reference_free_vibration_matches_closed_form():
     assert rel(ref["peak_disp_right"], peaks[1]) < 1e-9
 
 
+@pytest.mark.nojit
 @pytest.mark.parametrize("build", [sdof_pair_linear, shear_pair_linear], ids=["sdof", "shear"])
 @pytest.mark.parametrize("dt_s", [0.02, 0.005, 0.007])
 def test_adaptive_forced_linear_matches_matrix_exponential(build, dt_s):
@@ -257,6 +259,7 @@ def linear_peaks():
     return scene, (dt, ag), reference_solution(scene, (dt, ag))
 
 
+@pytest.mark.nojit
 @pytest.mark.parametrize("dt_s,tol", [(0.02, 1e-5), (0.005, 1e-6)])
 def test_adaptive_peak_displacement_within_hermite_bound(linear_peaks, dt_s, tol):
     # Bound of the cubic Hermite screen, O((omega h)^4 / 384) of the amplitude (3.7e-6 at
@@ -268,6 +271,7 @@ def test_adaptive_peak_displacement_within_hermite_bound(linear_peaks, dt_s, tol
     assert rel(out[OUT["peak_disp_right"]], ref["peak_disp_right"]) < tol
 
 
+@pytest.mark.nojit
 def test_adaptive_peak_displacement_exact_continuous_max(linear_peaks):
     # between linear steps the peak is found on the exact solution (not the Hermite cubic)
     scene, (dt, ag), ref = linear_peaks
@@ -276,6 +280,7 @@ def test_adaptive_peak_displacement_exact_continuous_max(linear_peaks):
     assert rel(out[OUT["peak_disp_right"]], ref["peak_disp_right"]) < 1e-8
 
 
+@pytest.mark.nojit
 def test_adaptive_free_vibration_peak():
     scene = sdof_pair_linear()
     dt = 0.01
@@ -294,6 +299,7 @@ def observed_orders(errors):
     return [math.log2(errors[i] / errors[i + 1]) for i in range(len(errors) - 1)]
 
 
+@pytest.mark.nojit
 def test_newmark_second_order_linear_forced():
     scene = sdof_pair_linear()
     dt, ag = random_record()
@@ -306,6 +312,7 @@ def test_newmark_second_order_linear_forced():
     assert all(1.8 <= p <= 2.2 for p in orders), (errors, orders)
 
 
+@pytest.mark.nojit
 def test_newmark_second_order_single_soft_impact():
     # one soft Hertz impact from initial velocities (smooth enough for order 2; the Jankowski
     # damping term ~ delta^0.25 delta_dot is not: measured orders 1.3-1.6 there)
@@ -372,6 +379,7 @@ SCENES = {
 }
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", list(SCENES))
 def test_adaptive_matches_reference_on_scenes(name):
     scene = make_scene(*SCENES[name])

@@ -6,6 +6,9 @@ import pytest
 from pound_mc.integrators.kernels import METHODS, OUTPUTS, run_kernel
 from pound_mc.scene import scene_from_dict
 
+# both Newmark kernels on one short record: also run with NUMBA_DISABLE_JIT=1
+pytestmark = pytest.mark.nojit
+
 OUT = {name: k for k, name in enumerate(OUTPUTS)}
 
 

@@ -362,6 +362,7 @@ def test_optional_filter_and_resample():
 # ----------------------------------------------------------------------------- spectra
 
 
+@pytest.mark.slow
 def test_response_spectrum_against_an_ode_solver():
     dt, acc = record_arrays(load_record("builtin:elcentro", duration_s=4.0))
     t = np.arange(acc.size) * dt

@@ -7,6 +7,9 @@ from reference_impact import jankowski_impact
 from pound_mc.errors import InputError
 from pound_mc.physics import relations
 
+# relations and the single impacts behind them: also run with NUMBA_DISABLE_JIT=1
+pytestmark = pytest.mark.nojit
+
 
 @pytest.mark.parametrize("e", [0.1, 0.3, 0.5, 0.65, 0.8, 0.9, 0.99, 1.0])
 def test_jankowski2008_is_eq_2_9_to_machine_precision(e):

@@ -17,58 +17,16 @@ from pound_mc.study.dataset import RESULT_VARIABLES
 from pound_mc.study.definition import load_study, study_from_text
 from pound_mc.study.engine import StudyEngine
 from pound_mc.study.runner import chunk_ranges, default_chunk_size, run_study
+from studies import study_text
 
-STUDY = """
-[study]
-name = "small"
-seed = 11
-
-[record]
-source = "builtin:knet-akt013"
-duration_s = 4.0
-pga_g = 0.3
-
-[left]
-model = "sdof"
-period_s = 0.5
-damping_ratio = 0.05
-mass_kg = 1.0e6
-
-[right]
-model = "sdof"
-period_s = 1.0
-damping_ratio = 0.05
-mass_kg = 1.0e6
-
-[contact]
-model = "jankowski"
-gap_m = 0.002
-beta = 2.75e9
-e = 0.65
-
-[integrator]
-method = "adaptive"
-dt_s = 0.01
-
-[grid]
-"left.period_s" = [0.3, 0.5, 0.7]
-"contact.gap_m" = [0.0, 0.002]
-
-[sampling]
-n = 8
-method = "sobol"
-[sampling.vary]
-"contact.e" = { material = "concrete" }
-"contact.beta" = { material = "concrete" }
-"""
+# studies.SMALL_SDOF: T = 0.3, 0.5, 0.7 s x gap 0, 2 mm x 8 concrete samples
+STUDY = study_text()
 N = 3 * 2 * 8
 
 
 @pytest.fixture
-def study_file(tmp_path):
-    path = tmp_path / "small.toml"
-    path.write_text(STUDY)
-    return path
+def study_file(make_study):
+    return make_study()  # tmp_path / "small.toml", the text of STUDY
 
 
 def _data(path) -> dict[str, bytes]:
@@ -160,6 +118,7 @@ run_study(study, sys.argv[2], chunk_size=4, engine=engine, progress=False)
 """
 
 
+@pytest.mark.slow
 def test_killed_process_resumes_identically(study_file, reference, tmp_path):
     out = tmp_path / "killed"
     log = open(tmp_path / "killed.log", "wb")  # noqa: SIM115
@@ -268,6 +227,7 @@ def test_shear_study_refuses_a_structural_axis():
     assert "structural" in errors["grid.left.period_s"]
 
 
+@pytest.mark.nojit  # the threaded batch kernel on four simulations
 def test_grid_study_without_base_value(tmp_path):
     # the grid axis supplies a value the scene does not give itself
     text = STUDY.replace("period_s = 0.5\n", "", 1)

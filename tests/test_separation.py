@@ -16,6 +16,7 @@ from pound_mc.physics.separation import (
     required_gaps,
 )
 from pound_mc.study.definition import study_from_text
+from studies import study_text
 
 
 @pytest.mark.parametrize("zeta", [0.02, 0.05, 0.1, 0.2])
@@ -113,50 +114,22 @@ def test_required_gaps_for_a_record():
     assert same.rho == pytest.approx(1.0) and same.ddc == pytest.approx(0.0, abs=1e-9)
 
 
-STUDY = """
-[study]
-name = "gaps"
-seed = 1
-
-[[records]]
-source = "synthetic:clough-penzien"
-seed = 1
-params = { duration_s = 5.0 }
-
-[[records]]
-source = "builtin:elcentro"
-duration_s = 5.0
-
-[left]
-model = "sdof"
-period_s = 0.5
-damping_ratio = 0.05
-mass_kg = 1.0e6
-
-[right]
-model = "sdof"
-period_s = 1.0
-damping_ratio = 0.03
-mass_kg = 1.0e6
-
-[contact]
-model = "jankowski"
-gap_m = 0.01
-beta = 2.75e9
-e = 0.65
-
-[integrator]
-method = "adaptive"
-dt_s = 0.01
-
-[grid]
-"contact.gap_m" = [0.0, 0.05]
-
-[sampling]
-n = 4
-[sampling.vary]
-"left.period_s" = { distribution = "lognormal", median = 0.5, sigma_ln = 0.2 }
-"""
+STUDY = study_text(
+    study={"name": "gaps", "seed": 1},
+    record=None,
+    records=[
+        {"source": "synthetic:clough-penzien", "seed": 1, "params": {"duration_s": 5.0}},
+        {"source": "builtin:elcentro", "duration_s": 5.0},
+    ],
+    right={"damping_ratio": 0.03},
+    contact={"gap_m": 0.01},
+    grid={"left.period_s": None, "contact.gap_m": [0.0, 0.05]},
+    sampling={
+        "n": 4,
+        "method": None,
+        "vary": {"left.period_s": {"distribution": "lognormal", "median": 0.5, "sigma_ln": 0.2}},
+    },
+)
 
 
 def test_study_gaps_match_required_gaps():

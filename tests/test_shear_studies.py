@@ -11,78 +11,27 @@ from pound_mc.scene import scene_from_dict, simulate
 from pound_mc.study.definition import study_from_text
 from pound_mc.study.engine import StudyEngine
 from pound_mc.study.runner import run_study
+from studies import SMALL_SHEAR, Whole, study_text, write_study
 
-SHEAR_3 = """
-model = "shear"
-storey_mass_kg = [1.0e6, 1.0e6, 1.0e6]
-storey_stiffness_N_per_m = [1.2e9, 1.0e9, 0.8e9]
-storey_height_m = [3.0, 3.0, 3.0]
-damping_ratio = 0.05
-"""
-SHEAR_5 = """
-model = "shear"
-storey_mass_kg = [1.0e6, 1.0e6, 1.0e6, 1.0e6, 1.0e6]
-storey_stiffness_N_per_m = [0.9e9, 0.8e9, 0.7e9, 0.6e9, 0.5e9]
-storey_height_m = [3.0, 3.0, 3.0, 3.0, 3.0]
-damping_ratio = 0.05
-"""
-SDOF_6M = """
-model = "sdof"
-period_s = 0.4
-mass_kg = 2.0e6
-damping_ratio = 0.05
-height_m = 6.0
-"""
+SDOF_6M = Whole(
+    {"model": "sdof", "period_s": 0.4, "mass_kg": 2.0e6, "damping_ratio": 0.05, "height_m": 6.0}
+)
 
 
-def _study_text(name="shear_small", left=SHEAR_3, right=SHEAR_5, grid=None, vary=None) -> str:
-    grid = grid or '"contact.gap_m" = [0.0, 0.01]'
-    vary = (
-        vary
-        or '"contact.e" = { material = "concrete" }\n"contact.beta" = { material = "concrete" }'
-    )
-    return f"""
-[study]
-name = "{name}"
-seed = 11
-
-[record]
-source = "builtin:elcentro"
-duration_s = 4.5
-pga_g = 0.5
-
-[left]
-{left}
-[right]
-{right}
-[contact]
-model = "jankowski"
-gap_m = 0.01
-beta = 2.75e9
-e = 0.65
-relation = "jankowski2008"
-
-[integrator]
-method = "adaptive"
-dt_s = 0.01
-
-[grid]
-{grid}
-
-[sampling]
-n = 4
-method = "sobol"
-[sampling.vary]
-{vary}
-"""
+def _study_text(name="shear_small", left=None, right=None, grid=None, vary=None) -> str:
+    """``studies.SMALL_SHEAR`` (3 + 5 storeys) with its name, buildings, grid or vary replaced."""
+    tables = {"left": left, "right": right, "grid": grid}
+    tables = {k: Whole(v) for k, v in tables.items() if v is not None}
+    if vary is not None:
+        tables["sampling"] = {"vary": vary}
+    return study_text(SMALL_SHEAR, study={"name": name}, **tables)
 
 
 @pytest.fixture(scope="module")
 def shear_run(tmp_path_factory):
     """The small 3 + 5 storey study run through the command line."""
     tmp = tmp_path_factory.mktemp("shear")
-    path = tmp / "shear_small.toml"
-    path.write_text(_study_text())
+    path = write_study(tmp, SMALL_SHEAR)  # shear_small.toml
     out = tmp / "out"
     assert main(["run", str(path), "--out", str(out), "--no-progress"]) == 0
     with xr.open_dataset(out / "shear_small.nc") as ds:
@@ -149,8 +98,9 @@ def test_each_simulation_matches_its_scene(shear_run):
             assert float(point["peak_force"]) == pytest.approx(res.outputs["peak_force"], rel=1e-12)
 
 
-def test_chunk_files_carry_the_contacts_and_resume(tmp_path):
-    study = study_from_text(_study_text(name="shear_chunks"), file=tmp_path / "s.toml")
+def test_chunk_files_carry_the_contacts_and_resume(tmp_path, make_shear_study):
+    path = make_shear_study(study={"name": "shear_chunks"})
+    study = study_from_text(path.read_text(), file=path)
     engine = StudyEngine(study)
     layout = engine.result_layout()
     assert layout["contact_peak_force"] == ((3,), "f8")
@@ -170,8 +120,8 @@ def test_chunk_files_carry_the_contacts_and_resume(tmp_path):
 
 def test_sdof_with_height_beside_a_shear_building(tmp_path):
     path = tmp_path / "mixed.toml"
-    beta = '"contact.beta" = { material = "concrete" }'
-    grid = '"contact.xi" = [0.2, 0.4]'
+    beta = {"contact.beta": {"material": "concrete"}}
+    grid = {"contact.xi": [0.2, 0.4]}
     path.write_text(_study_text(name="mixed", left=SDOF_6M, grid=grid, vary=beta))
     out = tmp_path / "out"
     assert main(["run", str(path), "--out", str(out), "--no-progress", "--no-plot"]) == 0
@@ -184,8 +134,8 @@ def test_sdof_with_height_beside_a_shear_building(tmp_path):
 
 
 def test_sdof_pair_has_no_contact_dimension(tmp_path):
-    sdof = SDOF_6M.replace("height_m = 6.0", "")
-    text = _study_text(name="sdof_pair", left=sdof, right=sdof.replace("0.4", "0.9"))
+    sdof = {k: v for k, v in SDOF_6M.items() if k != "height_m"}
+    text = _study_text(name="sdof_pair", left=sdof, right={**sdof, "period_s": 0.9})
     study = study_from_text(text, file=tmp_path / "s.toml")
     engine = StudyEngine(study)
     assert not engine.mdof
@@ -197,13 +147,13 @@ def test_sdof_pair_has_no_contact_dimension(tmp_path):
     ("grid", "vary", "key"),
     [
         (
-            '"left.damping_ratio" = [0.02, 0.05]',
+            {"left.damping_ratio": [0.02, 0.05]},
             None,
             "grid.left.damping_ratio",
         ),
         (
             None,
-            '"right.damping_ratio" = { distribution = "uniform", low = 0.02, high = 0.05 }',
+            {"right.damping_ratio": {"distribution": "uniform", "low": 0.02, "high": 0.05}},
             "sampling.vary.right.damping_ratio",
         ),
     ],
@@ -220,7 +170,7 @@ def test_structural_keys_are_refused(tmp_path, capsys, grid, vary, key):
 
 def test_structural_key_of_the_sdof_beside_a_shear_building_is_refused(tmp_path, capsys):
     path = tmp_path / "bad.toml"
-    path.write_text(_study_text(name="bad", left=SDOF_6M, grid='"left.period_s" = [0.3, 0.5]'))
+    path.write_text(_study_text(name="bad", left=SDOF_6M, grid={"left.period_s": [0.3, 0.5]}))
     assert main(["check", str(path)]) == 2
     assert "grid.left.period_s" in capsys.readouterr().err
 

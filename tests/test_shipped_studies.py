@@ -14,6 +14,7 @@ from pound_mc.errors import InputErrors
 from pound_mc.physics import materials
 from pound_mc.study.definition import load_study, study_from_text
 from pound_mc.study.runner import run_study
+from studies import Whole, study_text
 
 STUDIES = Path(__file__).resolve().parent.parent / "studies"
 SHIPPED = sorted(STUDIES.glob("*.toml"))
@@ -62,6 +63,7 @@ def _shrunken_separation_study() -> str:
     return text
 
 
+@pytest.mark.slow
 def test_separation_study_shrunken_runs_and_obeys_the_abs_bound(tmp_path, capsys):
     study = study_from_text(_shrunken_separation_study(), file=STUDIES / "separation_gap.toml")
     report = run_study(study, tmp_path, progress=False)
@@ -111,48 +113,20 @@ def test_separation_study_shrunken_runs_and_obeys_the_abs_bound(tmp_path, capsys
     assert float(rules["gap_ddc"]) <= float(rules["gap_srss"]) <= float(rules["gap_abs"])
 
 
-MATERIAL_AXIS = """
-[study]
-name = "material_axis"
-seed = 5
-
-[record]
-source = "builtin:knet-akt013"
-duration_s = 4.0
-pga_g = 0.3
-
-[left]
-model = "sdof"
-period_s = 0.5
-damping_ratio = 0.05
-mass_kg = 1.0e6
-
-[right]
-model = "sdof"
-period_s = 1.0
-damping_ratio = 0.05
-mass_kg = 1.0e6
-
-[contact]
-model = "jankowski"
-gap_m = 0.0
-beta = 2.75e9
-e = 0.65
-
-[integrator]
-method = "adaptive"
-dt_s = 0.01
-
-[grid]
-"contact.material" = ["timber", "steel", "ceramics", "concrete"]
-"contact.gap_m" = [0.0, 0.002]
-
-[sampling]
-n = 8
-[sampling.vary]
-"contact.e" = { material = "grid" }
-"contact.beta" = { material = "grid" }
-"""
+MATERIAL_AXIS = study_text(
+    study={"name": "material_axis", "seed": 5},
+    contact={"gap_m": 0.0},
+    grid=Whole(
+        {
+            "contact.material": ["timber", "steel", "ceramics", "concrete"],
+            "contact.gap_m": [0.0, 0.002],
+        }
+    ),
+    sampling={
+        "method": None,
+        "vary": {"contact.e": {"material": "grid"}, "contact.beta": {"material": "grid"}},
+    },
+)
 
 
 def test_material_axis_takes_each_material_s_ranges(tmp_path):

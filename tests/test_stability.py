@@ -6,6 +6,9 @@ import pytest
 
 from pound_mc.numerics import stability as S
 
+# a few steps of the explicit kernels: also run with NUMBA_DISABLE_JIT=1
+pytestmark = pytest.mark.nojit
+
 
 def test_predicted_limits_from_the_amplification_matrix():
     # Central differences on x'' = -w^2 x: |z| = 1 up to dt w = 2 (classical limit); the flag's

@@ -6,50 +6,14 @@ import pytest
 from pound_mc.cli import main
 from pound_mc.errors import InputErrors
 from pound_mc.study.definition import study_from_text
+from studies import study_text
 
-GOOD = """
-[study]
-name = "tiny"
-seed = 7
-
-[record]
-source = "builtin:knet-akt013"
-duration_s = 5.0
-pga_g = 0.3
-
-[left]
-model = "sdof"
-period_s = 0.5
-damping_ratio = 0.05
-mass_kg = 1.0e6
-
-[right]
-model = "sdof"
-period_s = 1.0
-damping_ratio = 0.05
-mass_kg = 1.0e6
-
-[contact]
-model = "jankowski"
-gap_m = 0.002
-beta = 2.75e9
-e = 0.65
-
-[integrator]
-method = "adaptive"
-dt_s = 0.01
-
-[grid]
-"left.period_s" = { start = 0.3, stop = 0.6, num = 2 }
-"contact.gap_m" = [0.0, 0.002]
-
-[sampling]
-n = 4
-method = "sobol"
-[sampling.vary]
-"contact.e" = { material = "concrete" }
-"contact.beta" = { material = "concrete" }
-"""
+GOOD = study_text(
+    study={"name": "tiny", "seed": 7},
+    record={"duration_s": 5.0},
+    grid={"left.period_s": {"start": 0.3, "stop": 0.6, "num": 2}},
+    sampling={"n": 4},
+)
 
 
 def test_good_study_parses():
