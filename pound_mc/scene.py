@@ -2,7 +2,7 @@
 
 A scene holds ``[record]``, ``[left]``, ``[right]``, ``[contact]`` and ``[integrator]``
 (``../shared/DESIGN.md`` section 6).  :func:`simulate` runs it through the compiled kernels of
-:mod:`pound_mc.integrators.kernels`.
+:mod:`pound_mc.integrators`.
 """
 
 from __future__ import annotations
@@ -16,9 +16,8 @@ from typing import Any
 import numpy as np
 
 from pound_mc.errors import InputError
-from pound_mc.integrators.kernels import CONTACT_OUTPUTS, METHODS, OUTPUTS, run_kernel
-from pound_mc.physics.contact import CONTACT_MODELS
-from pound_mc.physics.relations import RELATIONS, xi_from_e
+from pound_mc.integrators import METHODS, run_kernel
+from pound_mc.physics.contact import CONTACT_MODELS, check_relation, reported_xi
 from pound_mc.physics.structures import Building, Contact, building_from_dict, contacts_between
 
 __all__ = ["Scene", "SimulationResult", "scene_from_dict", "load_scene", "simulate"]
@@ -64,7 +63,10 @@ class Scene:
         side = np.r_[np.zeros(fl, dtype=np.int64), np.ones(fr, dtype=np.int64)]
         psi = np.array([phi[c.left_floor] - phi[fl + c.right_floor] for c in self.contacts])
         nc = len(self.contacts)
-        xi = self.e if self.contact_model == "hertzdamp" else self.xi
+        # the kernels' damping parameter: xi, or the restitution e for laws whose damping is set
+        # per impact from e and the impact velocity (hertzdamp)
+        per_impact = CONTACT_MODELS[self.contact_model].damping == "zeta"
+        xi = self.e if per_impact else self.xi
         return {
             "omega": np.r_[self.left.omega, self.right.omega],
             "zeta": np.r_[
@@ -121,7 +123,11 @@ class SimulationResult:
         return {0: "ok", 1: "unstable", 2: "not_converged"}[int(self.outputs["status"])]
 
     def to_json(self) -> dict[str, Any]:
-        """JSON-serialisable summary with the pinned keys of DESIGN.md section 7."""
+        """JSON-serialisable summary with the pinned keys of DESIGN.md section 7.
+
+        ``xi`` is the damping ratio the kernels ran with; null for ``hertzdamp``, whose damping
+        constant is set at every impact from ``e`` and the impact velocity (no constant ratio).
+        """
 
         def num(x):
             x = float(x)
@@ -240,18 +246,15 @@ def scene_from_dict(data: dict, *, file: str | Path | None = None) -> Scene:
     xi = e = relation = None
     if "xi" in ct and "e" in ct:
         raise InputError("give either xi or e, not both", file=file_s, key="contact.xi")
+    if "relation" in ct:
+        check_relation(model, ct["relation"], file=file_s)  # only the law's own relations
     if "e" in ct:
         e = _number(ct, "e", file=file_s, prefix="contact.")
         if not 0.0 < e <= 1.0:
             raise InputError(f"must be in (0, 1], got {e!r}", file=file_s, key="contact.e")
-        relation = ct.get("relation", "kelvin" if model == "kelvin" else "jankowski2008")
-        if not isinstance(relation, str) or relation not in RELATIONS:
-            raise InputError(
-                f"unknown relation {relation!r}; allowed: {', '.join(RELATIONS)}",
-                file=file_s,
-                key="contact.relation",
-            )
-        xi = float(xi_from_e(e, relation))
+        relation = check_relation(model, ct.get("relation"), file=file_s)
+        # the damping the kernels run with: NaN for hertzdamp (no constant ratio)
+        xi = float(reported_xi(model, e, relation))
     elif "xi" in ct:
         xi = _number(ct, "xi", file=file_s, prefix="contact.")
         if xi < 0:
@@ -343,18 +346,17 @@ def simulate(
     dt_rec, acc = record
     arrays = scene.modal_arrays()
     m = method or scene.method
-    out, cout, hist = run_kernel(
+    outputs, contacts, hist = run_kernel(
         acc,
         dt_rec,
         **arrays,
-        model=CONTACT_MODELS[scene.contact_model]["code"],
-        method=METHODS[m],
+        model=scene.contact_model,
+        method=m,
+        relation=scene.relation,
         dt_s=dt_s or scene.dt_s,
         substeps=substeps or scene.substeps,
         history=history,
     )
-    outputs = {name: float(out[k]) for k, name in enumerate(OUTPUTS)}
-    contacts = {name: cout[:, k].copy() for k, name in enumerate(CONTACT_OUTPUTS)}
     if m != scene.method or dt_s or substeps:
         from dataclasses import replace
 

@@ -1,6 +1,6 @@
 """Independent tight-tolerance reference solution of a scene (SciPy, pure Python).
 
-Used to check the compiled kernels of :mod:`pound_mc.integrators.kernels`; it shares none of their
+Used to check the compiled kernels of :mod:`pound_mc.integrators`; it shares none of their
 code.  The buildings are integrated in *physical* floor coordinates (not modes),
 
 ``M x'' + C x' + K x = -M 1 a_g(t) + f_c(x, x')``,
@@ -391,14 +391,3 @@ def reference_solution(
         "segments": segments,
         "wall_s": time.perf_counter() - t_wall,
     }
-
-
-if __name__ == "__main__":  # pragma: no cover - manual check on a scene file
-    import sys
-
-    from pound_mc.scene import load_scene
-
-    res = reference_solution(load_scene(sys.argv[1]))
-    for key in ("peak_force", "impacts", "max_penetration", "peak_disp_left", "peak_disp_right"):
-        print(f"{key}: {res[key]!r}")
-    print(f"wall: {res['wall_s']:.1f} s, segments {res['segments']}")

@@ -23,7 +23,8 @@ import xarray as xr
 from pound_mc._version import __version__
 from pound_mc.errors import InputError
 from pound_mc.integrators.threads import numba_threads
-from pound_mc.physics.relations import restitution_of_xi, xi_from_e
+from pound_mc.physics.contact import default_relation, reported_xi
+from pound_mc.physics.relations import restitution_of_xi
 from pound_mc.study.dataset import CONTACT_VARIABLES, RESULT_VARIABLES
 from pound_mc.study.definition import MATERIAL_KEY, grid_dim_name, scene_model
 
@@ -119,9 +120,7 @@ class StudyEngine:
         elif "xi" in contact:
             out["contact.xi"] = contact["xi"]
         out = {k: v for k, v in out.items() if v is not None}
-        out["contact.relation"] = scene.relation or (
-            "kelvin" if scene.contact_model == "kelvin" else "jankowski2008"
-        )
+        out["contact.relation"] = scene.relation or default_relation(scene.contact_model) or ""
         out["contact.model"] = scene.contact_model
         out["integrator.method"] = scene.method
         out["integrator.substeps"] = scene.substeps
@@ -156,11 +155,15 @@ class StudyEngine:
         varied = set(self.study.grid) | set(self.samples)
         e = None if "contact.xi" in varied else self._values("contact.e", idx)
         if e is not None:
-            return np.asarray(xi_from_e(e, self._base["contact.relation"]), float), e
+            return np.asarray(self._reported_xi(e), float), e
         xi = self._values("contact.xi", idx)
         if xi is None:
             xi = np.zeros(idx[0].shape)  # laws without damping (linear, hertz)
         return xi, None
+
+    def _reported_xi(self, e):
+        """Damping ratio the kernels run with for ``e`` (NaN for hertzdamp: set per impact)."""
+        return reported_xi(self._base["contact.model"], e, self._base["contact.relation"] or None)
 
     def parameters(self, indices: np.ndarray) -> dict[str, np.ndarray]:
         """Per-simulation kernel parameters of the simulations with flat ``indices``.
@@ -224,6 +227,7 @@ class StudyEngine:
             "method": self._base["integrator.method"],
             "contact_model": self._base["contact.model"],
             "substeps": self._base["integrator.substeps"],
+            "relation": self._base["contact.relation"] or None,
         }
         if self.mdof:
             for r in np.unique(p["record"]):
@@ -305,7 +309,7 @@ class StudyEngine:
                 else self._sampled("contact.e", self._base.get("contact.e"))
             )
             e = np.asarray(e, float)
-            xi = np.asarray(xi_from_e(e, self._base["contact.relation"]), float)
+            xi = np.asarray(self._reported_xi(e), float)
             out["e"] = (dims, e)
         else:
             dims = xi_dims
