@@ -19,8 +19,9 @@ the right floor (``../shared/DESIGN.md`` section 2).  The force laws are written
 ``linear`` / ``kelvin``
     ``F = k delta`` / ``F = k delta + 2 xi sqrt(k m_eff) delta_dot``.
 ``hertzdamp``
-    ``F = max(0, beta delta^1.5 (1 + zeta delta_dot))`` with ``zeta = 8 (1 - e) / (5 e v0)``
-    (Ye et al. 2009), ``v0`` the approach velocity of the episode.
+    ``F = max(0, beta delta^1.5 (1 + zeta delta_dot))`` with ``zeta`` from ``e`` and ``v0``,
+    the approach velocity of the episode, by the scene's relation (default Ye et al. 2009,
+    ``zeta = 8 (1 - e) / (5 e v0)``).
 
 The ground acceleration is the record's samples linearly interpolated, so the right-hand side
 has kinks at the samples: the solution is integrated sample interval by sample interval, each a
@@ -43,6 +44,8 @@ import time
 import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.optimize import minimize_scalar
+
+from pound_mc.physics.relations import HERTZDAMP_RELATIONS
 
 __all__ = ["reference_solution"]
 
@@ -161,6 +164,7 @@ def reference_solution(
     if model == "hertzdamp":
         e_coef = float(scene.e)
         xi = 0.0
+        zeta_of = HERTZDAMP_RELATIONS[scene.relation or "ye2009"]
     else:
         e_coef = 1.0
         xi = float(scene.xi) if scene.xi is not None else 0.0
@@ -189,7 +193,7 @@ def reference_solution(
             dd = y[n + il[j]] - y[n + ir[j]]
             phase[j] = _APPROACH if dd > 0.0 else _RESTITUTION
             if model == "hertzdamp":
-                zhd[j] = 8.0 * (1.0 - e_coef) / (5.0 * e_coef * max(dd, 1e-12))
+                zhd[j] = zeta_of(e_coef, max(dd, 1e-12))
 
     state = {"ag0": 0.0, "slope": 0.0, "t0": 0.0}
 
@@ -363,7 +367,7 @@ def reference_solution(
                     impact_times.append(t)
                     if model == "hertzdamp":
                         vimp = y[n + il[j]] - y[n + ir[j]]
-                        zhd[j] = 8.0 * (1.0 - e_coef) / (5.0 * e_coef * max(vimp, 1e-12))
+                        zhd[j] = zeta_of(e_coef, max(vimp, 1e-12))
                     h_last = None  # let the solver choose a step for the stiff contact
                 elif kind == "turn":
                     phase[j] = _RESTITUTION
