@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 import tomllib
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -17,6 +17,8 @@ import numpy as np
 
 from pound_mc.errors import InputError
 from pound_mc.integrators import METHODS, run_kernel
+from pound_mc.motions import records
+from pound_mc.motions.records import record_arrays
 from pound_mc.physics.contact import CONTACT_MODELS, check_relation, reported_xi
 from pound_mc.physics.structures import Building, Contact, building_from_dict, contacts_between
 
@@ -84,12 +86,10 @@ class Scene:
 
     def load_record(self):
         """The scene's record as an obspy Trace [m/s^2], preprocessed."""
-        from pound_mc.motions.records import load_record
-
         spec = dict(self.record)
         spec.pop("name", None)
         source = spec.pop("source")
-        return load_record(source, base_dir=self.base_dir, **spec)
+        return records.load_record(source, base_dir=self.base_dir, **spec)
 
 
 @dataclass
@@ -339,8 +339,6 @@ def simulate(
     method, dt_s, substeps : optional
         Override the scene's integrator settings.
     """
-    from pound_mc.motions.records import record_arrays
-
     if record is None:
         record = record_arrays(scene.load_record())
     dt_rec, acc = record
@@ -358,8 +356,6 @@ def simulate(
         history=history,
     )
     if m != scene.method or dt_s or substeps:
-        from dataclasses import replace
-
         scene = replace(
             scene, method=m, dt_s=dt_s or scene.dt_s, substeps=substeps or scene.substeps
         )

@@ -45,6 +45,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.optimize import minimize_scalar
 
+from pound_mc.motions.records import record_arrays
 from pound_mc.physics.relations import HERTZDAMP_RELATIONS
 
 __all__ = ["reference_solution"]
@@ -129,8 +130,6 @@ def reference_solution(
     if model not in _MODELS:
         raise ValueError(f"unsupported contact model {model!r}")
     if record is None:
-        from pound_mc.motions.records import record_arrays
-
         record = record_arrays(scene.load_record())
     dt_rec, acc = record
     dt_rec = float(dt_rec)
