@@ -134,7 +134,8 @@ def _run(
     if method == _ADAPTIVE:
         adaptive(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi, settings,
                  q, v, out, cout, hx, hd, hf, pre)  # fmt: skip
-    elif (
+        return
+    if (
         (method == NEWMARK or method == NEWMARK_EXPLICIT) and omega.size == 2 and gap.size == 1
         and phi.shape[0] == 2 and phi[0, 1] == 0.0 and phi[1, 0] == 0.0 and hx.shape[0] == 0
     ):  # fmt: skip
