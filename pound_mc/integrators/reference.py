@@ -1,6 +1,6 @@
 """Independent tight-tolerance reference solution of a scene (SciPy, pure Python).
 
-Used to check the compiled kernels of :mod:`pound_mc.integrators.kernels`; it shares none of their
+Used to check the compiled kernels of :mod:`pound_mc.integrators`; it shares none of their
 code.  The buildings are integrated in *physical* floor coordinates (not modes),
 
 ``M x'' + C x' + K x = -M 1 a_g(t) + f_c(x, x')``,
@@ -19,8 +19,9 @@ the right floor (``../shared/DESIGN.md`` section 2).  The force laws are written
 ``linear`` / ``kelvin``
     ``F = k delta`` / ``F = k delta + 2 xi sqrt(k m_eff) delta_dot``.
 ``hertzdamp``
-    ``F = max(0, beta delta^1.5 (1 + zeta delta_dot))`` with ``zeta = 8 (1 - e) / (5 e v0)``
-    (Ye et al. 2009), ``v0`` the approach velocity of the episode.
+    ``F = max(0, beta delta^1.5 (1 + zeta delta_dot))`` with ``zeta`` from ``e`` and ``v0``,
+    the approach velocity of the episode, by the scene's relation (default Ye et al. 2009,
+    ``zeta = 8 (1 - e) / (5 e v0)``).
 
 The ground acceleration is the record's samples linearly interpolated, so the right-hand side
 has kinks at the samples: the solution is integrated sample interval by sample interval, each a
@@ -43,6 +44,9 @@ import time
 import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.optimize import minimize_scalar
+
+from pound_mc.motions.records import record_arrays
+from pound_mc.physics.relations import HERTZDAMP_RELATIONS
 
 __all__ = ["reference_solution"]
 
@@ -126,8 +130,6 @@ def reference_solution(
     if model not in _MODELS:
         raise ValueError(f"unsupported contact model {model!r}")
     if record is None:
-        from pound_mc.motions import record_arrays
-
         record = record_arrays(scene.load_record())
     dt_rec, acc = record
     dt_rec = float(dt_rec)
@@ -161,6 +163,7 @@ def reference_solution(
     if model == "hertzdamp":
         e_coef = float(scene.e)
         xi = 0.0
+        zeta_of = HERTZDAMP_RELATIONS[scene.relation or "ye2009"]
     else:
         e_coef = 1.0
         xi = float(scene.xi) if scene.xi is not None else 0.0
@@ -189,7 +192,7 @@ def reference_solution(
             dd = y[n + il[j]] - y[n + ir[j]]
             phase[j] = _APPROACH if dd > 0.0 else _RESTITUTION
             if model == "hertzdamp":
-                zhd[j] = 8.0 * (1.0 - e_coef) / (5.0 * e_coef * max(dd, 1e-12))
+                zhd[j] = zeta_of(e_coef, max(dd, 1e-12))
 
     state = {"ag0": 0.0, "slope": 0.0, "t0": 0.0}
 
@@ -363,7 +366,7 @@ def reference_solution(
                     impact_times.append(t)
                     if model == "hertzdamp":
                         vimp = y[n + il[j]] - y[n + ir[j]]
-                        zhd[j] = 8.0 * (1.0 - e_coef) / (5.0 * e_coef * max(vimp, 1e-12))
+                        zhd[j] = zeta_of(e_coef, max(vimp, 1e-12))
                     h_last = None  # let the solver choose a step for the stiff contact
                 elif kind == "turn":
                     phase[j] = _RESTITUTION
@@ -391,14 +394,3 @@ def reference_solution(
         "segments": segments,
         "wall_s": time.perf_counter() - t_wall,
     }
-
-
-if __name__ == "__main__":  # pragma: no cover - manual check on a scene file
-    import sys
-
-    from pound_mc.scene import load_scene
-
-    res = reference_solution(load_scene(sys.argv[1]))
-    for key in ("peak_force", "impacts", "max_penetration", "peak_disp_left", "peak_disp_right"):
-        print(f"{key}: {res[key]!r}")
-    print(f"wall: {res['wall_s']:.1f} s, segments {res['segments']}")

@@ -4,9 +4,8 @@ For scene B1 (``studies/scenes/b1.toml``, DESIGN.md section 5) and a shear-build
 (``studies/scenes/shear_3_5.toml``), every method runs on a ladder of step sizes (contact
 sub-steps per contact duration for ``adaptive``).  Time per simulation is the median of repeated
 runs after compilation, on one thread; errors are relative to a reference run: the SciPy
-reference solution (:mod:`pound_mc.integrators.reference`) for B1 when available, else
-``adaptive`` with
-256 sub-steps at ``dt_s`` / 10.
+reference solution (:mod:`pound_mc.integrators.reference`) for B1, else ``adaptive`` with 256
+sub-steps at ``dt_s`` / 10.
 """
 
 from __future__ import annotations
@@ -14,8 +13,15 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
+import numba
 import numpy as np
 import pandas as pd
+from tqdm import tqdm
+
+from pound_mc.integrators import run_kernel
+from pound_mc.integrators.reference import reference_solution
+from pound_mc.motions.records import record_arrays
+from pound_mc.scene import load_scene, simulate
 
 __all__ = ["SCENES", "LADDER", "benchmark", "reference_values"]
 
@@ -33,23 +39,14 @@ _QUANTITIES = ("peak_force", "peak_disp_left", "peak_disp_right")
 
 
 def _scene(label):
-    from pound_mc.scene import load_scene
-
     return load_scene(_STUDIES / SCENES[label])
 
 
 def reference_values(label: str, scene, record) -> tuple[dict, str]:
     """Reference peak force and displacements for a benchmark scene, and where they come from."""
-    from pound_mc.scene import simulate
-
     if label == "B1":
-        try:
-            from pound_mc.integrators.reference import reference_solution
-
-            ref = reference_solution(scene, record=record)
-            return {k: ref[k] for k in (*_QUANTITIES, "impacts")}, "SciPy reference"
-        except ImportError:  # pragma: no cover - reference module is part of the package
-            pass
+        ref = reference_solution(scene, record=record)
+        return {k: ref[k] for k in (*_QUANTITIES, "impacts")}, "SciPy reference"
     res = simulate(scene, record=record, method="adaptive", dt_s=scene.dt_s / 10, substeps=256)
     return {k: res.outputs[k] for k in (*_QUANTITIES, "impacts")}, "adaptive, 256 sub-steps"
 
@@ -60,16 +57,13 @@ def _median_time(scene, record, method, dt_s, substeps, repeats):
     The scene's arrays are built once, as a study does for all its simulations; what is timed
     is one call of the kernel (its Python entry included).
     """
-    from pound_mc.integrators.kernels import METHODS, run_kernel
-    from pound_mc.physics.contact import CONTACT_MODELS
-    from pound_mc.scene import simulate
-
     res = simulate(scene, record=record, method=method, dt_s=dt_s, substeps=substeps)  # compile
     dt_rec, acc = record
     arrays = scene.modal_arrays()
     kw = dict(
-        model=CONTACT_MODELS[scene.contact_model]["code"],
-        method=METHODS[method],
+        model=scene.contact_model,
+        method=method,
+        relation=scene.relation,
         dt_s=dt_s,
         substeps=substeps,
     )
@@ -91,11 +85,6 @@ def benchmark(scenes=("B1", "shear-3-5"), methods=None, *, repeats: int = 7, pro
         relative errors of ``peak_force``, ``peak_disp_left``, ``peak_disp_right``, ``impacts``
         and the reference's ``impacts``, ``status``.
     """
-    import numba
-    from tqdm import tqdm
-
-    from pound_mc.motions import record_arrays
-
     methods = list(LADDER) if methods is None else list(methods)
     rows = []
     old = numba.get_num_threads()

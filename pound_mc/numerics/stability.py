@@ -25,6 +25,11 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pandas as pd
+
+from pound_mc.integrators import METHODS, UNSTABLE_ENERGY_FRACTION, run_kernel
+from pound_mc.physics.structures import contacts_between, sdof
+from pound_mc.scene import Scene
 
 __all__ = [
     "contact_frequency",
@@ -78,8 +83,6 @@ def predicted_limit(method: str) -> float:
     Stable means one contact gains less energy than the instability flag allows; inf for
     methods without a limit.
     """
-    from pound_mc.integrators.kernels import UNSTABLE_ENERGY_FRACTION
-
     if method not in BOUNDED:
         return math.inf
     allowed = 1.0 + UNSTABLE_ENERGY_FRACTION
@@ -95,9 +98,6 @@ def predicted_limit(method: str) -> float:
 
 def impact_scene(beta: float, *, m_kg: float = 1.0e6, xi: float = 0.0):
     """SDOF pair (T = 2 s and 4 s, undamped, equal masses) for the stability drill."""
-    from pound_mc.physics.structures import contacts_between, sdof
-    from pound_mc.scene import Scene
-
     left = sdof(2.0, m_kg, 0.0)
     right = sdof(4.0, m_kg, 0.0)
     return Scene(
@@ -115,11 +115,8 @@ def impact_scene(beta: float, *, m_kg: float = 1.0e6, xi: float = 0.0):
 def run_impact(scene, method: str, dt_s: float, *, v0: float = 0.5, duration_s: float = 3.0):
     """Run the drill: left mass moving at ``v0`` into the right one, no ground motion.
 
-    Returns the kernel's output vector (see :data:`pound_mc.integrators.kernels.OUTPUTS`).
+    Returns the kernel's outputs by name (see :data:`pound_mc.integrators.OUTPUTS`).
     """
-    from pound_mc.integrators.kernels import METHODS, run_kernel
-    from pound_mc.physics.contact import CONTACT_MODELS
-
     arrays = scene.modal_arrays()
     # no ground motion: one record interval, split by the kernel into steps of dt_s
     rec_dt = duration_s
@@ -129,8 +126,8 @@ def run_impact(scene, method: str, dt_s: float, *, v0: float = 0.5, duration_s: 
         ag,
         rec_dt,
         **arrays,
-        model=CONTACT_MODELS[scene.contact_model]["code"],
-        method=METHODS[method],
+        model=scene.contact_model,
+        method=method,
         dt_s=dt_s,
         substeps=scene.substeps,
         v0=v_modal,
@@ -139,7 +136,7 @@ def run_impact(scene, method: str, dt_s: float, *, v0: float = 0.5, duration_s: 
 
 
 def _stable(out) -> bool:
-    return int(out[8]) == 0
+    return int(out["status"]) == 0
 
 
 def observed_limit(beta: float, method: str, *, v0: float = 0.5, iterations: int = 14) -> float:
@@ -170,10 +167,6 @@ def stability_map(betas=None, methods=None, *, v0: float = 0.5):
         Columns ``method``, ``beta`` [N/m^1.5], ``omega_c`` [rad/s], ``predicted``,
         ``observed`` (both ``dt omega_c``; inf where no limit was found up to 20).
     """
-    import pandas as pd
-
-    from pound_mc.integrators.kernels import METHODS
-
     betas = np.geomspace(1e9, 1e12, 7) if betas is None else np.asarray(betas, float)
     methods = list(METHODS) if methods is None else methods
     rows = []

@@ -29,13 +29,26 @@ pounding simulation.  EESD 38, 1135-1142.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
 from pound_mc._jit import jit
+from pound_mc.errors import InputError
+from pound_mc.physics.relations import HERTZDAMP_RELATIONS, RELATIONS
 
 __all__ = [
     "CONTACT_MODELS",
+    "ContactLaw",
+    "KernelLaw",
+    "Parameter",
+    "allowed_relations",
+    "default_relation",
+    "contact_law",
+    "check_relation",
+    "reported_xi",
     "effective_mass",
     "jankowski_force",
     "jankowski_damping",
@@ -214,16 +227,6 @@ def hertzdamp_force(
     return f if f > 0.0 else 0.0
 
 
-#: Contact models by name: force function and the integer code compiled kernels switch on.
-CONTACT_MODELS = {
-    "jankowski": {"code": 0, "force": jankowski_force, "stiffness_units": "N m-1.5"},
-    "linear": {"code": 1, "force": linear_force, "stiffness_units": "N m-1"},
-    "kelvin": {"code": 2, "force": kelvin_force, "stiffness_units": "N m-1"},
-    "hertz": {"code": 3, "force": hertz_force, "stiffness_units": "N m-1.5"},
-    "hertzdamp": {"code": 4, "force": hertzdamp_force, "stiffness_units": "N m-1.5"},
-}
-
-
 def max_penetration_elastic(v0, beta, m_eff):
     """Peak penetration of an elastic Hertz impact [m], Jankowski (2008) eq. (2.5).
 
@@ -263,3 +266,311 @@ def contact_duration_hertz(v0, beta, m_eff):
     """
     v0 = np.asarray(v0, dtype=float)
     return 2.0 * HERTZ_DURATION_INTEGRAL * max_penetration_elastic(v0, beta, m_eff) / v0
+
+
+# --------------------------------------------------------------------------- kernel side
+# The compiled integrators evaluate a law through the functions below, one set per law, all
+# with the same signature.  ``c0 = 2 xi sqrt(beta m_eff)`` is the damping constant of the
+# Jankowski and Kelvin laws (precomputed per contact: seed eq. (1.1) reads ``c = c0 delta^0.25``
+# for Jankowski's), ``zeta`` the damping constant of the current Hertz-damp episode [s/m].
+# ``phase`` is 1 while approaching, 2 in restitution; the callers return 0 for ``phase == 0``
+# and pass ``d >= 0`` (force) or ``d > 0`` (rate, gradient).  Their arithmetic is fixed: results
+# are reproduced bit for bit across releases.
+
+
+@jit(inline=True)
+def _jankowski_k(d, dd, beta, c0, zeta, phase):
+    sd = math.sqrt(d)
+    f = beta * d * sd
+    if phase == 1:
+        f += c0 * math.sqrt(sd) * dd
+    return f
+
+
+@jit
+def _jankowski_rate(d, dd, ddd, beta, c0, zeta, phase):
+    sd = math.sqrt(d)
+    r = 1.5 * beta * sd * dd
+    if phase == 1:
+        q = math.sqrt(sd)  # d^0.25
+        r += c0 * (0.25 * dd * dd / (q * q * q) + q * ddd)
+    return r
+
+
+@jit(inline=True)
+def _jankowski_grad(d, dd, beta, c0, zeta, phase):
+    sd = math.sqrt(d)
+    f = beta * d * sd
+    fd = 1.5 * beta * sd
+    fdd = 0.0
+    if phase == 1:
+        q = math.sqrt(sd)  # d^0.25
+        f += c0 * q * dd
+        fd += 0.25 * c0 * dd / (q * q * q)
+        fdd = c0 * q
+    return f, fd, fdd
+
+
+@jit(inline=True)
+def _linear_k(d, dd, beta, c0, zeta, phase):
+    return beta * d
+
+
+@jit
+def _linear_rate(d, dd, ddd, beta, c0, zeta, phase):
+    return beta * dd
+
+
+@jit(inline=True)
+def _linear_grad(d, dd, beta, c0, zeta, phase):
+    return beta * d, beta, 0.0
+
+
+@jit(inline=True)
+def _kelvin_k(d, dd, beta, c0, zeta, phase):
+    return beta * d + c0 * dd
+
+
+@jit
+def _kelvin_rate(d, dd, ddd, beta, c0, zeta, phase):
+    return beta * dd + c0 * ddd
+
+
+@jit(inline=True)
+def _kelvin_grad(d, dd, beta, c0, zeta, phase):
+    return beta * d + c0 * dd, beta, c0
+
+
+@jit(inline=True)
+def _hertz_k(d, dd, beta, c0, zeta, phase):
+    return beta * d * math.sqrt(d)
+
+
+@jit
+def _hertz_rate(d, dd, ddd, beta, c0, zeta, phase):
+    return 1.5 * beta * math.sqrt(d) * dd
+
+
+@jit(inline=True)
+def _hertz_grad(d, dd, beta, c0, zeta, phase):
+    sd = math.sqrt(d)
+    return beta * d * sd, 1.5 * beta * sd, 0.0
+
+
+@jit(inline=True)
+def _hertzdamp_k(d, dd, beta, c0, zeta, phase):
+    f = beta * d * math.sqrt(d) * (1.0 + zeta * dd)
+    return f if f > 0.0 else 0.0
+
+
+@jit
+def _hertzdamp_rate(d, dd, ddd, beta, c0, zeta, phase):
+    sd = math.sqrt(d)
+    f = beta * d * sd * (1.0 + zeta * dd)
+    if f <= 0.0:
+        return 0.0
+    return 1.5 * beta * sd * dd * (1.0 + zeta * dd) + beta * d * sd * zeta * ddd
+
+
+@jit(inline=True)
+def _hertzdamp_grad(d, dd, beta, c0, zeta, phase):
+    sd = math.sqrt(d)
+    f = beta * d * sd * (1.0 + zeta * dd)
+    if f <= 0.0:
+        return 0.0, 0.0, 0.0
+    return f, 1.5 * beta * sd * (1.0 + zeta * dd), beta * d * sd * zeta
+
+
+@jit(inline=True)
+def _stored_power15(d, beta):
+    return 0.4 * beta * d * d * math.sqrt(d)  # int_0^d beta s^1.5 ds
+
+
+@jit(inline=True)
+def _stored_linear(d, beta):
+    return 0.5 * beta * d * d
+
+
+@jit
+def _duration_hertz(v0, beta, meff):
+    if v0 < 1e-12:
+        v0 = 1e-12
+    return 3.218 * (meff / beta) ** 0.4 * v0**-0.2  # DESIGN.md section 4
+
+
+@jit
+def _duration_linear(v0, beta, meff):
+    return math.pi * math.sqrt(meff / beta)  # half a period of the contact spring
+
+
+# --------------------------------------------------------------------------- registry
+
+
+class Parameter(NamedTuple):
+    """One parameter of a contact law: its scene key, units and meaning."""
+
+    key: str
+    units: str
+    description: str
+
+
+class KernelLaw(NamedTuple):
+    """What the compiled integrators call for one law (see the notes above the functions).
+
+    ``force(d, dd, beta, c0, zeta, phase)`` [N]; ``rate(d, dd, ddd, ...)`` its time derivative
+    along the motion [N/s]; ``grad(...)`` the force and its partial derivatives by ``d`` and by
+    ``dd``; ``stored(d, beta)`` the elastic energy held at penetration ``d`` [J];
+    ``duration(v0, beta, m_eff)`` the estimated contact duration [s] that sizes sub-steps.
+    """
+
+    force: Callable
+    rate: Callable
+    grad: Callable
+    stored: Callable
+    duration: Callable
+
+
+@dataclass(frozen=True)
+class ContactLaw:
+    """Declaration of one contact law: parameters, damping relations and force functions.
+
+    Attributes
+    ----------
+    name : str
+        The law's name (``[contact] model``).
+    force : callable
+        Public force function ``force(delta, delta_dot, stiffness, damping, m_eff)`` [N].
+    stiffness_key, stiffness_units : str
+        Scene key of the stiffness (``beta`` or ``k_N_per_m``) and its units.
+    damping : str or None
+        What the damping relation gives: ``"xi"`` (a ratio fixed per contact), ``"zeta"`` (the
+        Hertz-damp constant [s/m], set per impact from ``e`` and the impact velocity), or None
+        for laws without dissipation.
+    relations : tuple of str
+        Relations accepted for ``relation`` (``e`` to the damping); the first is the default.
+    parameters : tuple of Parameter
+        The law's parameters with their units.
+    kernel : KernelLaw
+        The compiled functions the integrators call.
+    reference : str
+        Where the law is published.
+    """
+
+    name: str
+    force: Callable
+    stiffness_key: str
+    stiffness_units: str
+    damping: str | None
+    relations: tuple[str, ...]
+    parameters: tuple[Parameter, ...]
+    kernel: KernelLaw
+    reference: str
+
+    @property
+    def default_relation(self) -> str | None:
+        """Relation used when a scene gives ``e`` without ``relation`` (None: no damping)."""
+        return self.relations[0] if self.relations else None
+
+    def __getitem__(self, key: str):
+        """Mapping access of the earlier registry (``law["force"]``, ``law["stiffness_units"]``)."""
+        return getattr(self, key)
+
+
+_GAP = Parameter("gap_m", "m", "initial separation of the floors that meet")
+_BETA = Parameter("beta", "N m-1.5", "impact stiffness parameter")
+_K = Parameter("k_N_per_m", "N m-1", "impact spring stiffness")
+_XI = Parameter("xi", "1", "impact damping ratio (or e with a relation)")
+_E = Parameter("e", "1", "coefficient of restitution")
+
+#: Contact laws by name, in the order the compiled kernels number them.
+CONTACT_MODELS: dict[str, ContactLaw] = {
+    "jankowski": ContactLaw(
+        "jankowski", jankowski_force, "beta", "N m-1.5", "xi",
+        ("jankowski2008", "jankowski2006", "exact"), (_GAP, _BETA, _XI),
+        KernelLaw(_jankowski_k, _jankowski_rate, _jankowski_grad, _stored_power15,
+                  _duration_hertz),
+        "Jankowski (2008) eq. (1.1)",
+    ),
+    "linear": ContactLaw(
+        "linear", linear_force, "k_N_per_m", "N m-1", None, (), (_GAP, _K),
+        KernelLaw(_linear_k, _linear_rate, _linear_grad, _stored_linear, _duration_linear),
+        "Maison & Kasai (1992)",
+    ),
+    "kelvin": ContactLaw(
+        "kelvin", kelvin_force, "k_N_per_m", "N m-1", "xi", ("kelvin",), (_GAP, _K, _XI),
+        KernelLaw(_kelvin_k, _kelvin_rate, _kelvin_grad, _stored_linear, _duration_linear),
+        "Anagnostopoulos & Spiliopoulos (1992)",
+    ),
+    "hertz": ContactLaw(
+        "hertz", hertz_force, "beta", "N m-1.5", None, (), (_GAP, _BETA),
+        KernelLaw(_hertz_k, _hertz_rate, _hertz_grad, _stored_power15, _duration_hertz),
+        "Hertz elastic contact",
+    ),
+    "hertzdamp": ContactLaw(
+        "hertzdamp", hertzdamp_force, "beta", "N m-1.5", "zeta",
+        tuple(HERTZDAMP_RELATIONS), (_GAP, _BETA, _E),
+        KernelLaw(_hertzdamp_k, _hertzdamp_rate, _hertzdamp_grad, _stored_power15,
+                  _duration_hertz),
+        "Muthukumar & DesRoches (2006); Ye, Li & Zhu (2009)",
+    ),
+}  # fmt: skip
+
+
+def contact_law(name: str) -> ContactLaw:
+    """The declaration of contact law ``name``; an :class:`InputError` naming ``contact.model``."""
+    try:
+        return CONTACT_MODELS[name]
+    except (KeyError, TypeError):
+        raise InputError(
+            f"unknown contact model {name!r}; allowed: {', '.join(CONTACT_MODELS)}",
+            key="contact.model",
+        ) from None
+
+
+def allowed_relations(law: str) -> tuple[str, ...]:
+    """Names accepted for ``[contact] relation`` with contact law ``law`` (empty: no damping)."""
+    return contact_law(law).relations
+
+
+def default_relation(law: str) -> str | None:
+    """Relation used for ``law`` when a scene gives ``e`` without ``relation``."""
+    return contact_law(law).default_relation
+
+
+def check_relation(law: str, relation: str | None, *, file: str | None = None) -> str | None:
+    """The relation ``law`` runs with: ``relation`` when the law accepts it, else its default.
+
+    Raises
+    ------
+    InputError
+        Naming ``contact.relation`` when ``relation`` belongs to another law (or none).
+    """
+    spec = contact_law(law)
+    if relation is None:
+        return spec.default_relation
+    if relation not in spec.relations:
+        allowed = ", ".join(spec.relations) if spec.relations else "none (the law has no damping)"
+        raise InputError(
+            f"relation {relation!r} does not belong to the {law!r} law; allowed: {allowed}",
+            file=file,
+            key="contact.relation",
+        )
+    return relation
+
+
+def reported_xi(law: str, e, relation: str | None):
+    """Impact damping ratio the kernels run with for restitution ``e`` under ``relation``.
+
+    For the Jankowski and Kelvin laws the ratio ``xi`` from the relation; 0 for laws without
+    damping (linear, hertz); NaN for ``hertzdamp``, whose damping is no constant ratio: the
+    kernels set ``zeta`` (:func:`~pound_mc.physics.relations.hertzdamp_zeta`) from ``e`` and
+    the impact velocity at every impact.
+    """
+    spec = contact_law(law)
+    e = np.asarray(e, dtype=float)
+    if spec.damping == "xi":
+        xi = np.asarray(RELATIONS[check_relation(law, relation)](e), dtype=float)
+    else:
+        check_relation(law, relation)
+        xi = np.full(e.shape, 0.0 if spec.damping is None else np.nan)
+    return float(xi) if xi.ndim == 0 else xi

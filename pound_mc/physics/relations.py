@@ -18,7 +18,10 @@ noted:
 ``kelvin``
     The linear viscoelastic law (Anagnostopoulos 1992), ``xi = -ln e / sqrt(pi^2 + ln^2 e)``.
 
-The Hertz-damp law takes a damping constant ``zeta`` [s/m] instead (:func:`hertzdamp_zeta`).
+The Hertz-damp law takes a damping constant ``zeta`` [s/m] instead (:func:`hertzdamp_zeta`,
+relations :data:`HERTZDAMP_RELATIONS`: ``ye2009``, the default, and ``muthukumar2006``).
+Which relations a law accepts is declared with the law
+(:func:`pound_mc.physics.contact.allowed_relations`).
 """
 
 from __future__ import annotations
@@ -257,15 +260,19 @@ def effective_restitution(e, relation: str = "jankowski2008"):
 
 
 def _zeta_muthukumar2006(e, v0):
+    """Muthukumar & DesRoches (2006): ``zeta = 3 (1 - e^2) / (4 v0)`` [s/m]."""
     return 3.0 * (1.0 - e**2) / (4.0 * v0)
 
 
 def _zeta_ye2009(e, v0):
+    """Ye, Li & Zhu (2009): ``zeta = 8 (1 - e) / (5 e v0)`` [s/m]."""
     return 8.0 * (1.0 - e) / (5.0 * e * v0)
 
 
-#: Damping-constant relations of the Hertz-damp law, by name.
-HERTZDAMP_RELATIONS = {"muthukumar2006": _zeta_muthukumar2006, "ye2009": _zeta_ye2009}
+#: Damping-constant relations of the Hertz-damp law, by name (the first is the default).  Each
+#: is written once, for scalars and arrays alike; the compiled integrators call the same
+#: functions with the impact velocity of each episode.
+HERTZDAMP_RELATIONS = {"ye2009": _zeta_ye2009, "muthukumar2006": _zeta_muthukumar2006}
 
 
 def hertzdamp_zeta(e, v0, relation: str = "ye2009"):

@@ -16,10 +16,9 @@ from typing import Any
 import numpy as np
 
 from pound_mc.errors import InputError
-from pound_mc.integrators.kernels import CONTACT_OUTPUTS, METHODS, OUTPUTS, run_kernel
+from pound_mc.integrators import run_kernel
 from pound_mc.motions import load_record, record_arrays
-from pound_mc.physics.contact import CONTACT_MODELS
-from pound_mc.physics.relations import xi_from_e
+from pound_mc.physics.contact import CONTACT_MODELS, reported_xi
 from pound_mc.physics.structures import Building, Contact, contacts_between, sdof, shear_building
 from pound_mc.scene import schema
 
@@ -59,7 +58,10 @@ class Scene:
         side = np.r_[np.zeros(fl, dtype=np.int64), np.ones(fr, dtype=np.int64)]
         psi = np.array([phi[c.left_floor] - phi[fl + c.right_floor] for c in self.contacts])
         nc = len(self.contacts)
-        xi = self.e if self.contact_model == "hertzdamp" else self.xi
+        # the kernels' damping parameter: xi, or the restitution e for laws whose damping is set
+        # per impact from e and the impact velocity (hertzdamp)
+        per_impact = CONTACT_MODELS[self.contact_model].damping == "zeta"
+        xi = self.e if per_impact else self.xi
         return {
             "omega": np.r_[self.left.omega, self.right.omega],
             "zeta": np.r_[
@@ -114,7 +116,11 @@ class SimulationResult:
         return {0: "ok", 1: "unstable", 2: "not_converged"}[int(self.outputs["status"])]
 
     def to_json(self) -> dict[str, Any]:
-        """JSON-serialisable summary with the pinned keys of DESIGN.md section 7."""
+        """JSON-serialisable summary with the pinned keys of DESIGN.md section 7.
+
+        ``xi`` is the damping ratio the kernels ran with; null for ``hertzdamp``, whose damping
+        constant is set at every impact from ``e`` and the impact velocity (no constant ratio).
+        """
 
         def num(x):
             x = float(x)
@@ -199,10 +205,13 @@ def _contact(ct: dict, n_contacts: int | None, file, errors: list) -> dict:
     if model == "hertzdamp" and "e" not in ct:
         errors.append(InputError("the 'hertzdamp' law needs e", file=file, key="contact.e"))
     if "e" in v:
-        v.setdefault("relation", schema.default_relation(model))
-        if model != "hertzdamp" and "relation" in v:
-            # hertzdamp takes e itself (its damping follows each impact's velocity)
-            v["xi"] = float(xi_from_e(v["e"], v["relation"]))
+        # the damping the kernels run with (NaN for hertzdamp: set per impact from e and the
+        # impact velocity; 0 for laws without damping)
+        v["relation"] = v.get("relation") or schema.default_relation(model)
+        try:
+            v["xi"] = float(reported_xi(model, v["e"], v["relation"]))
+        except InputError as exc:
+            errors.append(InputError(exc.message, file=file, key="contact.relation"))
     elif "relation" in ct:
         v.pop("relation", None)  # without e the relation says nothing
     if "gap_m" in v and n_contacts is not None:
@@ -327,18 +336,17 @@ def simulate(
     dt_rec, acc = record
     arrays = scene.modal_arrays()
     m = method or scene.method
-    out, cout, hist = run_kernel(
+    outputs, contacts, hist = run_kernel(
         acc,
         dt_rec,
         **arrays,
-        model=CONTACT_MODELS[scene.contact_model]["code"],
-        method=METHODS[m],
+        model=scene.contact_model,
+        method=m,
+        relation=scene.relation,
         dt_s=dt_s or scene.dt_s,
         substeps=substeps or scene.substeps,
         history=history,
     )
-    outputs = {name: float(out[k]) for k, name in enumerate(OUTPUTS)}
-    contacts = {name: cout[:, k].copy() for k, name in enumerate(CONTACT_OUTPUTS)}
     if m != scene.method or dt_s or substeps:
         scene = replace(
             scene, method=m, dt_s=dt_s or scene.dt_s, substeps=substeps or scene.substeps

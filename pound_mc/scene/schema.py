@@ -24,8 +24,8 @@ from typing import Any
 from pound_mc.errors import InputError, InputErrors
 from pound_mc.integrators.kernels import METHODS
 from pound_mc.motions import UNITS, builtin_catalogue, synthetic
+from pound_mc.physics import contact
 from pound_mc.physics.contact import CONTACT_MODELS
-from pound_mc.physics.relations import HERTZDAMP_RELATIONS, RELATIONS
 
 __all__ = [
     "Field",
@@ -256,18 +256,13 @@ LINEAR_LAWS = ("linear", "kelvin")
 
 
 def allowed_relations(model: str) -> tuple[str, ...]:
-    """Names of the e-to-damping relations the contact law ``model`` takes.
-
-    The Hertz-damp law turns ``e`` into its damping constant with
-    :data:`~pound_mc.physics.relations.HERTZDAMP_RELATIONS`; the other laws into ``xi`` with
-    :data:`~pound_mc.physics.relations.RELATIONS`.
-    """
-    return tuple(HERTZDAMP_RELATIONS if model == "hertzdamp" else RELATIONS)
+    """Names of the e-to-damping relations the contact law ``model`` takes (its declaration)."""
+    return contact.allowed_relations(model) if model in contact.CONTACT_MODELS else ()
 
 
-def default_relation(model: str) -> str:
-    """The relation a law uses when ``contact.relation`` is not given."""
-    return {"kelvin": "kelvin", "hertzdamp": "ye2009"}.get(model, "jankowski2008")
+def default_relation(model: str) -> str | None:
+    """The relation a law uses when ``contact.relation`` is not given (None: no damping)."""
+    return contact.default_relation(model) if model in contact.CONTACT_MODELS else None
 
 
 # --------------------------------------------------------------------------- record sources
@@ -404,11 +399,13 @@ CONTACT = Table(
         Field("xi", "number", "Impact damping ratio.", minimum=0.0, varied=True),
         Field("e", "number", "Coefficient of restitution; the damping follows from it through "
               "`relation`.", minimum=0.0, exclusive_minimum=True, maximum=1.0, varied=True),
-        Field("relation", "string", "Relation from e to the damping (default: jankowski2008; "
-              "kelvin for the kelvin law; ye2009 for hertzdamp).",
+        Field("relation", "string", "Relation from e to the damping, one of the law's own (default:"
+              " its first); the linear and hertz laws have no damping and take none.",
               choices=lambda values: allowed_relations(values.get("model", "jankowski")),
-              choices_doc=f"{', '.join(RELATIONS)}; for hertzdamp "
-              f"{', '.join(HERTZDAMP_RELATIONS)}"),
+              choices_doc="; ".join(
+                  f"{name}: {', '.join(law.relations)}"
+                  for name, law in contact.CONTACT_MODELS.items() if law.relations
+              )),
     ),
 )  # fmt: skip
 

@@ -27,9 +27,9 @@ from pound_mc.errors import InputError, InputErrors
 from pound_mc.integrators import kernels as integrators
 from pound_mc.integrators.threads import numba_threads
 from pound_mc.motions import load_record, record_arrays
-from pound_mc.physics.relations import restitution_of_xi, xi_from_e
+from pound_mc.physics.contact import default_relation, reported_xi
+from pound_mc.physics.relations import restitution_of_xi
 from pound_mc.scene import Scene, scene_from_dict
-from pound_mc.scene.schema import default_relation
 from pound_mc.study.dataset import CONTACT_VARIABLES, RESULT_VARIABLES
 from pound_mc.study.definition import MATERIAL_KEY, grid_dim_name, scene_model
 
@@ -168,7 +168,7 @@ class StudyEngine:
         elif "xi" in contact:
             out["contact.xi"] = contact["xi"]
         out = {k: v for k, v in out.items() if v is not None}
-        out["contact.relation"] = scene.relation or default_relation(scene.contact_model)
+        out["contact.relation"] = scene.relation or default_relation(scene.contact_model) or ""
         out["contact.model"] = scene.contact_model
         out["integrator.method"] = scene.method
         out["integrator.substeps"] = scene.substeps
@@ -199,13 +199,15 @@ class StudyEngine:
         """
         e = None if "contact.xi" in varied else self._values("contact.e", varied, size)
         if e is not None:
-            if self._base["contact.model"] == "hertzdamp":
-                return np.asarray(e, float), e
-            return np.asarray(xi_from_e(e, self._base["contact.relation"]), float), e
+            return np.asarray(self._reported_xi(e), float), e
         xi = self._values("contact.xi", varied, size)
         if xi is None:
             xi = np.zeros(size)  # laws without damping (linear, hertz)
         return xi, None
+
+    def _reported_xi(self, e):
+        """Damping ratio the kernels run with for ``e`` (NaN for hertzdamp: set per impact)."""
+        return reported_xi(self._base["contact.model"], e, self._base["contact.relation"] or None)
 
     def parameters(self, indices: np.ndarray) -> dict[str, np.ndarray]:
         """Per-simulation kernel parameters of the simulations with flat ``indices``.
@@ -266,6 +268,7 @@ class StudyEngine:
             "method": self._base["integrator.method"],
             "contact_model": self._base["contact.model"],
             "substeps": self._base["integrator.substeps"],
+            "relation": self._base["contact.relation"] or None,
         }
         for r in np.unique(p["record"]):
             sel = np.flatnonzero(p["record"] == r)
@@ -330,11 +333,7 @@ class StudyEngine:
                 else self._sampled("contact.e", self._base.get("contact.e"))
             )
             e = np.asarray(e, float)
-            if self._base["contact.model"] == "hertzdamp":
-                # no constant xi: the law's damping follows each impact's velocity from e
-                xi = np.full(e.shape, np.nan)
-            else:
-                xi = np.asarray(xi_from_e(e, self._base["contact.relation"]), float)
+            xi = np.asarray(self._reported_xi(e), float)
             out["e"] = (dims, e)
         else:
             dims = xi_dims

@@ -1,0 +1,619 @@
+"""The ``adaptive`` method: exact linear steps between contacts, located events, RK4 in contact.
+
+Exact (Nigam-Jennings) steps of the linear modes between contacts, on the record's samples
+split into steps no longer than ``dt_s``; contact onset located by root finding on the exact
+solution (a cubic Hermite bound screens every step for a grazing approach); during contact,
+classical Runge-Kutta sub-steps sized from the contact-duration estimate of the law
+(``substeps`` per duration), with every switch of the force law (onset, approach ->
+restitution, separation) located inside its sub-step and the step cut there.  Peak force,
+peak displacements and penetration are continuous-time maxima (cubic Hermite interpolation
+within each step).
+
+The kernel :func:`adaptive` is a loop over the record's intervals that alternates two kinds of
+step, each made of the ``inline="always"`` helpers below (numba inlines them at its IR level:
+the compiled loop is the same as one long function, the source is not).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from pound_mc._jit import jit
+from pound_mc.integrators.laws import (
+    contact_forces,
+    duration,
+    episode_zeta,
+    force,
+    force_rate,
+    stored,
+)
+from pound_mc.integrators.outputs import (
+    C_IMPACTS,
+    C_IMPULSE,
+    C_MAX_PENETRATION,
+    C_PEAK_FORCE,
+    PRE_E0,
+    PRE_E_D,
+    PRE_E_IN,
+    PRE_INTERVAL,
+    PRE_MODE,
+    PRE_RESUME,
+    PRE_RUN_TO_CONTACT,
+    PRE_STATE,
+    PRE_STEPS,
+    STATUS_NOT_CONVERGED,
+    STATUS_OK,
+    STATUS_UNSTABLE,
+    finish,
+    reset_contacts,
+    snapshot,
+)
+from pound_mc.integrators.toolkit import (
+    accel,
+    advance,
+    coefficients,
+    end_values,
+    exact_delta,
+    exact_root,
+    hermite_max,
+    hermite_root,
+    mechanical_energy,
+    powers,
+    refresh,
+    rowdot,
+    step_size,
+    track_floors,
+)
+
+# event kinds located inside a contact sub-step
+_ONSET, _TO_RESTITUTION, _SEPARATION, _TO_APPROACH = 1, 2, 3, 4
+
+
+@jit
+def rk4(
+    q, v, s, hs, ag0, slope, omega, zeta, gamma, psi, gap, beta, cd, zhd, phase, model,
+    qn, vn, wk, fc, cimp, fc0,
+):  # fmt: skip
+    """One classical Runge-Kutta step of length ``hs`` from local time ``s``.
+
+    Writes the new state into ``qn, vn``, the contact impulses of the step into ``cimp`` and
+    the forces at the start into ``fc0`` (the accelerations at the start are ``wk[4]``);
+    returns the increments of input energy, damping energy and contact work.
+    """
+    n = q.size
+    nc = fc.size
+    # wk rows: 0..3 dq stages, 4..7 dv stages, 8 q stage, 9 v stage
+    e_in = 0.0
+    e_d = 0.0
+    w_c = 0.0
+    for c in range(nc):
+        cimp[c] = 0.0
+    for stage in range(4):
+        if stage == 0:
+            tau = 0.0
+            for j in range(n):
+                wk[8, j] = q[j]
+                wk[9, j] = v[j]
+        else:
+            tau = hs if stage == 3 else 0.5 * hs
+            fac = hs if stage == 3 else 0.5 * hs
+            for j in range(n):
+                wk[8, j] = q[j] + fac * wk[stage - 1, j]
+                wk[9, j] = v[j] + fac * wk[4 + stage - 1, j]
+        ag = ag0 + slope * (s + tau)
+        contact_forces(wk[8], wk[9], psi, gap, beta, cd, zhd, phase, model, fc)
+        accel(wk[8], wk[9], ag, omega, zeta, gamma, psi, fc, wk[4 + stage])
+        if stage == 0:
+            for c in range(nc):
+                fc0[c] = fc[c]
+        for j in range(n):
+            wk[stage, j] = wk[9, j]
+        pin, pd = powers(wk[9], ag, omega, zeta, gamma)
+        pc = 0.0
+        for c in range(nc):
+            pc += fc[c] * rowdot(psi, c, wk[9])
+        wgt = (1.0 if stage == 0 or stage == 3 else 2.0) * hs / 6.0
+        e_in += wgt * pin
+        e_d += wgt * pd
+        w_c += wgt * pc
+        for c in range(nc):
+            cimp[c] += wgt * fc[c]
+    for j in range(n):
+        qn[j] = q[j] + hs / 6.0 * (wk[0, j] + 2.0 * wk[1, j] + 2.0 * wk[2, j] + wk[3, j])
+        vn[j] = v[j] + hs / 6.0 * (wk[4, j] + 2.0 * wk[5, j] + 2.0 * wk[6, j] + wk[7, j])
+    return e_in, e_d, w_c
+
+
+# --------------------------------------------------------------------------- linear steps
+
+
+@jit(inline=True)
+def _exact_step(q, v, q1, v1, coef, regular, p0s, p1s, omega, zeta, gamma, hh):
+    """Exact step of every mode over ``hh`` (the precomputed coefficients on a regular step)."""
+    for j in range(q.size):
+        if regular:
+            cf = coef[j]
+            p0 = -gamma[j] * p0s
+            p1 = -gamma[j] * p1s
+            q1[j] = cf[0, 0] * q[j] + cf[0, 1] * v[j] + cf[0, 2] * p0 + cf[0, 3] * p1
+            v1[j] = cf[1, 0] * q[j] + cf[1, 1] * v[j] + cf[1, 2] * p0 + cf[1, 3] * p1
+        else:
+            q1[j], v1[j] = advance(q[j], v[j], -gamma[j] * p0s, -gamma[j] * p1s, omega[j],
+                                   zeta[j], hh)  # fmt: skip
+
+
+@jit(inline=True)
+def _screen_onsets(q, v, q1, v1, p0s, slope, s, hh, dc0, ddc0, dc1, ddc1, omega, zeta, gamma,
+                   psi, gap):  # fmt: skip
+    """First contact onset inside a linear step: ``(contact, time)``, ``(-1, inf)`` for none.
+
+    A contact whose penetration ends the step positive crosses zero inside it; one that turns
+    back inside the step is checked where the cubic Hermite bound says its maximum may reach
+    zero, on the exact solution.  Fills ``dc1, ddc1`` with the penetrations at the step's end.
+    """
+    tau_on = np.inf
+    c_on = -1
+    for c in range(gap.size):
+        d0 = dc0[c]
+        dd0 = ddc0[c]
+        d1 = rowdot(psi, c, q1) - gap[c]
+        dd1 = rowdot(psi, c, v1)
+        dc1[c] = d1
+        ddc1[c] = dd1
+        crossing = d1 > 0.0
+        t_hi = hh
+        if not crossing and dd0 > 0.0 and dd1 < 0.0:
+            hm, _ = hermite_max(d0, dd0, d1, dd1, hh)
+            margin = 0.05 * (abs(dd0) + abs(dd1)) * hh
+            if hm > -margin:
+                # exact maximum of delta in the step: root of delta_dot
+                _, tg = hermite_max(d0, dd0, d1, dd1, hh)
+                tm = exact_root(q, v, p0s, slope, s, tg, 0.0, hh, 1, c, omega, zeta, gamma, psi,
+                                gap)  # fmt: skip
+                dm, _, _ = exact_delta(q, v, p0s, slope, s, tm, c, omega, zeta, gamma, psi, gap)
+                if dm > 0.0:
+                    crossing = True
+                    t_hi = tm
+                    d1 = dm
+                    dd1 = 0.0
+        if crossing and d0 <= 0.0:
+            # locate delta = 0 on the exact solution (safeguarded Newton)
+            tg = hermite_root(d0, dd0, d1, dd1, t_hi)
+            hi = exact_root(q, v, p0s, slope, s, tg, 0.0, t_hi, 0, c, omega, zeta, gamma, psi,
+                            gap)  # fmt: skip
+            if hi < tau_on:
+                tau_on = hi
+                c_on = c
+    return c_on, tau_on
+
+
+@jit(inline=True)
+def _linear_energies(hh, p0s, p1s, slope, en0, en1):
+    """Input and damping energy of a linear step, corrected trapezoidal rule (O(h^5) a step)."""
+    # en: 0 sum gamma v, 1 sum gamma a, 2 damping power, 3 its rate
+    pin0 = -p0s * en0[0]
+    pin1 = -p1s * en1[0]
+    dpin0 = -(slope * en0[0] + p0s * en0[1])
+    dpin1 = -(slope * en1[0] + p1s * en1[1])
+    de_in = 0.5 * hh * (pin0 + pin1) + hh * hh / 12.0 * (dpin0 - dpin1)
+    de_d = 0.5 * hh * (en0[2] + en1[2]) + hh * hh / 12.0 * (en0[3] - en1[3])
+    return de_in, de_d
+
+
+@jit(inline=True)
+def _linear_floor_peaks(q, v, q1, v1, p0s, slope, s, hh, phi, nphi, zf, xf0, xfd0, peaks,
+                        herm_tol, omega, zeta, gamma):  # fmt: skip
+    """Continuous-time peak |x| of every floor over a linear step; ``xf0, xfd0`` move on."""
+    for f in range(phi.shape[0]):
+        x1 = rowdot(phi, f, q1)
+        xd1 = rowdot(phi, f, v1)
+        m = abs(x1)
+        if m > peaks[f]:
+            peaks[f] = m
+        if (xfd0[f] > 0.0) != (xd1 > 0.0):
+            # an extremum inside the step: where the cubic Hermite bound says it may be a new
+            # peak, find it on the exact solution
+            for sg in range(2):
+                mat = phi if sg == 0 else nphi
+                sign = 1.0 if sg == 0 else -1.0
+                hm, tg = hermite_max(sign * xf0[f], sign * xfd0[f], sign * x1, sign * xd1, hh)
+                if hm > peaks[f] - herm_tol * abs(hm):
+                    tm = exact_root(q, v, p0s, slope, s, tg, 0.0, hh, 1, f, omega, zeta, gamma,
+                                    mat, zf)  # fmt: skip
+                    xm, _, _ = exact_delta(q, v, p0s, slope, s, tm, f, omega, zeta, gamma, mat,
+                                           zf)  # fmt: skip
+                    if xm > peaks[f]:
+                        peaks[f] = xm
+        xf0[f] = x1
+        xfd0[f] = xd1
+
+
+@jit(inline=True)
+def _shift(q, v, q1, v1, dc0, ddc0, dc1, ddc1, en0, en1):
+    """The step's end becomes the next step's start."""
+    for c in range(dc0.size):
+        dc0[c] = dc1[c]
+        ddc0[c] = ddc1[c]
+    for k in range(4):
+        en0[k] = en1[k]
+    for j in range(q.size):
+        q[j] = q1[j]
+        v[j] = v1[j]
+
+
+# --------------------------------------------------------------------------- contact steps
+
+
+@jit(inline=True)
+def _substep_length(q, v, psi, gap, phase, hc, t, t_onset, room):
+    """Length of the next contact sub-step; ``room`` is what is left of the record interval.
+
+    Sub-steps are graded geometrically away from onset and towards separation, where the force
+    law is not smooth (delta^0.25, delta^0.5 terms).
+    """
+    hs = min(hc, max(1.0 * (t - t_onset), hc * 1e-3))
+    for c in range(gap.size):
+        if phase[c] == 2:
+            ddc = rowdot(psi, c, v)
+            if ddc < 0.0:
+                dc = rowdot(psi, c, q) - gap[c]
+                hs = min(hs, max(-0.5 * dc / ddc, hc * 0.25))
+    if hs >= room or room - hs < 1e-9 * hc:
+        hs = room
+    return hs
+
+
+@jit(inline=True)
+def _locate_switch(q, v, q1, v1, a0, a1, psi, gap, phase, hs):
+    """First switch of a force law inside a sub-step: ``(time, contact, kind)``.
+
+    Kinds: onset, approach -> restitution, separation, restitution -> approach; located on
+    the cubic Hermite interpolant of the penetration (or its rate).  ``(inf, -1, 0)``: none.
+    """
+    t_ev = np.inf
+    c_ev = -1
+    kind = 0
+    for c in range(gap.size):
+        d0 = rowdot(psi, c, q) - gap[c]
+        d1 = rowdot(psi, c, q1) - gap[c]
+        dd0 = rowdot(psi, c, v)
+        dd1 = rowdot(psi, c, v1)
+        ddd0 = rowdot(psi, c, a0)
+        ddd1 = rowdot(psi, c, a1)
+        te = np.inf
+        kd = 0
+        if phase[c] == 0:
+            if d1 > 0.0 and d0 <= 0.0:
+                te = hermite_root(d0, dd0, d1, dd1, hs)
+                kd = _ONSET
+        elif phase[c] == 1:
+            if dd1 <= 0.0 and dd0 > 0.0:
+                te = hermite_root(dd0, ddd0, dd1, ddd1, hs)
+                kd = _TO_RESTITUTION
+        else:
+            if d1 <= 0.0 and d0 > 0.0:
+                te = hermite_root(d0, dd0, d1, dd1, hs)
+                kd = _SEPARATION
+            if dd1 > 0.0 and dd0 <= 0.0:
+                t2 = hermite_root(dd0, ddd0, dd1, ddd1, hs)
+                if t2 < te:
+                    te = t2
+                    kd = _TO_APPROACH
+        if te < t_ev:
+            t_ev = te
+            c_ev = c
+            kind = kd
+    return t_ev, c_ev, kind
+
+
+@jit(inline=True)
+def _contact_peaks(q, v, q1, v1, a0, a1, psi, gap, beta, cd, zhd, phase, model, fc0, fc, cimp,
+                   cout, hs, t, peak_f, peak_t):  # fmt: skip
+    """Peak force per contact (Hermite on F with its rate), penetration and impulse.
+
+    Returns the run's peak force and its time, raised where this sub-step holds a new one.
+    """
+    for c in range(gap.size):
+        cout[c, C_IMPULSE] += cimp[c]
+        if phase[c] == 0:
+            continue
+        d0 = rowdot(psi, c, q) - gap[c]
+        d1 = rowdot(psi, c, q1) - gap[c]
+        dd0 = rowdot(psi, c, v)
+        dd1 = rowdot(psi, c, v1)
+        f0 = fc0[c]
+        f1 = fc[c]  # forces at the end of the (possibly cut) sub-step
+        fm = f1
+        tm = hs
+        # an interior maximum exceeds the step's end values by far less than 10 % (sub-steps
+        # are a fraction of the contact duration): interpolate only where it could raise this
+        # contact's peak
+        if max(f0, f1) >= 0.9 * cout[c, C_PEAK_FORCE] and d0 > 0.25 * d1:
+            r0 = force_rate(model, d0, dd0, rowdot(psi, c, a0), beta[c], cd[c], zhd[c], phase[c])
+            r1 = force_rate(model, d1, dd1, rowdot(psi, c, a1), beta[c], cd[c], zhd[c], phase[c])
+            if r0 > 0.0 and r1 < 0.0:
+                hm, th = hermite_max(f0, r0, f1, r1, hs)
+                if hm > fm:
+                    fm = hm
+                    tm = th
+        if f0 > fm:
+            fm = f0
+            tm = 0.0
+        if fm > cout[c, C_PEAK_FORCE]:
+            cout[c, C_PEAK_FORCE] = fm
+        if fm > peak_f:
+            peak_f = fm
+            peak_t = t + tm
+        dm = max(d0, d1)
+        if dd0 > 0.0 and dd1 < 0.0:
+            hm, _ = hermite_max(d0, dd0, d1, dd1, hs)
+            if hm > dm:
+                dm = hm
+        if dm > cout[c, C_MAX_PENETRATION]:
+            cout[c, C_MAX_PENETRATION] = dm
+    return peak_f, peak_t
+
+
+@jit(inline=True)
+def _open_contact(c, v, psi, xi, beta, meff, zhd, phase, cout, model, relation, substeps, hc):
+    """Contact ``c`` starts an impact: its phase, count, episode damping and sub-step bound."""
+    v0c = rowdot(psi, c, v)
+    phase[c] = 1
+    cout[c, C_IMPACTS] += 1.0
+    zhd[c] = episode_zeta(model, relation, xi[c], v0c, zhd[c])
+    return min(hc, duration(model, v0c, beta[c], meff[c]) / substeps)
+
+
+@jit(inline=True)
+def _grid_index(s, h, m_sub):
+    """Index of the next grid point of the record interval after local time ``s``."""
+    k_grid = int(math.floor(s / h + 1e-9))
+    if k_grid >= m_sub:
+        k_grid = m_sub - 1
+    return k_grid
+
+
+@jit(inline=True)
+def _store_history(i, q, v, phi, psi, gap, beta, cd, zhd, phase, model, hx, hd, hf):
+    """Floor displacements, penetrations and forces at record sample ``i``."""
+    for f in range(phi.shape[0]):
+        hx[i, f] = rowdot(phi, f, q)
+    for c in range(gap.size):
+        hd[i, c] = rowdot(psi, c, q) - gap[c]
+        hf[i, c] = force(model, hd[i, c], rowdot(psi, c, v), beta[c], cd[c], zhd[c], phase[c])
+
+
+@jit(inline=True)
+def _all_open(phase):
+    """Whether no contact is closed."""
+    for c in range(phase.size):
+        if phase[c] != 0:
+            return False
+    return True
+
+
+@jit(inline=True)
+def _finite(q, v):
+    """Whether the state is finite."""
+    ok = True
+    for j in range(q.size):
+        if not (math.isfinite(q[j]) and math.isfinite(v[j])):
+            ok = False
+    return ok
+
+
+@jit(inline=True)
+def _hermite_tolerance(omega, h):
+    """Error bound of the cubic Hermite maximum in a linear step, relative to the amplitude.
+
+    ``(omega h)^4 / 384`` with a safety factor of 4: a candidate below the peak by more is no
+    new peak.
+    """
+    wmax = 0.0
+    for j in range(omega.size):
+        wmax = max(wmax, omega[j])
+    return 4.0 * (wmax * h) ** 4 / 384.0
+
+
+# --------------------------------------------------------------------------- the kernel
+
+
+@jit
+def adaptive(
+    ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi, settings,
+    q, v, out, cout, hx, hd, hf, pre,
+):  # fmt: skip
+    """Run one simulation with the ``adaptive`` method (module docstring).
+
+    ``xi`` holds the damping ratio per contact (the restitution ``e`` for Hertz-damp laws).
+    ``pre``: shared linear response before the first contact (layout in
+    :mod:`pound_mc.integrators.outputs`); empty for a plain run.  Longer than 150 lines because
+    the loop keeps its scalar state (energies, clocks, phase flags) in locals across the two
+    kinds of step; each step's work is in the helpers above.
+    """
+    model = settings.model
+    relation = settings.relation
+    substeps = settings.substeps
+    n = q.size
+    nc = gap.size
+    nf = phi.shape[0]
+    npts = ag.size
+    m_sub, h = step_size(dt_rec, settings.dt_s)
+    cd = 2.0 * xi * np.sqrt(beta * meff)  # damping constants c0 of the force laws
+    coef = np.empty((n, 2, 4))
+    for j in range(n):
+        coef[j] = coefficients(omega[j], zeta[j], h)
+    q1 = np.empty(n)
+    v1 = np.empty(n)
+    a0 = np.empty(n)
+    a1 = np.empty(n)
+    wk = np.empty((10, n))
+    fc = np.zeros(nc)
+    fc0 = np.zeros(nc)
+    cimp = np.zeros(nc)
+    phase = np.zeros(nc, dtype=np.int64)
+    zhd = np.zeros(nc)
+    peaks = np.zeros(nf)
+    dc0 = np.empty(nc)
+    ddc0 = np.empty(nc)
+    dc1 = np.empty(nc)
+    ddc1 = np.empty(nc)
+    xf0 = np.empty(nf)
+    xfd0 = np.empty(nf)
+    en0 = np.empty(4)
+    en1 = np.empty(4)
+    nphi = -phi
+    zf = np.zeros(nf)
+    herm_tol = _hermite_tolerance(omega, h)
+    e_in = 0.0
+    e_d = 0.0
+    w_c = 0.0
+    e0 = mechanical_energy(q, v, omega)
+    peak_f = 0.0
+    peak_t = 0.0
+    steps = 0
+    hc = h
+    fresh = False
+    t_onset = 0.0
+    # steps allowed: 200 per linear step of the record, plus room for many contacts
+    budget = 200 * (npts - 1) * m_sub + 1_000_000
+    in_contact = False
+    status = STATUS_OK
+    store = hx.shape[0] > 0
+    reset_contacts(cout)
+    mode = int(pre[PRE_MODE]) if pre.size > 0 else 0
+    i_first = 0
+    if mode == PRE_RESUME:
+        i_first = int(pre[PRE_INTERVAL])
+        e_in = pre[PRE_E_IN]
+        e_d = pre[PRE_E_D]
+        steps = int(pre[PRE_STEPS])
+        e0 = pre[PRE_E0]
+        for j in range(n):
+            q[j] = pre[PRE_STATE + j]
+            v[j] = pre[PRE_STATE + n + j]
+        for f in range(nf):
+            peaks[f] = pre[PRE_STATE + 2 * n + f]
+    for i in range(i_first, npts - 1):
+        if mode == PRE_RUN_TO_CONTACT:
+            snapshot(pre, i, e_in, e_d, steps, e0, q, v, peaks)
+        if store:
+            _store_history(i, q, v, phi, psi, gap, beta, cd, zhd, phase, model, hx, hd, hf)
+        ag0 = ag[i]
+        slope = (ag[i + 1] - ag[i]) / dt_rec
+        s = 0.0
+        k_grid = 0  # index of the next grid point within the interval
+        while s < dt_rec * (1.0 - 1e-12):
+            steps += 1
+            if steps > budget:
+                # absurd parameters (say beta = 1e300 makes contact sub-steps of 1e-119 s):
+                # give up instead of running for ever, and say so
+                status = STATUS_NOT_CONVERGED
+                break
+            if not in_contact:
+                # ---------------- exact linear step to the next grid point (or an onset)
+                s_next = (k_grid + 1) * h
+                if k_grid + 1 == m_sub:
+                    s_next = dt_rec
+                hh = s_next - s
+                regular = abs(hh - h) <= 1e-12 * h
+                p0s = ag0 + slope * s
+                p1s = ag0 + slope * s_next
+                _exact_step(q, v, q1, v1, coef, regular, p0s, p1s, omega, zeta, gamma, hh)
+                if not fresh:
+                    refresh(q, v, p0s, omega, zeta, gamma, phi, psi, gap, dc0, ddc0, xf0, xfd0,
+                            en0)  # fmt: skip
+                    fresh = True
+                c_on, tau_on = _screen_onsets(q, v, q1, v1, p0s, slope, s, hh, dc0, ddc0, dc1,
+                                              ddc1, omega, zeta, gamma, psi, gap)  # fmt: skip
+                if c_on >= 0 and mode == PRE_RUN_TO_CONTACT:
+                    return
+                if c_on >= 0:
+                    hh = tau_on
+                    p1s = ag0 + slope * (s + hh)
+                    _exact_step(q, v, q1, v1, coef, False, p0s, p1s, omega, zeta, gamma, hh)
+                    for c in range(nc):
+                        dc1[c] = rowdot(psi, c, q1) - gap[c]
+                        ddc1[c] = rowdot(psi, c, v1)
+                end_values(q1, v1, p1s, omega, zeta, gamma, en1)
+                de_in, de_d = _linear_energies(hh, p0s, p1s, slope, en0, en1)
+                e_in += de_in
+                e_d += de_d
+                _linear_floor_peaks(q, v, q1, v1, p0s, slope, s, hh, phi, nphi, zf, xf0, xfd0,
+                                    peaks, herm_tol, omega, zeta, gamma)  # fmt: skip
+                _shift(q, v, q1, v1, dc0, ddc0, dc1, ddc1, en0, en1)
+                s += hh
+                if c_on >= 0:
+                    hc = _open_contact(c_on, v, psi, xi, beta, meff, zhd, phase, cout, model,
+                                       relation, substeps, h)  # fmt: skip
+                    t_onset = i * dt_rec + s
+                    in_contact = True
+                else:
+                    k_grid += 1
+            else:
+                # ---------------- contact sub-step (RK4) with located switches
+                fresh = False
+                hs = _substep_length(q, v, psi, gap, phase, hc, i * dt_rec + s, t_onset,
+                                     dt_rec - s)  # fmt: skip
+                de_in, de_d, dw_c = rk4(q, v, s, hs, ag0, slope, omega, zeta, gamma, psi, gap,
+                                        beta, cd, zhd, phase, model, q1, v1, wk, fc, cimp,
+                                        fc0)  # fmt: skip
+                for j in range(n):
+                    a0[j] = wk[4, j]
+                contact_forces(q1, v1, psi, gap, beta, cd, zhd, phase, model, fc)
+                accel(q1, v1, ag0 + slope * (s + hs), omega, zeta, gamma, psi, fc, a1)
+                t_ev, c_ev, kind = _locate_switch(q, v, q1, v1, a0, a1, psi, gap, phase, hs)
+                if c_ev >= 0 and t_ev < hs:
+                    hs = t_ev
+                    de_in, de_d, dw_c = rk4(q, v, s, hs, ag0, slope, omega, zeta, gamma, psi,
+                                            gap, beta, cd, zhd, phase, model, q1, v1, wk, fc,
+                                            cimp, fc0)  # fmt: skip
+                    contact_forces(q1, v1, psi, gap, beta, cd, zhd, phase, model, fc)
+                    accel(q1, v1, ag0 + slope * (s + hs), omega, zeta, gamma, psi, fc, a1)
+                e_in += de_in
+                e_d += de_d
+                w_c += dw_c
+                peak_f, peak_t = _contact_peaks(q, v, q1, v1, a0, a1, psi, gap, beta, cd, zhd,
+                                                phase, model, fc0, fc, cimp, cout, hs,
+                                                i * dt_rec + s, peak_f, peak_t)  # fmt: skip
+                track_floors(phi, side, q, v, q1, v1, hs, peaks)
+                for j in range(n):
+                    q[j] = q1[j]
+                    v[j] = v1[j]
+                s += hs
+                if c_ev >= 0 and hs == t_ev:
+                    if kind == _ONSET:
+                        hc = _open_contact(c_ev, v, psi, xi, beta, meff, zhd, phase, cout,
+                                           model, relation, substeps, hc)  # fmt: skip
+                        t_onset = i * dt_rec + s
+                    elif kind == _TO_RESTITUTION:
+                        phase[c_ev] = 2
+                    elif kind == _SEPARATION:
+                        phase[c_ev] = 0
+                        if _all_open(phase):
+                            # continue with exact steps from here to the next grid point
+                            in_contact = False
+                            hc = h
+                    else:
+                        phase[c_ev] = 1
+                k_grid = _grid_index(s, h, m_sub)
+            # divergence / non-finite guard
+            if not _finite(q, v):
+                status = STATUS_UNSTABLE
+                break
+        if status != STATUS_OK:
+            break
+    if mode == PRE_RUN_TO_CONTACT:
+        # no contact in the whole record: the end state is shared
+        snapshot(pre, npts - 1, e_in, e_d, steps, e0, q, v, peaks)
+        return
+    if store and status == STATUS_OK:
+        _store_history(npts - 1, q, v, phi, psi, gap, beta, cd, zhd, phase, model, hx, hd, hf)
+    stored_energy = 0.0
+    for c in range(nc):
+        if phase[c] != 0:
+            stored_energy += stored(model, rowdot(psi, c, q) - gap[c], beta[c])
+    finish(out, cout, peaks, side, phase, q, v, omega, e0, e_in, e_d, w_c, stored_energy,
+           peak_f, peak_t, steps, status)  # fmt: skip

@@ -1,0 +1,429 @@
+"""Boundary of the compiled integrators: names in, named arrays out.
+
+Everything above :mod:`pound_mc.integrators` passes names (contact law, relation, method) and
+receives outputs by name; the integer codes the kernels switch on and the positions of the
+outputs in the kernels' vectors stay below this module.
+
+Both buildings are integrated in their modal coordinates (:mod:`pound_mc.physics.structures`): for
+each mode ``q'' + 2 zeta omega q' + omega^2 q = -gamma a_g(t) - sum_c F_c psi_c`` with
+``psi_c = phi[left floor of c] - phi[right floor of c]``, so that the penetration of contact
+``c`` is ``delta_c = psi_c . q - gap_c`` and its force pushes the floors apart.  The ground
+acceleration is the record's samples linearly interpolated (``../shared/DESIGN.md`` section 2).
+
+Methods (names pinned by DESIGN.md section 4): ``adaptive`` (default,
+:mod:`~pound_mc.integrators.adaptive`), ``newmark``, ``newmark-explicit`` and
+``central-difference`` (:mod:`~pound_mc.integrators.fixed`, and
+:mod:`~pound_mc.integrators.pair` for SDOF pairs).
+
+Every run returns the outputs of :data:`OUTPUTS` and a status: 0 ok, 1 unstable (non-finite or
+diverging state, or an energy balance broken either way by more than
+:data:`UNSTABLE_ENERGY_FRACTION` of the energy put in), 2 not converged (Newton).
+Fixed-step methods report maxima over their step points.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import namedtuple
+from typing import NamedTuple
+
+import numba
+import numpy as np
+
+from pound_mc._jit import jit
+from pound_mc.errors import InputError
+from pound_mc.integrators.adaptive import adaptive
+from pound_mc.integrators.fixed import CENTRAL_DIFFERENCE, NEWMARK, NEWMARK_EXPLICIT, fixed
+from pound_mc.integrators.laws import LAW_CODES, RELATION_CODES
+from pound_mc.integrators.outputs import (
+    CONTACT_OUTPUTS,
+    N_COUT,
+    N_OUT,
+    OUTPUTS,
+    PRE_MODE,
+    PRE_RESUME,
+    PRE_RUN_TO_CONTACT,
+    STATUS_NOT_CONVERGED,
+    UNSTABLE_ENERGY_FRACTION,
+    fail,
+    pre_size,
+)
+from pound_mc.integrators.pair import newmark_pair
+from pound_mc.integrators.toolkit import MAX_STEPS
+from pound_mc.physics.contact import check_relation
+
+__all__ = [
+    "METHODS",
+    "OUTPUTS",
+    "CONTACT_OUTPUTS",
+    "UNSTABLE_ENERGY_FRACTION",
+    "KernelSettings",
+    "KernelResult",
+    "kernel_settings",
+    "run_kernel",
+    "simulate_sdof_pairs",
+    "simulate_scene_batch",
+]
+
+_ADAPTIVE = 0
+_METHOD_CODES = {
+    "adaptive": _ADAPTIVE,
+    "newmark": NEWMARK,
+    "newmark-explicit": NEWMARK_EXPLICIT,
+    "central-difference": CENTRAL_DIFFERENCE,
+}
+#: Integration methods by name (DESIGN.md section 4); the first is the default.
+METHODS = tuple(_METHOD_CODES)
+
+#: Settings of one kernel run, as the kernels take them: codes of the contact law, of its
+#: damping relation and of the method, the step bound ``dt_s`` [s] and the contact sub-steps
+#: per contact duration (``adaptive``).  Build it with :func:`kernel_settings`.
+KernelSettings = namedtuple("KernelSettings", "model relation method dt_s substeps")
+
+
+class KernelResult(NamedTuple):
+    """Outputs of one kernel run, by name.
+
+    ``outputs``: ``{name: float}`` for :data:`OUTPUTS`; ``contacts``: ``{name: (n_contacts,)}``
+    for :data:`CONTACT_OUTPUTS`; ``history``: ``(floor displacements, penetrations, forces)``
+    at the record's samples, or None.
+    """
+
+    outputs: dict
+    contacts: dict
+    history: tuple | None
+
+
+def kernel_settings(
+    model: str = "jankowski",
+    method: str = "adaptive",
+    *,
+    relation: str | None = None,
+    dt_s: float = 0.001,
+    substeps: int = 16,
+) -> KernelSettings:
+    """Kernel settings from names (``relation`` None: the law's default).
+
+    Raises
+    ------
+    InputError
+        For an unknown law or method, or a relation the law does not accept.
+    """
+    relation = check_relation(model, relation)
+    if method not in _METHOD_CODES:
+        raise InputError(
+            f"unknown method {method!r}; allowed: {', '.join(METHODS)}", key="integrator.method"
+        )
+    rel = RELATION_CODES[model][relation] if relation is not None else 0
+    return KernelSettings(
+        LAW_CODES[model], rel, _METHOD_CODES[method], float(dt_s), float(substeps)
+    )
+
+
+@jit
+def _run(
+    ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi, settings,
+    q, v, out, cout, hx, hd, hf, pre,
+):  # fmt: skip
+    dt_s = settings.dt_s
+    method = settings.method
+    if not (dt_s > 0.0) or (ag.size - 1) * dt_rec / dt_s > MAX_STEPS:
+        # a step so small that the run could not end: flagged as not converged
+        fail(out, cout, STATUS_NOT_CONVERGED)
+        return
+    if method == _ADAPTIVE:
+        adaptive(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi, settings,
+                 q, v, out, cout, hx, hd, hf, pre)  # fmt: skip
+        return
+    if (
+        (method == NEWMARK or method == NEWMARK_EXPLICIT) and omega.size == 2 and gap.size == 1
+        and phi.shape[0] == 2 and phi[0, 1] == 0.0 and phi[1, 0] == 0.0 and hx.shape[0] == 0
+    ):  # fmt: skip
+        newmark_pair(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi,
+                     settings, q, v, out, cout)  # fmt: skip
+    else:
+        fixed(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi, settings,
+              q, v, out, cout, hx, hd, hf)  # fmt: skip
+
+
+def _named(out):
+    """``{name: column}`` of an output matrix (one row per simulation) with integer counts."""
+    result = {name: out[..., k] for k, name in enumerate(OUTPUTS)}
+    result["impacts"] = result["impacts"].astype(np.int32)
+    result["status"] = result["status"].astype(np.int8)
+    result["steps"] = result["steps"].astype(np.int64)
+    return result
+
+
+def run_kernel(
+    ag,
+    dt_rec,
+    omega,
+    zeta,
+    gamma,
+    phi,
+    side,
+    psi,
+    gap,
+    meff,
+    beta,
+    xi,
+    *,
+    model: str = "jankowski",
+    method: str = "adaptive",
+    relation: str | None = None,
+    dt_s: float = 0.001,
+    substeps: int = 16,
+    q0=None,
+    v0=None,
+    history: bool = False,
+) -> KernelResult:
+    """Run one simulation on prepared modal arrays.
+
+    :func:`pound_mc.scene.simulate` is the scene-level entry point; the arrays are those of
+    :meth:`pound_mc.scene.Scene.modal_arrays` (``xi`` the damping ratio per contact, the
+    restitution ``e`` for ``hertzdamp``).
+
+    Parameters
+    ----------
+    model, method, relation : str
+        Contact law, integration method and the law's damping relation (None: its default).
+    dt_s : float
+        Step (fixed-step methods) or bound on the steps between contacts [s].
+    substeps : int
+        Contact sub-steps per estimated contact duration (``adaptive``).
+    q0, v0 : array_like, optional
+        Initial modal state (default at rest).
+    history : bool
+        Also return histories at the record's samples.
+    """
+    settings = kernel_settings(model, method, relation=relation, dt_s=dt_s, substeps=substeps)
+    n = omega.size
+    nc = gap.size
+    nf = phi.shape[0]
+    q = np.zeros(n) if q0 is None else np.array(q0, dtype=float)
+    v = np.zeros(n) if v0 is None else np.array(v0, dtype=float)
+    out = np.empty(N_OUT)
+    cout = np.empty((nc, N_COUT))
+    nh = ag.size if history else 0
+    hx = np.zeros((nh, nf))
+    hd = np.zeros((nh, nc))
+    hf = np.zeros((nh, nc))
+    f8 = np.float64
+    _run(
+        np.ascontiguousarray(ag, dtype=f8), f8(dt_rec),
+        np.ascontiguousarray(omega, dtype=f8), np.ascontiguousarray(zeta, dtype=f8),
+        np.ascontiguousarray(gamma, dtype=f8), np.ascontiguousarray(phi, dtype=f8),
+        np.ascontiguousarray(side, dtype=np.int64), np.ascontiguousarray(psi, dtype=f8),
+        np.ascontiguousarray(gap, dtype=f8), np.ascontiguousarray(meff, dtype=f8),
+        np.ascontiguousarray(beta, dtype=f8), np.ascontiguousarray(xi, dtype=f8),
+        settings, q, v, out, cout, hx, hd, hf, np.zeros(0),
+    )  # fmt: skip
+    outputs = {name: float(out[k]) for k, name in enumerate(OUTPUTS)}
+    contacts = {name: cout[:, k].copy() for k, name in enumerate(CONTACT_OUTPUTS)}
+    return KernelResult(outputs, contacts, (hx, hd, hf) if history else None)
+
+
+@jit(inline=True)
+def _with_step(settings, dt_s):
+    """``settings`` with the step bound ``dt_s`` of one simulation."""
+    return KernelSettings(settings.model, settings.relation, settings.method, dt_s,
+                          settings.substeps)  # fmt: skip
+
+
+@jit(inline=True)
+def _sdof_arrays(k, tl, zl, ml, tr, zr, mr, gap, beta, xi):
+    """Modal arrays of SDOF pair ``k`` (mass-normalised: q = sqrt(m) x)."""
+    omega = np.empty(2)
+    zeta = np.empty(2)
+    gamma = np.empty(2)
+    phi = np.zeros((2, 2))
+    side = np.zeros(2, dtype=np.int64)
+    side[1] = 1
+    psi = np.empty((1, 2))
+    omega[0] = 2.0 * math.pi / tl[k]
+    omega[1] = 2.0 * math.pi / tr[k]
+    zeta[0] = zl[k]
+    zeta[1] = zr[k]
+    gamma[0] = math.sqrt(ml[k])
+    gamma[1] = math.sqrt(mr[k])
+    phi[0, 0] = 1.0 / gamma[0]
+    phi[1, 1] = 1.0 / gamma[1]
+    psi[0, 0] = phi[0, 0]
+    psi[0, 1] = -phi[1, 1]
+    g = np.full(1, gap[k])
+    me = np.full(1, ml[k] * mr[k] / (ml[k] + mr[k]))
+    be = np.full(1, beta[k])
+    x = np.full(1, xi[k])
+    return omega, zeta, gamma, phi, side, psi, g, me, be, x
+
+
+@jit(parallel=True)
+def _sdof_batch(
+    ag, dt_rec, tl, zl, ml, tr, zr, mr, gap, beta, xi, dt_s, settings, out, first, group, shared,
+):  # fmt: skip
+    # 1. adaptive: the linear response up to the first contact of each group of simulations
+    #    that differ only in contact parameters, once per group (``first`` = a member of it)
+    ngroup = first.size
+    empty = np.zeros((0, 2))
+    empty1 = np.zeros((0, 1))
+    if settings.method == _ADAPTIVE:
+        for gi in numba.prange(ngroup):
+            k = first[gi]
+            omega, zeta, gamma, phi, side, psi, g, me, be, x = _sdof_arrays(
+                k, tl, zl, ml, tr, zr, mr, gap, beta, xi
+            )
+            shared[gi, PRE_MODE] = PRE_RUN_TO_CONTACT
+            _run(ag, dt_rec, omega, zeta, gamma, phi, side, psi, g, me, be, x,
+                 _with_step(settings, dt_s[k]), np.zeros(2), np.zeros(2), np.empty(N_OUT),
+                 np.empty((1, N_COUT)), empty, empty1, empty1, shared[gi])  # fmt: skip
+            shared[gi, PRE_MODE] = PRE_RESUME
+    # 2. every simulation, resumed from its group's shared state
+    nsim = tl.size
+    for k in numba.prange(nsim):
+        omega, zeta, gamma, phi, side, psi, g, me, be, x = _sdof_arrays(
+            k, tl, zl, ml, tr, zr, mr, gap, beta, xi
+        )
+        pre = shared[group[k]] if settings.method == _ADAPTIVE else np.zeros(0)
+        _run(ag, dt_rec, omega, zeta, gamma, phi, side, psi, g, me, be, x,
+             _with_step(settings, dt_s[k]), np.zeros(2), np.zeros(2), out[k],
+             np.empty((1, N_COUT)), empty, empty1, empty1, pre.copy())  # fmt: skip
+
+
+def simulate_sdof_pairs(
+    acc,
+    dt_rec,
+    *,
+    left_period_s,
+    left_damping_ratio,
+    left_mass_kg,
+    right_period_s,
+    right_damping_ratio,
+    right_mass_kg,
+    gap_m,
+    beta,
+    xi,
+    dt_s,
+    method: str = "adaptive",
+    contact_model: str = "jankowski",
+    relation: str | None = None,
+    substeps: int = 16,
+) -> dict[str, np.ndarray]:
+    """Run many SDOF-pair simulations on one record in parallel threads.
+
+    Every argument after ``dt_rec`` is an array with one value per simulation (or a scalar);
+    ``xi`` is the damping ratio (the restitution ``e`` for ``hertzdamp``), ``relation`` the
+    law's damping relation (None: its default).  Returns ``{output name: array}`` for every
+    name in :data:`OUTPUTS`; each simulation writes only its own slot, so results do not
+    depend on the number of threads.
+    """
+    settings = kernel_settings(contact_model, method, relation=relation, substeps=substeps)
+    arrays = [
+        left_period_s, left_damping_ratio, left_mass_kg, right_period_s, right_damping_ratio,
+        right_mass_kg, gap_m, beta, xi, dt_s,
+    ]  # fmt: skip
+    arrays = np.broadcast_arrays(*[np.asarray(a, dtype=np.float64) for a in arrays])
+    arrays = [np.ascontiguousarray(a.ravel()) for a in arrays]
+    nsim = arrays[0].size
+    out = np.empty((nsim, N_OUT))
+    # simulations that differ only in contact parameters share their linear response up to
+    # the first contact (periods, damping ratios, masses, gap and step define a group)
+    linear = np.stack([arrays[k] for k in (0, 1, 2, 3, 4, 5, 6, 9)], axis=1)
+    _, first, group = np.unique(linear, axis=0, return_index=True, return_inverse=True)
+    shared = np.zeros((first.size, pre_size(2, 2)))
+    _sdof_batch(
+        np.ascontiguousarray(acc, dtype=np.float64), float(dt_rec), *arrays[:9], arrays[9],
+        settings, out, first.astype(np.int64), group.ravel().astype(np.int64), shared,
+    )  # fmt: skip
+    return _named(out)
+
+
+@jit(parallel=True)
+def _scene_batch(
+    ag, dt_rec, omega, zeta, gamma, phi, side, psi, meff, gap, beta, xi, dt_s, settings, out,
+    cout,
+):  # fmt: skip
+    nsim = beta.size
+    n = omega.size
+    nf = phi.shape[0]
+    nc = psi.shape[0]
+    for k in numba.prange(nsim):
+        empty = np.zeros((0, nf))
+        empty1 = np.zeros((0, nc))
+        _run(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap[k].copy(), meff,
+             np.full(nc, beta[k]), np.full(nc, xi[k]), _with_step(settings, dt_s[k]),
+             np.zeros(n), np.zeros(n), out[k], cout[k], empty, empty1, empty1,
+             np.zeros(0))  # fmt: skip
+
+
+def simulate_scene_batch(
+    acc,
+    dt_rec,
+    arrays: dict,
+    *,
+    gap_m,
+    beta,
+    xi,
+    dt_s,
+    method: str = "adaptive",
+    contact_model: str = "jankowski",
+    relation: str | None = None,
+    substeps: int = 16,
+) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
+    """Run many simulations of one pair of buildings (any model) on one record, in threads.
+
+    Parameters
+    ----------
+    acc, dt_rec
+        Ground acceleration [m/s^2] and its sampling interval [s].
+    arrays : dict
+        :meth:`pound_mc.scene.Scene.modal_arrays` of the pair (shared by every simulation).
+    gap_m : array_like
+        Gaps [m], shape ``(nsim,)`` (every contact) or ``(nsim, n_contacts)``.
+    beta, xi, dt_s : array_like
+        Per simulation: impact stiffness [N/m^1.5, or N/m for linear laws], damping ratio (the
+        restitution ``e`` for ``hertzdamp``) and step bound [s].
+    method, contact_model, relation : str
+        Integration method, contact law and its damping relation (None: the law's default).
+    substeps : int
+        Contact sub-steps per estimated contact duration (``adaptive``).
+
+    Returns
+    -------
+    outputs : dict
+        ``{name: (nsim,)}`` for every name in :data:`OUTPUTS`.
+    contacts : dict
+        ``{name: (nsim, n_contacts)}`` for every name in :data:`CONTACT_OUTPUTS`.
+    """
+    settings = kernel_settings(contact_model, method, relation=relation, substeps=substeps)
+    nc = arrays["psi"].shape[0]
+    beta, xi, dt_s = np.broadcast_arrays(
+        *[np.asarray(a, dtype=np.float64) for a in (beta, xi, dt_s)]
+    )
+    beta, xi, dt_s = (np.ascontiguousarray(a.ravel()) for a in (beta, xi, dt_s))
+    nsim = beta.size
+    gap = np.asarray(gap_m, dtype=np.float64)
+    gap = np.ascontiguousarray(
+        np.broadcast_to(gap.reshape(gap.shape[0] if gap.ndim else 1, -1), (nsim, nc))
+    )
+    out = np.empty((nsim, N_OUT))
+    cout = np.empty((nsim, nc, N_COUT))
+    f8 = np.float64
+    _scene_batch(
+        np.ascontiguousarray(acc, dtype=f8),
+        f8(dt_rec),
+        *(np.ascontiguousarray(arrays[k], dtype=f8) for k in ("omega", "zeta", "gamma", "phi")),
+        np.ascontiguousarray(arrays["side"], dtype=np.int64),
+        np.ascontiguousarray(arrays["psi"], dtype=f8),
+        np.ascontiguousarray(arrays["meff"], dtype=f8),
+        gap,
+        beta,
+        xi,
+        dt_s,
+        settings,
+        out,
+        cout,
+    )  # fmt: skip
+    contacts = {name: cout[:, :, k] for k, name in enumerate(CONTACT_OUTPUTS)}
+    contacts["impacts"] = contacts["impacts"].astype(np.int32)
+    return _named(out), contacts

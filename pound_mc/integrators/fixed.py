@@ -1,0 +1,356 @@
+"""Fixed-step methods on the general modal model (any buildings, any number of contacts).
+
+``newmark``
+    Average acceleration (gamma = 1/2, beta = 1/4) at the fixed step ``dt_s``, the contact
+    forces solved implicitly by Newton's method on the penetrations in every step.
+``newmark-explicit``
+    The same, with the contact force lagged one step (explicit in the contact).
+``central-difference``
+    Explicit central differences, contact force from the backward-difference velocity.
+
+They report maxima over their step points.  An SDOF pair with ``newmark`` or
+``newmark-explicit`` runs through :mod:`pound_mc.integrators.pair` instead (same results).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from pound_mc._jit import jit
+from pound_mc.integrators.laws import (
+    episode_zeta,
+    force,
+    force_grad,
+    newton_scalar,
+    phase_of,
+    stored,
+)
+from pound_mc.integrators.outputs import (
+    C_IMPACTS,
+    C_IMPULSE,
+    C_MAX_PENETRATION,
+    C_PEAK_FORCE,
+    DIVERGENCE_LIMIT_M,
+    STATUS_NOT_CONVERGED,
+    STATUS_OK,
+    STATUS_UNSTABLE,
+    finish,
+    reset_contacts,
+)
+from pound_mc.integrators.toolkit import (
+    accel,
+    mechanical_energy,
+    powers,
+    rowdot,
+    solve_small,
+    step_size,
+)
+
+#: Method codes of this module (the boundary maps names to them).
+NEWMARK, NEWMARK_EXPLICIT, CENTRAL_DIFFERENCE = 1, 2, 3
+
+
+@jit(inline=True)
+def _newton_contacts(model, dtry, dstar, dpen, ddpen, g, c2h, beta, cd, zhd, fn, jac, rhs):
+    """Contact forces at the end of a Newmark step for several contacts (Newton, 60 at most).
+
+    Solves ``d - d* + G F(d, d_dot(d)) = 0`` on the penetrations; fills ``fn``, returns
+    whether it converged.
+    """
+    nc = dtry.size
+    conv = False
+    for _it in range(60):
+        for c in range(nc):
+            ddt = c2h * (dtry[c] - dpen[c]) - ddpen[c]
+            ph = phase_of(dtry[c], ddt)
+            f, fd, fdd = force_grad(model, dtry[c], ddt, beta[c], cd[c], zhd[c], ph)
+            fn[c] = f
+            rhs[c] = fd + fdd * c2h  # slope along the Newmark velocity
+        for c1 in range(nc):
+            for c2 in range(nc):
+                jac[c1, c2] = g[c1, c2] * rhs[c2] + (1.0 if c1 == c2 else 0.0)
+        for c1 in range(nc):
+            r = dtry[c1] - dstar[c1]
+            for c2 in range(nc):
+                r += g[c1, c2] * fn[c2]
+            rhs[c1] = -r
+        if not solve_small(jac, rhs, nc):
+            break
+        step_max = 0.0
+        scale = 0.0
+        for c in range(nc):
+            step_max = max(step_max, abs(rhs[c]))
+            dtry[c] += rhs[c]
+            scale = max(scale, abs(dtry[c]), abs(dstar[c]))
+        if step_max <= 1e-12 * scale + 1e-15:
+            conv = True
+            break
+    for c in range(nc):
+        ddt = c2h * (dtry[c] - dpen[c]) - ddpen[c]
+        fn[c] = force(model, dtry[c], ddt, beta[c], cd[c], zhd[c], phase_of(dtry[c], ddt))
+    return conv
+
+
+@jit(inline=True)
+def _implicit_forces(model, method, dstar, dtry, dpen, ddpen, g, c2h, fc, beta, cd, zhd, fn,
+                     jac, rhs):  # fmt: skip
+    """Contact forces at the end of a Newmark step (lagged for ``newmark-explicit``).
+
+    Returns whether the contact solve converged.
+    """
+    nc = dstar.size
+    if method == NEWMARK_EXPLICIT:
+        for c in range(nc):
+            fn[c] = fc[c]  # lagged one step
+        return True
+    any_pos = False
+    for c in range(nc):
+        dtry[c] = dstar[c]
+        if dstar[c] > 0.0:
+            any_pos = True
+    if not any_pos:
+        for c in range(nc):
+            fn[c] = 0.0
+        return True
+    if nc == 1:
+        # scalar safeguarded Newton with the analytic slope, root in (0, d*)
+        fn[0], conv = newton_scalar(model, dstar[0], dpen[0], ddpen[0], g[0, 0], c2h, fc[0],
+                                    beta[0], cd[0], zhd[0])  # fmt: skip
+        return conv
+    return _newton_contacts(model, dtry, dstar, dpen, ddpen, g, c2h, beta, cd, zhd, fn, jac, rhs)
+
+
+@jit
+def fixed(
+    ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi, settings,
+    q, v, out, cout, hx, hd, hf,
+):  # fmt: skip
+    """Run one simulation with a fixed-step method (module docstring).
+
+    ``xi`` holds the damping ratio per contact (the restitution ``e`` for Hertz-damp laws).
+    Longer than 150 lines because the three schemes share the per-step bookkeeping (contacts,
+    energies, maxima, divergence) in one loop whose scalar state stays in locals.
+    """
+    model = settings.model
+    relation = settings.relation
+    method = settings.method
+    n = q.size
+    nc = gap.size
+    nf = phi.shape[0]
+    npts = ag.size
+    m_sub, h = step_size(dt_rec, settings.dt_s)
+    cd = 2.0 * xi * np.sqrt(beta * meff)  # damping constants c0 of the force laws
+    n_steps = (npts - 1) * m_sub
+    store = hx.shape[0] > 0
+    a = np.empty(n)
+    qn = np.empty(n)
+    vn = np.empty(n)
+    an = np.empty(n)
+    qs = np.empty(n)
+    qprev = np.empty(n)
+    khat = np.empty(n)
+    fc = np.zeros(nc)
+    fn = np.zeros(nc)
+    fprev = np.zeros(nc)
+    zhd = np.zeros(nc)
+    dpen = np.zeros(nc)
+    ddpen = np.zeros(nc)
+    was_in = np.zeros(nc, dtype=np.bool_)
+    g = np.zeros((nc, nc))
+    jac = np.zeros((nc, nc))
+    rhs = np.zeros(nc)
+    dstar = np.zeros(nc)
+    dtry = np.zeros(nc)
+    peaks = np.zeros(nf)
+    e0 = mechanical_energy(q, v, omega)
+    reset_contacts(cout)
+    c2h = 2.0 / h
+    c4h = 4.0 / h
+    c4h2 = 4.0 / (h * h)
+    ikhat = np.empty(n)
+    zw2 = np.empty(n)
+    for j in range(n):
+        khat[j] = omega[j] * omega[j] + 4.0 * zeta[j] * omega[j] / h + 4.0 / (h * h)
+        ikhat[j] = 1.0 / khat[j]
+        zw2[j] = 2.0 * zeta[j] * omega[j]
+    for c1 in range(nc):
+        for c2 in range(nc):
+            acc = 0.0
+            for j in range(n):
+                acc += psi[c1, j] * psi[c2, j] / khat[j]
+            g[c1, c2] = acc
+    # initial contact state and accelerations
+    for c in range(nc):
+        dpen[c] = rowdot(psi, c, q) - gap[c]
+        ddpen[c] = rowdot(psi, c, v)
+        fc[c] = force(model, dpen[c], ddpen[c], beta[c], cd[c], zhd[c],
+                      phase_of(dpen[c], ddpen[c]))  # fmt: skip
+        was_in[c] = dpen[c] > 0.0
+    accel(q, v, ag[0], omega, zeta, gamma, psi, fc, a)
+    if method == CENTRAL_DIFFERENCE:
+        for j in range(n):
+            qprev[j] = q[j] - h * v[j] + 0.5 * h * h * a[j]
+    e_in = 0.0
+    e_d = 0.0
+    w_c = 0.0
+    peak_f = 0.0
+    peak_t = 0.0
+    status = STATUS_OK
+    pin_prev, pd_prev = powers(v, ag[0], omega, zeta, gamma)
+    pc_prev = 0.0
+    for c in range(nc):
+        pc_prev += fc[c] * ddpen[c]
+    steps = 0
+    inv_m = 1.0 / m_sub
+    i = 0
+    k = -1
+    for step in range(n_steps):
+        k += 1
+        if k == m_sub:
+            k = 0
+            i += 1
+        if store and k == 0:
+            for f in range(nf):
+                hx[i, f] = rowdot(phi, f, q)
+            for c in range(nc):
+                hd[i, c] = dpen[c]
+                hf[i, c] = fc[c]
+        t1 = (step + 1) * h
+        ag1 = ag[i] + (ag[i + 1] - ag[i]) * ((k + 1) * inv_m)
+        steps += 1
+        if method == CENTRAL_DIFFERENCE:
+            # central difference: q_{n+1} from q_n, q_{n-1}; force at n from backward velocity
+            ag_n = ag[i] + (ag[i + 1] - ag[i]) * (k * inv_m)
+            for c in range(nc):
+                dprev = rowdot(psi, c, qprev) - gap[c]
+                vb = (dpen[c] - dprev) / h
+                fc[c] = force(model, dpen[c], vb, beta[c], cd[c], zhd[c], phase_of(dpen[c], vb))
+            for j in range(n):
+                p = -gamma[j] * ag_n
+                for c in range(nc):
+                    p -= fc[c] * psi[c, j]
+                zw = zeta[j] * omega[j] * h
+                qn[j] = (h * h * p + (2.0 - omega[j] * omega[j] * h * h) * q[j]
+                         - (1.0 - zw) * qprev[j]) / (1.0 + zw)  # fmt: skip
+            # velocity at n (central), then shift; the state reported is at n+1 with a
+            # backward-difference velocity consistent with the scheme
+            for j in range(n):
+                v[j] = (qn[j] - qprev[j]) / (2.0 * h)
+            # energies at step n with the central velocity, trapezoidal between n-1 and n
+            pin1, pd1 = powers(v, ag_n, omega, zeta, gamma)
+            pc1 = 0.0
+            for c in range(nc):
+                pc1 += fc[c] * rowdot(psi, c, v)
+            if step > 0:
+                e_in += 0.5 * h * (pin_prev + pin1)
+                e_d += 0.5 * h * (pd_prev + pd1)
+                w_c += 0.5 * h * (pc_prev + pc1)
+                for c in range(nc):
+                    cout[c, C_IMPULSE] += 0.5 * h * (fprev[c] + fc[c])
+            for c in range(nc):
+                fprev[c] = fc[c]
+                if fc[c] > cout[c, C_PEAK_FORCE]:
+                    cout[c, C_PEAK_FORCE] = fc[c]
+                if fc[c] > peak_f:
+                    peak_f = fc[c]
+                    peak_t = t1 - h
+            pin_prev = pin1
+            pd_prev = pd1
+            pc_prev = pc1
+            for j in range(n):
+                qprev[j] = q[j]
+                q[j] = qn[j]
+            for j in range(n):
+                vn[j] = (q[j] - qprev[j]) / h
+            for c in range(nc):
+                fn[c] = fc[c]
+        else:
+            # Newmark average acceleration, modal predictor without contact at n+1
+            for j in range(n):
+                phat = -gamma[j] * ag1 + (c4h2 * q[j] + c4h * v[j] + a[j])
+                phat += zw2[j] * (c2h * q[j] + v[j])
+                qs[j] = phat * ikhat[j]
+            for c in range(nc):
+                dstar[c] = rowdot(psi, c, qs) - gap[c]
+            if not _implicit_forces(model, method, dstar, dtry, dpen, ddpen, g, c2h, fc, beta,
+                                    cd, zhd, fn, jac, rhs):  # fmt: skip
+                status = STATUS_NOT_CONVERGED
+            for j in range(n):
+                corr = 0.0
+                for c in range(nc):
+                    corr += fn[c] * psi[c, j]
+                qn[j] = qs[j] - corr * ikhat[j]
+                dq = qn[j] - q[j]
+                vn[j] = c2h * dq - v[j]
+                an[j] = c4h2 * dq - c4h * v[j] - a[j]
+        # contact bookkeeping at n+1
+        for c in range(nc):
+            d1 = rowdot(psi, c, qn if method != CENTRAL_DIFFERENCE else q) - gap[c]
+            dd1 = rowdot(psi, c, vn)
+            if d1 > 0.0 and not was_in[c]:
+                cout[c, C_IMPACTS] += 1.0
+                zhd[c] = episode_zeta(model, relation, xi[c], dd1, zhd[c])
+            was_in[c] = d1 > 0.0
+            dpen[c] = d1
+            ddpen[c] = dd1
+            if method == NEWMARK_EXPLICIT:
+                # the force the next (lagged) step uses, from this state
+                fn[c] = force(model, d1, dd1, beta[c], cd[c], zhd[c], phase_of(d1, dd1))
+            if d1 > cout[c, C_MAX_PENETRATION]:
+                cout[c, C_MAX_PENETRATION] = d1
+        if method != CENTRAL_DIFFERENCE:
+            # energies (trapezoidal); contact work with the force acting over the step
+            pin1, pd1 = powers(vn, ag1, omega, zeta, gamma)
+            pc1 = 0.0
+            for c in range(nc):
+                pc1 += fn[c] * ddpen[c]
+            e_in += 0.5 * h * (pin_prev + pin1)
+            e_d += 0.5 * h * (pd_prev + pd1)
+            w_c += 0.5 * h * (pc_prev + pc1)
+            for c in range(nc):
+                cout[c, C_IMPULSE] += 0.5 * h * (fc[c] + fn[c])
+                if fn[c] > cout[c, C_PEAK_FORCE]:
+                    cout[c, C_PEAK_FORCE] = fn[c]
+                if fn[c] > peak_f:
+                    peak_f = fn[c]
+                    peak_t = t1
+            pin_prev = pin1
+            pd_prev = pd1
+            pc_prev = pc1
+            for j in range(n):
+                q[j] = qn[j]
+                v[j] = vn[j]
+                a[j] = an[j]
+        for c in range(nc):
+            fc[c] = fn[c]
+        bad = False
+        for f in range(nf):
+            x = abs(rowdot(phi, f, q))
+            if not x < DIVERGENCE_LIMIT_M:  # also true for NaN
+                bad = True
+            elif x > peaks[f]:
+                peaks[f] = x
+        if bad:
+            status = STATUS_UNSTABLE
+            break
+    if store and status != STATUS_UNSTABLE:
+        i = npts - 1
+        for f in range(nf):
+            hx[i, f] = rowdot(phi, f, q)
+        for c in range(nc):
+            hd[i, c] = dpen[c]
+            hf[i, c] = fc[c]
+    stored_energy = 0.0
+    phase = np.zeros(nc, dtype=np.int64)
+    if method == CENTRAL_DIFFERENCE:
+        # energies were integrated up to the last step n with its central velocity
+        for j in range(n):
+            q[j] = qprev[j]
+        for c in range(nc):
+            dpen[c] = rowdot(psi, c, q) - gap[c]
+    for c in range(nc):
+        if dpen[c] > 0.0:
+            stored_energy += stored(model, dpen[c], beta[c])
+            phase[c] = 1
+    finish(out, cout, peaks, side, phase, q, v, omega, e0, e_in, e_d, w_c, stored_energy,
+           peak_f, peak_t, steps, status)  # fmt: skip

@@ -1,0 +1,162 @@
+"""Layout of the kernels' outputs: names, slots and the end-of-run summary.
+
+One simulation fills a vector of :data:`OUTPUTS` and a matrix with one row per contact and the
+columns of :data:`CONTACT_OUTPUTS`.  Kernels write them through the slot constants below (the
+only place that numbers them); :mod:`pound_mc.integrators.batch` turns them into named arrays.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from pound_mc._jit import jit
+from pound_mc.integrators.toolkit import mechanical_energy
+
+#: Per-simulation outputs, in the order of the kernel's output vector.
+OUTPUTS = (
+    "peak_force",
+    "impacts",
+    "max_penetration",
+    "peak_disp_left",
+    "peak_disp_right",
+    "impulse",
+    "dissipated_energy",
+    "energy_residual",
+    "status",
+    "input_energy",
+    "steps",
+    "peak_force_time",
+)
+N_OUT = len(OUTPUTS)
+(
+    PEAK_FORCE, IMPACTS, MAX_PENETRATION, PEAK_DISP_LEFT, PEAK_DISP_RIGHT, IMPULSE,
+    DISSIPATED_ENERGY, ENERGY_RESIDUAL, STATUS, INPUT_ENERGY, STEPS, PEAK_FORCE_TIME,
+) = range(N_OUT)  # fmt: skip
+#: Outputs that are NaN for a run that is not ok (no plain numbers to be taken for results).
+_NAN_WHEN_FAILED = (
+    PEAK_FORCE, MAX_PENETRATION, PEAK_DISP_LEFT, PEAK_DISP_RIGHT, IMPULSE, DISSIPATED_ENERGY,
+    ENERGY_RESIDUAL,
+)  # fmt: skip
+
+#: Per-contact outputs (columns of the kernel's contact matrix).
+CONTACT_OUTPUTS = ("peak_force", "impacts", "max_penetration", "impulse")
+N_COUT = len(CONTACT_OUTPUTS)
+C_PEAK_FORCE, C_IMPACTS, C_MAX_PENETRATION, C_IMPULSE = range(N_COUT)
+
+#: Status codes of a run.
+STATUS_OK, STATUS_UNSTABLE, STATUS_NOT_CONVERGED = 0, 1, 2
+
+#: A run whose energy balance is broken by more than this fraction of the energy put in
+#: (energy created by the integrator) is flagged unstable.
+UNSTABLE_ENERGY_FRACTION = 0.5
+#: A displacement beyond this [m] is a diverging run.
+DIVERGENCE_LIMIT_M = 1.0e3
+
+# Shared linear response before the first contact (``pre`` of the adaptive kernel): slots of
+# the run mode, the record interval reached, input and damping energy, steps and initial
+# energy, then ``q`` (n), ``v`` (n) and the floors' peaks (nf).  Mode 1: run linearly to the
+# first contact onset and leave the state at the start of that interval; mode 2: resume.
+PRE_MODE, PRE_INTERVAL, PRE_E_IN, PRE_E_D, PRE_STEPS, PRE_E0, PRE_STATE = range(7)
+PRE_RUN_TO_CONTACT, PRE_RESUME = 1, 2
+
+
+def pre_size(n_modes: int, n_floors: int) -> int:
+    """Length of a shared-state vector for ``n_modes`` modes and ``n_floors`` floors."""
+    return PRE_STATE + 2 * n_modes + n_floors
+
+
+@jit
+def reset_contacts(cout):
+    """Initial per-contact outputs: no force, no impact, no penetration yet, no impulse."""
+    for c in range(cout.shape[0]):
+        cout[c, C_PEAK_FORCE] = 0.0
+        cout[c, C_IMPACTS] = 0.0
+        cout[c, C_MAX_PENETRATION] = -np.inf
+        cout[c, C_IMPULSE] = 0.0
+
+
+@jit
+def snapshot(pre, i, e_in, e_d, steps, e0, q, v, peaks):
+    """Store the state of a run at the start of record interval ``i`` in ``pre``."""
+    n = q.size
+    pre[PRE_INTERVAL] = i
+    pre[PRE_E_IN] = e_in
+    pre[PRE_E_D] = e_d
+    pre[PRE_STEPS] = steps
+    pre[PRE_E0] = e0
+    for j in range(n):
+        pre[PRE_STATE + j] = q[j]
+        pre[PRE_STATE + n + j] = v[j]
+    for f in range(peaks.size):
+        pre[PRE_STATE + 2 * n + f] = peaks[f]
+
+
+@jit
+def fail(out, cout, status):
+    """Outputs of a run that could not start (NaN, no impact, no step) with ``status``."""
+    for k in range(out.size):
+        out[k] = np.nan
+    out[IMPACTS] = 0.0
+    out[STATUS] = status
+    out[STEPS] = 0.0
+    for c in range(cout.shape[0]):
+        for k in range(cout.shape[1]):
+            cout[c, k] = np.nan
+
+
+@jit
+def finish(out, cout, peaks, side, phase, q, v, omega, e0, e_in, e_d, w_c, stored, peak_f,
+           peak_t, steps, status):  # fmt: skip
+    """Fill the output vector at the end of a run: maxima, energy balance and status."""
+    nc = cout.shape[0]
+    e_mech = mechanical_energy(q, v, omega)
+    scale = abs(e_in) + e0
+    if scale <= 0.0:
+        scale = 1e-300
+    residual = (e0 + e_in - e_mech - e_d - w_c) / scale
+    pl = 0.0
+    pr = 0.0
+    for f in range(peaks.size):
+        if side[f] == 0:
+            pl = max(pl, peaks[f])
+        else:
+            pr = max(pr, peaks[f])
+        if peaks[f] > DIVERGENCE_LIMIT_M:
+            status = STATUS_UNSTABLE
+    if status == STATUS_OK and not math.isfinite(residual):
+        status = STATUS_UNSTABLE
+    if status == STATUS_OK and abs(residual) > UNSTABLE_ENERGY_FRACTION:
+        status = STATUS_UNSTABLE
+    impacts = 0.0
+    maxpen = -np.inf
+    impulse = 0.0
+    for c in range(nc):
+        impacts += cout[c, C_IMPACTS]
+        maxpen = max(maxpen, cout[c, C_MAX_PENETRATION])
+        impulse += cout[c, C_IMPULSE]
+    out[PEAK_FORCE] = peak_f
+    out[IMPACTS] = impacts
+    out[MAX_PENETRATION] = maxpen if impacts > 0 else 0.0
+    out[PEAK_DISP_LEFT] = pl
+    out[PEAK_DISP_RIGHT] = pr
+    out[IMPULSE] = impulse
+    out[DISSIPATED_ENERGY] = w_c - stored
+    out[ENERGY_RESIDUAL] = residual
+    out[STATUS] = status
+    out[INPUT_ENERGY] = e_in
+    out[STEPS] = steps
+    out[PEAK_FORCE_TIME] = peak_t
+    if status != STATUS_OK:
+        # unstable or not converged: no plain numbers that could be taken for results
+        for k in _NAN_WHEN_FAILED:
+            out[k] = np.nan
+        for c in range(nc):
+            cout[c, C_PEAK_FORCE] = np.nan
+            cout[c, C_MAX_PENETRATION] = np.nan
+            cout[c, C_IMPULSE] = np.nan
+    else:
+        for c in range(nc):
+            if cout[c, C_IMPACTS] == 0.0:
+                cout[c, C_MAX_PENETRATION] = 0.0

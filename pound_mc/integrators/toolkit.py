@@ -1,0 +1,354 @@
+"""Shared toolkit of the compiled integrators: exact linear steps, cubic Hermite screens.
+
+* :func:`advance` / :func:`coefficients`: the exact (Nigam-Jennings) step of one linear mode
+  under a load linear in time (Nigam & Jennings 1969; Chopra, Table 5.2.1);
+* :func:`hermite_max` / :func:`hermite_root`: the cubic Hermite interpolant of a quantity and
+  its rate over a step, its interior maximum and its first root (event screens);
+* :func:`exact_delta` / :func:`exact_root`: a penetration (or any row of modal weights) on the
+  exact linear solution inside a step, and its root by safeguarded Newton;
+* :func:`step_size`, the modal accelerations and powers, and the energy sums that the methods
+  share; :func:`solve_small` for the Newton systems of several contacts.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from pound_mc._jit import jit
+
+#: Most integration steps one simulation may take (record length / dt_s); beyond it the run is
+#: flagged not converged instead of running for hours.
+MAX_STEPS = 2.0e9
+
+
+@jit(inline=True)
+def step_size(dt_rec, dt_s):
+    """Steps per record interval and their length [s].
+
+    The step is the longest one no longer than ``dt_s`` that divides the record's interval.
+    """
+    m_sub = max(1, int(math.ceil(dt_rec / dt_s - 1e-9)))
+    return m_sub, dt_rec / m_sub
+
+
+@jit
+def advance(q, v, p0, p1, w, z, h):
+    """Exact state after ``h`` of ``q'' + 2 z w q' + w^2 q = p`` with ``p`` linear p0 -> p1.
+
+    Closed form (Nigam & Jennings 1969; Chopra, Table 5.2.1) for ``w h >= 0.05``, else a
+    Taylor series of the exact solution (the closed form cancels digits for short steps).
+    """
+    if h == 0.0:
+        return q, v
+    if w * h < 0.05:
+        slope = (p1 - p0) / h
+        d0 = q
+        d1 = v
+        qs = q + v * h
+        vs = v
+        tv = 1.0
+        for k in range(24):
+            pk = p0 if k == 0 else (slope if k == 1 else 0.0)
+            d2 = pk - 2.0 * z * w * d1 - w * w * d0  # d_{k+2}
+            tv = tv * h / (k + 1)  # h^(k+1) / (k+1)!
+            vs += d2 * tv
+            qs += d2 * tv * h / (k + 2)
+            d0 = d1
+            d1 = d2
+        return qs, vs
+    k = w * w
+    sq = math.sqrt(1.0 - z * z)
+    wd = w * sq
+    e = math.exp(-z * w * h)
+    s = math.sin(wd * h)
+    c = math.cos(wd * h)
+    a = e * (z / sq * s + c)
+    b = e * (s / wd)
+    cc = (
+        2.0 * z / (w * h)
+        + e * (((1.0 - 2.0 * z * z) / (wd * h) - z / sq) * s - (1.0 + 2.0 * z / (w * h)) * c)
+    ) / k
+    dd = (
+        1.0 - 2.0 * z / (w * h) + e * ((2.0 * z * z - 1.0) / (wd * h) * s + 2.0 * z / (w * h) * c)
+    ) / k
+    ap = -e * (w / sq * s)
+    bp = e * (c - z / sq * s)
+    cp = (-1.0 / h + e * ((w / sq + z / (h * sq)) * s + c / h)) / k
+    dp = (1.0 - e * (z / sq * s + c)) / (k * h)
+    return a * q + b * v + cc * p0 + dd * p1, ap * q + bp * v + cp * p0 + dp * p1
+
+
+def exact_step_coefficients(omega: float, zeta: float, h: float) -> np.ndarray:
+    """Coefficients ``[[A, B, C, D], [A', B', C', D']]`` of the exact linear step.
+
+    ``q1 = A q0 + B v0 + C p0 + D p1`` and ``v1 = A' q0 + B' v0 + C' p0 + D' p1`` for a unit
+    mass with circular frequency ``omega`` [rad/s], damping ratio ``zeta`` [-], load ``p``
+    linear over the step ``h`` [s] (Nigam & Jennings 1969).
+    """
+    return coefficients(float(omega), float(zeta), float(h))
+
+
+@jit
+def coefficients(w, z, h):
+    """Compiled :func:`exact_step_coefficients` (``w`` [rad/s], ``z`` [-], ``h`` [s])."""
+    out = np.empty((2, 4))
+    for col in range(4):
+        q0 = 1.0 if col == 0 else 0.0
+        v0 = 1.0 if col == 1 else 0.0
+        p0 = 1.0 if col == 2 else 0.0
+        p1 = 1.0 if col == 3 else 0.0
+        q1, v1 = advance(q0, v0, p0, p1, w, z, h)
+        out[0, col] = q1
+        out[1, col] = v1
+    return out
+
+
+@jit
+def hermite_max(y0, yp0, y1, yp1, h):
+    """Largest interior local maximum of the cubic Hermite interpolant on ``[0, h]``.
+
+    Returns ``(value, tau)``; ``(-inf, 0)`` when the cubic has no interior maximum.
+    """
+    b = h * yp0
+    c = 3.0 * (y1 - y0) - h * (2.0 * yp0 + yp1)
+    d = 2.0 * (y0 - y1) + h * (yp0 + yp1)
+    best = -np.inf
+    tbest = 0.0
+    # y'(s) = b + 2 c s + 3 d s^2
+    if abs(d) < 1e-300:
+        if c < 0.0:
+            s = -b / (2.0 * c)
+            if 0.0 < s < 1.0:
+                best = y0 + b * s + c * s * s
+                tbest = s * h
+        return best, tbest
+    disc = c * c - 3.0 * d * b
+    if disc < 0.0:
+        return best, tbest
+    r = math.sqrt(disc)
+    for sgn in (-1.0, 1.0):
+        s = (-c + sgn * r) / (3.0 * d)
+        if 0.0 < s < 1.0 and 2.0 * c + 6.0 * d * s < 0.0:
+            val = y0 + s * (b + s * (c + s * d))
+            if val > best:
+                best = val
+                tbest = s * h
+    return best, tbest
+
+
+@jit
+def hermite_root(y0, yp0, y1, yp1, h):
+    """First root in ``(0, h]`` of the cubic Hermite interpolant.
+
+    ``y0`` and ``y1`` have opposite signs (or ``y1 == 0``); bisection safeguarded Newton.
+    """
+    b = h * yp0
+    c = 3.0 * (y1 - y0) - h * (2.0 * yp0 + yp1)
+    d = 2.0 * (y0 - y1) + h * (yp0 + yp1)
+    lo = 0.0
+    hi = 1.0
+    flo = y0
+    s = 0.5
+    # a sign change inside may come earlier than the one the endpoints bracket: scan first
+    n_scan = 8
+    prev = y0
+    for k in range(1, n_scan + 1):
+        sk = k / n_scan
+        val = y0 + sk * (b + sk * (c + sk * d))
+        if (val >= 0.0) != (prev >= 0.0) or val == 0.0:
+            lo = (k - 1) / n_scan
+            hi = sk
+            flo = prev
+            break
+        prev = val
+    s = 0.5 * (lo + hi)
+    for _ in range(60):
+        f = y0 + s * (b + s * (c + s * d))
+        if (f >= 0.0) == (flo >= 0.0):
+            lo = s
+        else:
+            hi = s
+        fp = b + s * (2.0 * c + 3.0 * d * s)
+        s_new = s - f / fp if fp != 0.0 else 0.5 * (lo + hi)
+        if not (lo < s_new < hi):
+            s_new = 0.5 * (lo + hi)
+        if abs(s_new - s) < 1e-15:
+            s = s_new
+            break
+        s = s_new
+    return s * h
+
+
+@jit(inline=True)
+def rowdot(mat, r, x):
+    """Dot product of row ``r`` of ``mat`` with ``x``."""
+    acc = 0.0
+    for j in range(x.size):
+        acc += mat[r, j] * x[j]
+    return acc
+
+
+@jit(inline=True)
+def accel(q, v, ag, omega, zeta, gamma, psi, fc, a):
+    """Modal accelerations into ``a`` for ground acceleration ``ag`` and contact forces."""
+    n = q.size
+    for j in range(n):
+        a[j] = -2.0 * zeta[j] * omega[j] * v[j] - omega[j] * omega[j] * q[j] - gamma[j] * ag
+    for c in range(fc.size):
+        if fc[c] != 0.0:
+            for j in range(n):
+                a[j] -= fc[c] * psi[c, j]
+
+
+@jit(inline=True)
+def powers(v, ag, omega, zeta, gamma):
+    """Input power -a_g sum gamma v and structural damping power sum 2 zeta omega v^2."""
+    pin = 0.0
+    pd = 0.0
+    for j in range(v.size):
+        pin -= ag * gamma[j] * v[j]
+        pd += 2.0 * zeta[j] * omega[j] * v[j] * v[j]
+    return pin, pd
+
+
+@jit
+def track_floors(phi, side, q0, v0, q1, v1, h, peaks):
+    """Update the continuous-time peak |x| of every floor over a step (Hermite)."""
+    nf = phi.shape[0]
+    for f in range(nf):
+        x0 = rowdot(phi, f, q0)
+        x1 = rowdot(phi, f, q1)
+        m = abs(x1)
+        if m > peaks[f]:
+            peaks[f] = m
+        xd0 = rowdot(phi, f, v0)
+        xd1 = rowdot(phi, f, v1)
+        if (xd0 > 0.0) != (xd1 > 0.0):
+            hm, _ = hermite_max(x0, xd0, x1, xd1, h)
+            if hm > peaks[f]:
+                peaks[f] = hm
+            hm, _ = hermite_max(-x0, -xd0, -x1, -xd1, h)
+            if hm > peaks[f]:
+                peaks[f] = hm
+
+
+@jit
+def mechanical_energy(q, v, omega):
+    """Kinetic plus strain energy of the modes per unit modal mass [J]."""
+    e = 0.0
+    for j in range(q.size):
+        e += 0.5 * (v[j] * v[j] + omega[j] * omega[j] * q[j] * q[j])
+    return e
+
+
+@jit(inline=True)
+def end_values(q, v, ag, omega, zeta, gamma, en):
+    """Sums for the energy integrals at one state without contact force."""
+    sgv = 0.0
+    sga = 0.0
+    pd = 0.0
+    dpd = 0.0
+    for j in range(q.size):
+        a = -2.0 * zeta[j] * omega[j] * v[j] - omega[j] * omega[j] * q[j] - gamma[j] * ag
+        sgv += gamma[j] * v[j]
+        sga += gamma[j] * a
+        pd += 2.0 * zeta[j] * omega[j] * v[j] * v[j]
+        dpd += 4.0 * zeta[j] * omega[j] * v[j] * a
+    en[0] = sgv
+    en[1] = sga
+    en[2] = pd
+    en[3] = dpd
+
+
+@jit
+def refresh(q, v, ag, omega, zeta, gamma, phi, psi, gap, dc, ddc, xf, xfd, en):
+    """Values at the current state that linear steps carry from one step to the next."""
+    for c in range(gap.size):
+        dc[c] = rowdot(psi, c, q) - gap[c]
+        ddc[c] = rowdot(psi, c, v)
+    for f in range(phi.shape[0]):
+        xf[f] = rowdot(phi, f, q)
+        xfd[f] = rowdot(phi, f, v)
+    end_values(q, v, ag, omega, zeta, gamma, en)
+
+
+@jit
+def exact_delta(q, v, p0s, slope, s, tau, c, omega, zeta, gamma, psi, gap):
+    """Penetration of contact ``c``, its rate and acceleration at ``tau`` into a linear step.
+
+    Any row of modal weights works: ``psi = phi, gap = 0`` gives a floor's displacement.
+    """
+    d = -gap[c]
+    dd = 0.0
+    ddd = 0.0
+    ag = p0s + slope * tau
+    for j in range(q.size):
+        if psi[c, j] == 0.0:
+            continue  # e.g. the other building's modes for a floor
+        qm, vm = advance(q[j], v[j], -gamma[j] * p0s, -gamma[j] * ag, omega[j], zeta[j], tau)
+        am = -2.0 * zeta[j] * omega[j] * vm - omega[j] * omega[j] * qm - gamma[j] * ag
+        d += psi[c, j] * qm
+        dd += psi[c, j] * vm
+        ddd += psi[c, j] * am
+    return d, dd, ddd
+
+
+@jit
+def exact_root(q, v, p0s, slope, s, guess, lo, hi, which, c, omega, zeta, gamma, psi, gap):
+    """Root in ``[lo, hi]`` on the exact linear solution.
+
+    Of delta (``which = 0``, from below) or delta_dot (``which = 1``, from above);
+    Newton from ``guess``, kept in the bracket.
+    """
+    t = guess
+    if not (lo < t < hi):
+        t = 0.5 * (lo + hi)
+    for _ in range(60):
+        d, dd, ddd = exact_delta(q, v, p0s, slope, s, t, c, omega, zeta, gamma, psi, gap)
+        g = d if which == 0 else -dd
+        gp = dd if which == 0 else -ddd
+        if g > 0.0:
+            hi = t
+        else:
+            lo = t
+        t_new = t - g / gp if gp != 0.0 else 0.5 * (lo + hi)
+        if not (lo < t_new < hi):
+            t_new = 0.5 * (lo + hi)
+        if abs(t_new - t) <= 1e-15 * (hi + 1e-300) or hi - lo <= 1e-15 * hi:
+            t = t_new
+            break
+        t = t_new
+    return t
+
+
+@jit
+def solve_small(a, b, nc):
+    """Solve ``a x = b`` in place (Gauss elimination with partial pivoting); returns ok."""
+    for k in range(nc):
+        p = k
+        for r in range(k + 1, nc):
+            if abs(a[r, k]) > abs(a[p, k]):
+                p = r
+        if a[p, k] == 0.0:
+            return False
+        if p != k:
+            for col in range(nc):
+                tmp = a[k, col]
+                a[k, col] = a[p, col]
+                a[p, col] = tmp
+            tmp = b[k]
+            b[k] = b[p]
+            b[p] = tmp
+        for r in range(k + 1, nc):
+            f = a[r, k] / a[k, k]
+            for col in range(k, nc):
+                a[r, col] -= f * a[k, col]
+            b[r] -= f * b[k]
+    for k in range(nc - 1, -1, -1):
+        acc = b[k]
+        for col in range(k + 1, nc):
+            acc -= a[k, col] * b[col]
+        b[k] = acc / a[k, k]
+    return True
