@@ -9,10 +9,10 @@ with the kernels.  Scene: the SDOF pair of B1 (T = 0.5 s and 1.0 s, 5 %, 1e6 kg)
 import math
 
 import pytest
-from pound_mc.motions.records import record_arrays
 
 from pound_mc.errors import InputError
 from pound_mc.integrators.reference import reference_solution
+from pound_mc.motions import record_arrays
 from pound_mc.scene import scene_from_dict, simulate
 
 RECORD = {"source": "builtin:knet-akt013", "duration_s": 6.0, "pga_g": 0.5}

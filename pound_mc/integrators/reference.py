@@ -45,7 +45,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.optimize import minimize_scalar
 
-from pound_mc.motions.records import record_arrays
+from pound_mc.motions import record_arrays
 from pound_mc.physics.relations import HERTZDAMP_RELATIONS
 
 __all__ = ["reference_solution"]

@@ -20,7 +20,7 @@ from tqdm import tqdm
 
 from pound_mc.integrators import run_kernel
 from pound_mc.integrators.reference import reference_solution
-from pound_mc.motions.records import record_arrays
+from pound_mc.motions import record_arrays
 from pound_mc.scene import load_scene, simulate
 
 __all__ = ["SCENES", "LADDER", "benchmark", "reference_values"]
