@@ -36,7 +36,7 @@ from typing import Any
 import numpy as np
 
 from pound_mc.errors import InputError
-from pound_mc.motions import G, make_trace
+from pound_mc.motions.traces import G, make_trace
 
 __all__ = [
     "SUITES",
@@ -45,6 +45,7 @@ __all__ = [
     "is_glob",
     "parse_suite",
     "suite_catalogue",
+    "suite_component",
     "suite_records",
 ]
 
@@ -298,6 +299,25 @@ def suite_records(source: str) -> list[SuiteRecord]:
                 )
             )
     return entries
+
+
+def suite_component(source: str, component: str) -> SuiteRecord:
+    """One component of a suite, by its PEER NGA component name (``"NORTHR/MUL009"``).
+
+    Raises
+    ------
+    InputError
+        Unknown suite, or no component of that name in it.
+    """
+    entries = suite_records(source)
+    for entry in entries:
+        if entry.name == component:
+            return entry
+    raise InputError(
+        f"the suite {source!r} has no component {component!r}; its components are named as "
+        f"{entries[0].name!r} (`pound-mc records list` lists the suites)",
+        key="record.component",
+    )
 
 
 # --------------------------------------------------------------------------- globs
