@@ -9,8 +9,8 @@ A study is a scene (``[record]`` or ``[[records]]``, ``[left]``, ``[right]``, ``
     study, between 256 and 8192: :func:`pound_mc.study.runner.default_chunk_size`).
 ``[grid]``
     Axes of the spectra, keyed by the scene key they vary (``"left.period_s"``): a list of
-    numbers or ``{ start, stop, num }`` (evenly spaced, both ends included, rounded to
-    :data:`~pound_mc.study.schema.GRID_DIGITS` significant digits: :func:`grid_values`).
+    numbers or ``{ start, stop, num }`` (evenly spaced, both ends included, round-off snapped
+    to :data:`~pound_mc.study.schema.GRID_DIGITS` significant digits: :func:`grid_values`).
     Intensity axes ``"record.pga_g"`` or ``"record.sa_g"`` [g] (one per study) scale every
     record to each value: a multiple-stripe analysis (``record.sa_g`` at each record table's
     ``sa_period_s``); the factors are computed by the study engine.  One non-numeric
@@ -263,9 +263,11 @@ def grid_values(start: float, stop: float, num: int) -> np.ndarray:
     """``num`` evenly spaced values from ``start`` to ``stop``, rounded to the value meant.
 
     :func:`numpy.linspace` gives ``0.9999999999999999`` for the 10th of 20 values from 0.1 to
-    2.0; each value is rounded to :data:`~pound_mc.study.schema.GRID_DIGITS` (12) significant
-    digits (its shortest decimal form at that precision), so the grid holds 1.0 and a pair of
-    buildings with equal periods is really equal.
+    2.0.  A value within 8 units in the last place of its
+    :data:`~pound_mc.study.schema.GRID_DIGITS` (12) significant digit form is replaced by that
+    form, so the grid holds 1.0 and a pair of buildings with equal periods is really equal;
+    values that are not short decimals (0.32105263157894737 of 20 from 0.3 to 0.7) stay as
+    :func:`numpy.linspace` gives them.
 
     Parameters
     ----------
@@ -280,7 +282,9 @@ def grid_values(start: float, stop: float, num: int) -> np.ndarray:
         float64 values.
     """
     values = np.linspace(float(start), float(stop), int(num))
-    return np.array([float(f"{x:.{GRID_DIGITS}g}") for x in values], dtype=float)
+    short = np.array([float(f"{x:.{GRID_DIGITS}g}") for x in values], dtype=float)
+    near = np.abs(short - values) <= 8 * np.spacing(np.abs(values))
+    return np.where(near, short, values)
 
 
 def _material_axis(spec, file, errors) -> list[str] | None:

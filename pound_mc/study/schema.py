@@ -52,8 +52,9 @@ INTENSITY_KEYS = {
     "record.sa_g": "5 %-damped pseudo-spectral acceleration at `sa_period_s` (a key of every "
     "record table): each record is scaled so that Sa(sa_period_s) = value * g",
 }
-#: Significant digits ``{ start, stop, num }`` grid values are rounded to, so that the value
-#: meant (1.0, 0.3) is the value stored rather than ``np.linspace``'s 0.9999999999999999.
+#: Significant digits ``{ start, stop, num }`` grid values snap to (from within 8 units in the
+#: last place), so that the value meant (1.0) is the value stored rather than
+#: ``np.linspace``'s 0.9999999999999999.
 GRID_DIGITS = 12
 
 STUDY = Table(
@@ -72,8 +73,9 @@ STUDY = Table(
 GRID_AXIS = Table(
     "grid.KEY",
     "Axes of the spectra, keyed by the scene key they vary (`\"left.period_s\"`): a list of "
-    "distinct numbers, or `{ start, stop, num }` (evenly spaced, both ends included, each "
-    f"value rounded to {GRID_DIGITS} significant digits so that 1.0 is exactly 1.0).  One "
+    "distinct numbers, or `{ start, stop, num }` (evenly spaced, both ends included; a value "
+    f"within 8 units in the last place of a {GRID_DIGITS}-significant-digit number is that "
+    "number, so that 1.0 is exactly 1.0).  One "
     f"non-numeric axis: `\"{MATERIAL_KEY}\" = [\"steel\", \"concrete\", ...]` (names of "
     "`pound_mc.physics.materials.MATERIALS`).  With a shear building only `contact.*` keys "
     "and `integrator.dt_s` may vary.  Intensity axes `record.pga_g` and `record.sa_g` [g] scale "
