@@ -118,8 +118,6 @@ def response_spectrum(dt: float, acc, periods, damping: float = 0.05) -> np.ndar
     if acc.ndim != 1 or acc.size == 0 or not np.all(np.isfinite(acc)):
         raise InputError("acceleration must be a non-empty 1-D array of finite values", key="acc")
     m = sdof_transition(dt, periods, damping)
-    a_uu, a_uv, a_ua, a_us = m[:, 0, 0], m[:, 0, 1], m[:, 0, 2], m[:, 0, 3]
-    a_vu, a_vv, a_va, a_vs = m[:, 1, 0], m[:, 1, 1], m[:, 1, 2], m[:, 1, 3]
     slopes = np.diff(acc) / dt
     peak = _peak_displacements(np.ascontiguousarray(m[:, :2, :]), acc, slopes)
     omega = 2.0 * np.pi / periods
