@@ -165,7 +165,7 @@ def required_gap_chart(
         first = False
     ax.legend(fontsize=7, loc="upper right")
     ax.set_title(
-        ax.get_title() + f"; diamonds: smallest gap with P <= {probability:g} (bars: Wilson "
+        ax.get_title() + f"\ndiamonds: smallest gap with P <= {probability:g} (bars: Wilson "
         "interval)",
         fontsize=8,
     )
