@@ -19,6 +19,8 @@ import numpy as np
 from pound_mc.analysis import (
     accessor,  # noqa: F401  (registers ds.pound)
     plot,
+    risk,
+    risk_chart,
 )
 from pound_mc.errors import InputError
 
