@@ -23,7 +23,8 @@ A study is a scene (``[record]`` or ``[[records]]``, ``[left]``, ``[right]``, ``
 ``[[records]]``
     One record per table; a table whose ``source`` is a suite (``"suite:fema-p695-farfield"``)
     or a glob (``"records/*.AT2"``, relative to the study file) stands for one record per
-    component or file (sorted), each with the table's other keys (:func:`expand_records`).
+    component or file (sorted), each with the table's other keys
+    (:func:`pound_mc.study.records.expand_records`).
     Validation counts a suite's components from its metadata and a glob's files; the records
     themselves are read by the engine.
 ``[sampling]``
@@ -55,10 +56,10 @@ from pathlib import Path
 import numpy as np
 
 from pound_mc.errors import InputError, InputErrors
-from pound_mc.motions import suites
 from pound_mc.physics import materials
 from pound_mc.scene import scene_from_dict
 from pound_mc.scene.schema import check_table
+from pound_mc.study import records as records_mod
 from pound_mc.study import sampling
 from pound_mc.study.schema import (
     GRID_AXIS,
@@ -358,83 +359,11 @@ def _records(data: dict, file, errors: list) -> tuple[list[dict], list[str], lis
         if not tables:
             errors.append(InputError("must be one or more [[records]] tables", file=file,
                                      key="records"))  # fmt: skip
-        return expand_records(tables, file, errors)
+        return records_mod.expand_records(tables, file, errors)
     if "record" in data:
         return [data["record"]], [""], [{}]
     errors.append(InputError("missing table [record] (or [[records]])", file=file, key="record"))
     return [], [], []
-
-
-def _suite_meta(entry) -> dict:
-    """What the dataset keeps of a suite's component (a ``SuiteRecord``)."""
-    return {
-        "event": entry.event,
-        "station": entry.station,
-        "suite": entry.suite,
-        "rsn": entry.rsn,
-        "year": entry.year,
-        "magnitude": entry.magnitude,
-    }
-
-
-def expand_records(tables: list[dict], file, errors: list) -> tuple[list, list, list]:
-    """Expand ``[[records]]`` tables: a suite or a glob becomes one table per component/file.
-
-    Parameters
-    ----------
-    tables : list of dict
-        The ``[[records]]`` tables as read.
-    file : str or None
-        The study file (globs are relative to its folder; messages name it).
-    errors : list
-        Problems found are appended (a suite that does not exist, a glob that matches nothing).
-
-    Returns
-    -------
-    records : list of dict
-        One table per record: a suite component keeps the table's keys with ``source`` the
-        suite, ``component`` and ``name`` the component's PEER NGA name; a glob's file keeps
-        them with ``source`` the file's path (relative to the study file when the pattern is).
-    prefixes : list of str
-        Key prefix of each record's messages: its table's (``"records[0]."``).
-    meta : list of dict
-        Per record the suite's ``event``, ``station``, ``suite``, ``rsn``, ``year`` and
-        ``magnitude``; ``pattern`` for a glob's file; empty for other records.
-    """
-    base_dir = None if file is None else Path(file).parent
-    records, prefixes, meta = [], [], []
-    for i, table in enumerate(tables):
-        prefix = f"records[{i}]."
-        source = table.get("source")
-        if not isinstance(source, str):
-            records.append(table), prefixes.append(prefix), meta.append({})
-            continue  # check_table reports it
-        try:
-            if source.strip().lower().startswith(suites.SUITE_PREFIX):
-                entries = suites.suite_records(source)
-                if "component" in table:
-                    entries = [suites.suite_component(source, str(table["component"]))]
-                for entry in entries:
-                    name = table.get("name") if "component" in table else None
-                    records.append({**table, "component": entry.name, "name": name or entry.name})
-                    prefixes.append(prefix)
-                    meta.append(_suite_meta(entry))
-            elif suites.is_glob(source):
-                pattern_is_relative = not Path(source).expanduser().is_absolute()
-                for path in suites.expand_glob(source, base_dir):
-                    text = str(path)
-                    if pattern_is_relative and base_dir is not None:
-                        text = Path(path).relative_to(base_dir).as_posix()
-                    records.append({**{k: v for k, v in table.items() if k != "name"},
-                                    "source": text})  # fmt: skip
-                    prefixes.append(prefix)
-                    meta.append({"pattern": source})
-            else:
-                records.append(table), prefixes.append(prefix), meta.append({})
-        except InputError as exc:
-            key = prefix + (exc.key or "record.source").split(".", 1)[-1]
-            errors.append(InputError(exc.message, file=file, key=key))
-    return records, prefixes, meta
 
 
 def _grid(spec: dict, file, errors: list) -> tuple[dict, dict]:
@@ -625,29 +554,6 @@ def _probe(study: Study, prefixes: list[str], file, errors: list) -> None:
                 errors.append(InputError(f"value {value:g}: {err.message}", file=file, key=where))
 
 
-def _intensity(study: Study, prefixes: list[str], file, errors: list) -> None:
-    """An intensity axis scales every record: no record's own ``pga_g``; Sa needs a period."""
-    key = study.intensity_key
-    for i, record in enumerate(study.records):
-        where = prefixes[i] or "record."
-        if key is not None and "pga_g" in record:
-            errors.append(
-                InputError(
-                    f"the grid axis {key!r} scales every record: drop the record's own pga_g",
-                    file=file,
-                    key=where + "pga_g",
-                )
-            )
-        if key == "record.sa_g" and "sa_period_s" not in record:
-            errors.append(
-                InputError(
-                    "the grid axis 'record.sa_g' needs the period of Sa: sa_period_s [s]",
-                    file=file,
-                    key=where + "sa_period_s",
-                )
-            )
-
-
 def _record_names(records: list[dict]) -> list[str]:
     names: list[str] = []
     for i, record in enumerate(records):
@@ -709,7 +615,7 @@ def study_from_text(text: str, *, file: str | Path | None = None) -> Study:
         material_variables=material_variables,
         record_meta=meta if any(meta) else [],
     )
-    _intensity(study, prefixes, fname, errors)
+    records_mod.check_intensity(study, prefixes, fname, errors)
     _probe(study, prefixes, fname, errors)
     if errors:
         raise InputErrors(errors)
