@@ -8,6 +8,8 @@ Registered on ``import pound_mc``::
     ds = xr.open_dataset("outputs/quickstart.nc")
     ds.pound.spectrum(contact_gap_m=0.01)      # quantiles of peak force over samples [N]
     ds.pound.probability()                     # fraction of samples with an impact [-]
+    ds.pound.fragility(im="sa_g")              # lognormal fragility per other grid axis
+    ds.pound.required_gap(probability=0.1)     # gap for a target probability, and the rules
     ds.pound.plot.spectrum()                   # matplotlib Figures
     ds.pound.plot.history(left_period_s=0.5, contact_gap_m=0.01, sample=3)
 
@@ -28,6 +30,9 @@ from pound_mc.analysis.plot import (
     spectrum_chart,
 )
 from pound_mc.analysis.plot_numerics import time_history_chart
+from pound_mc.analysis.risk import fragility as _fragility
+from pound_mc.analysis.risk import required_gap as _required_gap
+from pound_mc.analysis.risk_chart import fragility_panels, required_gap_chart
 from pound_mc.errors import InputError
 from pound_mc.scene import simulate as simulate_scene
 from pound_mc.study.definition import grid_dim_name, study_from_text
@@ -87,7 +92,8 @@ def scene_at(ds: xr.Dataset, *, record=0, sample=0, study_path=None, **coords):
     -------
     scene : pound_mc.scene.Scene
     record_arrays : tuple
-        ``(dt_s, acceleration)`` of the record, as the study engine ran it.
+        ``(dt_s, acceleration)`` of the record, as the study engine ran it (scaled to the
+        simulation's intensity where the study has an intensity axis).
     index : dict
         The integer position of the simulation along every dimension of ``peak_force``.
     """
@@ -110,7 +116,7 @@ def scene_at(ds: xr.Dataset, *, record=0, sample=0, study_path=None, **coords):
     index["sample"] = int(sample)
     engine = StudyEngine(study)
     flat = int(np.ravel_multi_index(tuple(index.values()), study.shape))
-    return engine.scene_of(flat), engine.records[int(r)], index
+    return engine.scene_of(flat), engine.record_of(flat), index
 
 
 class PoundPlot:
@@ -126,6 +132,14 @@ class PoundPlot:
     def probability(self, path=None, **kwargs):
         """Pounding probability against gap (:func:`pound_mc.analysis.plot.probability_chart`)."""
         return probability_chart(self._ds, path, **kwargs)
+
+    def fragility(self, path=None, **kwargs):
+        """Fragility panels (:func:`pound_mc.analysis.risk_chart.fragility_panels`)."""
+        return fragility_panels(self._ds, path, **kwargs)
+
+    def required_gap(self, path=None, **kwargs):
+        """Probability against gap with the required gap marked (``required_gap_chart``)."""
+        return required_gap_chart(self._ds, path, **kwargs)
 
     def distribution(self, path=None, **kwargs):
         """Peak force distribution (:func:`pound_mc.analysis.plot.distribution_chart`)."""
@@ -232,6 +246,22 @@ class PoundAccessor:
         more = "" if threshold is None else f" and a peak force above {threshold:g} N"
         p.attrs = {"units": "1", "long_name": f"fraction of samples with an impact{more}"}
         return p.rename("pounding_probability")
+
+    def fragility(self, im=None, event="pounding", **kwargs) -> xr.Dataset:
+        """Lognormal fragility per combination of the other grid axes.
+
+        See :func:`pound_mc.analysis.risk.fragility`: ``theta``, ``beta``, ``theta_ci``,
+        ``beta_ci`` along the remaining axes (``event``: ``"pounding"``, ``"peak_force>N"``,
+        ``"ductility>X"``).
+        """
+        return _fragility(self._ds, im, event, **kwargs)
+
+    def required_gap(self, probability: float = 0.1, **kwargs) -> xr.Dataset:
+        """Smallest gap with pounding probability at or below ``probability``, with the rules.
+
+        See :func:`pound_mc.analysis.risk.required_gap`.
+        """
+        return _required_gap(self._ds, probability, **kwargs)
 
     def status_counts(self) -> dict[str, int]:
         """Number of simulations per status (``ok``, ``unstable``, ``not_converged``)."""

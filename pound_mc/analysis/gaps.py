@@ -45,7 +45,8 @@ def study_gaps(study_or_dataset, *, base_dir=None, substeps: int = 8):
 
     The periods and damping ratios of each simulation (fixed, grid axes or sampled) are those
     the study runs; each record's linear peak displacements are computed once per distinct
-    period and damping ratio.
+    period and damping ratio (and, with an intensity axis, scaled by the record's factor: the
+    linear peaks are proportional to the record).
 
     Parameters
     ----------
@@ -84,6 +85,11 @@ def study_gaps(study_or_dataset, *, base_dir=None, substeps: int = 8):
     u2 = _linear_peaks(
         engine.records, p["record"], p["right.period_s"], p["right.damping_ratio"], substeps
     )
+    if engine.scale_factors is not None:  # linear peaks scale with the record
+        idx = np.unravel_index(np.arange(study.n_simulations), study.shape)
+        factor = engine.scale_factors[p["record"], idx[list(study.grid).index(
+            engine.intensity_key) + 1]]  # fmt: skip
+        u1, u2 = u1 * factor, u2 * factor
     rho = cqc_correlation(
         p["left.period_s"], p["right.period_s"], p["left.damping_ratio"], p["right.damping_ratio"]
     )

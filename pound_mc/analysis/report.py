@@ -19,6 +19,8 @@ import numpy as np
 from pound_mc.analysis import (
     accessor,  # noqa: F401  (registers ds.pound)
     plot,
+    risk,
+    risk_chart,
 )
 from pound_mc.errors import InputError
 
@@ -147,6 +149,28 @@ def report_html(ds, *, base_dir=None, history: bool = True) -> str:
                 "Pounding probability: the fraction of samples with at least one impact against "
                 "the initial gap; vertical lines mark the gaps the ABS, SRSS and DDC separation "
                 "rules ask for.",
+            )
+        )
+    intensity = [d for d in risk.INTENSITY_DIMS if d in ds.dims]
+    if intensity and plot.GAP_DIM in ds.dims and ds.sizes[plot.GAP_DIM] > 1:
+        fig = risk_chart.required_gap_chart(ds, base_dir=base_dir)
+        figures.append(
+            _figure_html(
+                "required-gap",
+                fig,
+                "Required gap: pounding probability over records and samples against the gap, "
+                "one line per intensity, the ABS, SRSS and DDC rules, and the smallest gap with "
+                "probability at or below 0.1 (diamonds, Wilson 95 % interval).",
+            )
+        )
+    if intensity:
+        fig = risk_chart.fragility_panels(ds)
+        figures.append(
+            _figure_html(
+                "fragility",
+                fig,
+                "Fragility: fraction of the simulations that pounded at each intensity (points), "
+                "the lognormal fit by maximum likelihood and its 95 % bootstrap band.",
             )
         )
     if int(((ds["impacts"] > 0) & ds.pound.ok).sum()):

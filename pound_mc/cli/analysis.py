@@ -1,4 +1,4 @@
-"""Sub-commands that look at results: ``plot`` and ``report``.
+"""Sub-commands that look at results: ``plot``, ``report`` and ``fragility``.
 
 Their arguments are declared in :mod:`pound_mc.cli.commands` (``pound-mc plot --help`` lists
 what ``FILE`` is for each chart kind); :func:`draw` is ``pound-mc plot`` as a function.
@@ -6,13 +6,17 @@ what ``FILE`` is for each chart kind); :func:`draw` is ``pound-mc plot`` as a fu
 
 from __future__ import annotations
 
+import json
+import math
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 import xarray as xr
 
-from pound_mc.analysis import plot, plot_numerics
+from pound_mc.analysis import plot, plot_numerics, risk_chart
 from pound_mc.analysis.report import write_report
+from pound_mc.analysis.risk import fragility
 from pound_mc.errors import InputError
 from pound_mc.scene import load_scene, simulate
 
@@ -101,6 +105,19 @@ def draw(path: str | Path, kind: str, *, out=None, sel=None, record=None, sample
             return ds.pound.plot.history(
                 out, record=0 if record is None else record, sample=sample, **sel
             )
+        if kind == "fragility":
+            return risk_chart.fragility_panels(
+                ds, out, im=kwargs.get("im"), event=kwargs.get("event") or "pounding", sel=sel
+            )
+        if kind == "required-gap":
+            return risk_chart.required_gap_chart(
+                ds,
+                out,
+                probability=kwargs.get("probability") or 0.1,
+                line=kwargs.get("line"),
+                sel=sel,
+                base_dir=path.parent,
+            )
     raise ValueError(f"unknown kind {kind!r}")  # pragma: no cover - argparse checks it
 
 
@@ -127,7 +144,12 @@ def plot_command(args) -> int:
             sample=args.sample,
             line=args.line,
             by=args.by,
+            im=args.im,
+            event=args.event,
+            probability=args.probability,
         )
+    except InputError as exc:
+        raise InputError(exc.message, file=args.file, key=exc.key) from None
     except (ValueError, KeyError, IndexError) as exc:
         raise InputError(str(exc).strip("'\""), file=args.file) from None
     print(f"wrote {out}")
@@ -143,4 +165,62 @@ def report_command(args) -> int:
         ds.load()
         write_report(ds, out, base_dir=path.parent)
     print(f"wrote {out}")
+    return 0
+
+
+def _jsonable(value):
+    """Floats, with NaN and infinities as None (JSON has neither)."""
+    array = np.asarray(value, dtype=float)
+    out = np.where(np.isfinite(array), array, np.nan).tolist()
+    if isinstance(out, float):
+        return None if math.isnan(out) else out
+    return json.loads(json.dumps(out).replace("NaN", "null"))
+
+
+def fragility_command(args) -> int:
+    """``pound-mc fragility``: lognormal fragility per combination of the other grid axes."""
+    path = Path(args.file)
+    if args.n_boot < 0:
+        raise InputError(f"must be >= 0, got {args.n_boot}", key="--n-boot")
+    ds = _open_dataset(path)
+    with ds:
+        ds.load()
+        if "peak_force" not in ds:
+            raise InputError("is not a pound-mc study dataset (no peak_force)", file=str(path))
+        try:
+            fit = fragility(ds, args.im, args.event, n_boot=args.n_boot)
+        except InputError as exc:
+            raise InputError(exc.message, file=str(path), key=exc.key) from None
+    rest = list(fit["theta"].dims)
+    out = {
+        "im": fit.attrs["im"],
+        "event": fit.attrs["event"],
+        "dims": rest,
+        "coords": {d: np.asarray(fit[d].values).tolist() for d in rest},
+        "theta": _jsonable(fit["theta"].values),
+        "beta": _jsonable(fit["beta"].values),
+        "theta_ci": _jsonable(fit["theta_ci"].values),
+        "beta_ci": _jsonable(fit["beta_ci"].values),
+        "ci": fit.attrs["ci"],
+        "message": np.asarray(fit["fit_message"].values, dtype=object).tolist(),
+    }
+    if args.json:
+        print(json.dumps(out, indent=1))
+        return 0
+    print(f"fragility of {out['event']} against {out['im']} ({path.name}); "
+          f"{round(100 * fit.attrs['ci'])} % bootstrap intervals")  # fmt: skip
+    flat_theta = np.atleast_1d(fit["theta"].values).ravel()
+    flat_beta = np.atleast_1d(fit["beta"].values).ravel()
+    tci = fit["theta_ci"].values.reshape(-1, 2)
+    bci = fit["beta_ci"].values.reshape(-1, 2)
+    msgs = np.atleast_1d(np.asarray(fit["fit_message"].values, dtype=object)).ravel()
+    grids = np.meshgrid(*(fit[d].values for d in rest), indexing="ij") if rest else []
+    for k in range(flat_theta.size):
+        where = ", ".join(f"{d} = {g.ravel()[k]:g}" for d, g in zip(rest, grids, strict=True))
+        head = f"  {where or 'all'}: "
+        if msgs[k]:
+            print(head + f"no fit ({msgs[k]})")
+        else:
+            print(head + f"theta = {flat_theta[k]:.4g} [{tci[k, 0]:.4g}, {tci[k, 1]:.4g}], "
+                  f"beta = {flat_beta[k]:.3g} [{bci[k, 0]:.3g}, {bci[k, 1]:.3g}]")  # fmt: skip
     return 0

@@ -28,6 +28,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "check": ("pound_mc.cli.study", "check_command"),
     "plot": ("pound_mc.cli.analysis", "plot_command"),
     "report": ("pound_mc.cli.analysis", "report_command"),
+    "fragility": ("pound_mc.cli.analysis", "fragility_command"),
 }
 
 #: Chart kinds of ``pound-mc plot``.
@@ -39,6 +40,8 @@ KINDS = (
     "work-precision",
     "stability",
     "history",
+    "fragility",
+    "required-gap",
 )
 
 PLOT_DESCRIPTION = """\
@@ -55,6 +58,8 @@ kind                file
 ``stability``       ``pound-mc stability``'s CSV (``outputs/stability.csv``)
 ``history``         a scene file (``.toml``), or a study dataset with ``--sel``/``--sample``:
                     that simulation is rebuilt from the dataset's study text and run again
+``fragility``       a study dataset with an intensity axis (or ``--im DIM``); ``--event``
+``required-gap``    a study dataset with the gap on its grid; ``--probability``
 ==================  ======================================================================
 """
 
@@ -109,7 +114,7 @@ def _records(sub: argparse._SubParsersAction) -> None:
     actions = p.add_subparsers(dest="records_command", metavar="ACTION")
     actions.required = True
 
-    q = actions.add_parser("list", help="the built-in records (builtin:NAME)")
+    q = actions.add_parser("list", help="the built-in records (builtin:NAME) and record suites")
     q.add_argument("--json", action="store_true", help="print the catalogue as JSON")
     q.set_defaults(handler="records list")
 
@@ -209,7 +214,26 @@ def _analysis(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--sample", type=int, default=0, metavar="N", help="sample (history; 0)")
     p.add_argument("--line", metavar="DIM", help="dimension drawn as one line per value")
     p.add_argument("--by", metavar="DIM", help="dimension of the distribution chart's groups")
+    p.add_argument(
+        "--im", metavar="DIM", help="intensity dimension (fragility; default sa_g/pga_g)"
+    )
+    p.add_argument("--event", default="pounding", help="fragility event (default pounding)")
+    p.add_argument(
+        "--probability", type=float, default=0.1, help="target probability (required-gap; 0.1)"
+    )
     p.set_defaults(handler="plot")
+
+    p = sub.add_parser("fragility", help="fit lognormal fragility curves to a study dataset")
+    p.add_argument("file", metavar="RESULT.nc")
+    p.add_argument("--im", metavar="NAME", help="intensity dimension (default sa_g or pga_g)")
+    p.add_argument(
+        "--event",
+        default="pounding",
+        help="pounding (default), peak_force>N (newtons) or ductility>X",
+    )
+    p.add_argument("--n-boot", type=int, default=1000, metavar="N", help="bootstrap replicates")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(handler="fragility")
 
     p = sub.add_parser("report", help="write a self-contained HTML results page of a study")
     p.add_argument("file", metavar="RESULT.nc")

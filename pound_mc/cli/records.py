@@ -20,15 +20,17 @@ from pound_mc.motions import (
     load_record,
     record_arrays,
     record_info,
+    suites,
 )
 from pound_mc.physics.spectra import response_spectrum
 
 
 def list_command(args) -> int:
-    """``pound-mc records list``: the built-in records."""
+    """``pound-mc records list``: the built-in records and the record suites."""
     catalogue = builtin_catalogue()
+    suite_table = suites.suite_catalogue()
     if args.json:
-        print(json.dumps(catalogue, indent=1))
+        print(json.dumps({**catalogue, **suite_table}, indent=1))
         return 0
     columns = ("name", "event", "station", "component", "format", "source_package")
     rows = [
@@ -40,6 +42,10 @@ def list_command(args) -> int:
     print("  ".join("-" * widths[c] for c in columns))
     for row in rows:
         print("  ".join(row[c].ljust(widths[c]) for c in columns).rstrip())
+    print()
+    print("record suites ([[records]] source = NAME: one record per component):")
+    for name, entry in suite_table.items():
+        print(f"  {name}  ({entry['package']} package): {entry['description']}")
     return 0
 
 

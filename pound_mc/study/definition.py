@@ -9,13 +9,24 @@ A study is a scene (``[record]`` or ``[[records]]``, ``[left]``, ``[right]``, ``
     study, between 256 and 8192: :func:`pound_mc.study.runner.default_chunk_size`).
 ``[grid]``
     Axes of the spectra, keyed by the scene key they vary (``"left.period_s"``): a list of
-    numbers or ``{ start, stop, num }`` (evenly spaced, both ends included).  One non-numeric
+    numbers or ``{ start, stop, num }`` (evenly spaced, both ends included, round-off snapped
+    to :data:`~pound_mc.study.schema.GRID_DIGITS` significant digits: :func:`grid_values`).
+    Intensity axes ``"record.pga_g"`` or ``"record.sa_g"`` [g] (one per study) scale every
+    record to each value: a multiple-stripe analysis (``record.sa_g`` at each record table's
+    ``sa_period_s``); the factors are computed by the study engine.  One non-numeric
     axis: ``"contact.material" = ["steel", "concrete", ...]`` (names of
     :data:`pound_mc.physics.materials.MATERIALS`); ``[sampling.vary]`` entries
     ``{ material = "grid" }`` for ``contact.e`` and ``contact.beta`` then take each grid
     point's material's ranges (the same design points for every material: common random
     numbers).  The axis's values are the materials' indices in ``MATERIALS`` (0 steel,
     1 concrete, 2 timber, 3 ceramics); their names are in ``Study.grid_labels``.
+``[[records]]``
+    One record per table; a table whose ``source`` is a suite (``"suite:fema-p695-farfield"``)
+    or a glob (``"records/*.AT2"``, relative to the study file) stands for one record per
+    component or file (sorted), each with the table's other keys
+    (:func:`pound_mc.study.records.expand_records`).
+    Validation counts a suite's components from its metadata and a glob's files; the records
+    themselves are read by the engine.
 ``[sampling]``
     ``n`` samples per grid point and record, ``method`` (``random`` | ``lhs`` | ``sobol``,
     default ``sobol``), optional ``seed`` (default: the study's), and ``[sampling.vary]``
@@ -48,9 +59,12 @@ from pound_mc.errors import InputError, InputErrors
 from pound_mc.physics import materials
 from pound_mc.scene import scene_from_dict
 from pound_mc.scene.schema import check_table
+from pound_mc.study import records as records_mod
 from pound_mc.study import sampling
 from pound_mc.study.schema import (
     GRID_AXIS,
+    GRID_DIGITS,
+    INTENSITY_KEYS,
     MATERIAL_KEY,
     MAX_SAMPLES,
     NUMERIC_SCENE_KEYS,
@@ -66,7 +80,9 @@ __all__ = [
     "NUMERIC_SCENE_KEYS",
     "MATERIAL_KEY",
     "MAX_SAMPLES",
+    "INTENSITY_KEYS",
     "grid_dim_name",
+    "grid_values",
 ]
 
 # Keys that replace each other: varying e drops a fixed xi from the scene and vice versa.
@@ -76,7 +92,13 @@ _SCENE_TABLES = ("left", "right", "contact", "integrator")
 
 
 def grid_dim_name(key: str) -> str:
-    """Dataset dimension name of a scene key (``"left.period_s"`` -> ``"left_period_s"``)."""
+    """Dataset dimension name of a grid key (``"left.period_s"`` -> ``"left_period_s"``).
+
+    The intensity axes are ``pga_g`` and ``sa_g`` (``record_pga_g`` and ``record_sa_g`` are
+    the records' own, unscaled intensities).
+    """
+    if key in INTENSITY_KEYS:
+        return key.split(".", 1)[1]
     return key.replace(".", "_")
 
 
@@ -106,6 +128,14 @@ class Study:
     #: Sampled keys that follow the material axis: ``{key: [variable per material]}`` (the
     #: variable in ``variables`` is the first material's, standing for all of them).
     material_variables: dict[str, list] = field(default_factory=dict)
+    #: Per record, what a suite tells of it (``event``, ``station``, ...; empty dicts for other
+    #: records); non-empty only when a table was expanded (a suite or a glob).
+    record_meta: list[dict] = field(default_factory=list)
+
+    @property
+    def intensity_key(self) -> str | None:
+        """The intensity grid axis (``"record.pga_g"`` or ``"record.sa_g"``), if any."""
+        return next((k for k in self.grid if k in INTENSITY_KEYS), None)
 
     @property
     def shape(self) -> tuple[int, ...]:
@@ -227,7 +257,35 @@ def _grid_axis(key, spec, file, errors) -> np.ndarray | None:
     if v["num"] > 1 and v["start"] == v["stop"]:
         errors.append(InputError("start and stop must differ", file=file, key=where))
         return None
-    return np.linspace(float(v["start"]), float(v["stop"]), v["num"])
+    return grid_values(v["start"], v["stop"], v["num"])
+
+
+def grid_values(start: float, stop: float, num: int) -> np.ndarray:
+    """``num`` evenly spaced values from ``start`` to ``stop``, rounded to the value meant.
+
+    :func:`numpy.linspace` gives ``0.9999999999999999`` for the 10th of 20 values from 0.1 to
+    2.0.  A value within 8 units in the last place of its
+    :data:`~pound_mc.study.schema.GRID_DIGITS` (12) significant digit form is replaced by that
+    form, so the grid holds 1.0 and a pair of buildings with equal periods is really equal;
+    values that are not short decimals (0.32105263157894737 of 20 from 0.3 to 0.7) stay as
+    :func:`numpy.linspace` gives them.
+
+    Parameters
+    ----------
+    start, stop : float
+        First and last value (as the key).
+    num : int
+        Number of values, >= 1.
+
+    Returns
+    -------
+    numpy.ndarray
+        float64 values.
+    """
+    values = np.linspace(float(start), float(stop), int(num))
+    short = np.array([float(f"{x:.{GRID_DIGITS}g}") for x in values], dtype=float)
+    near = np.abs(short - values) <= 8 * np.spacing(np.abs(values))
+    return np.where(near, short, values)
 
 
 def _material_axis(spec, file, errors) -> list[str] | None:
@@ -290,22 +348,22 @@ def _head(data: dict, file, errors: list) -> dict:
     return {"name": "study", "seed": 0} | v
 
 
-def _records(data: dict, file, errors: list) -> tuple[list[dict], list[str]]:
-    """The record tables and the key prefix each one's messages take."""
+def _records(data: dict, file, errors: list) -> tuple[list[dict], list[str], list[dict]]:
+    """The record tables (suites and globs expanded), their keys' prefixes and metadata."""
     if "record" in data and "records" in data:
         errors.append(
             InputError("give either [record] or [[records]], not both", file=file, key="records")
         )
     if "records" in data:
-        records = data["records"]
-        if not records:
+        tables = data["records"]
+        if not tables:
             errors.append(InputError("must be one or more [[records]] tables", file=file,
                                      key="records"))  # fmt: skip
-        return records, [f"records[{i}]." for i in range(len(records))]
+        return records_mod.expand_records(tables, file, errors)
     if "record" in data:
-        return [data["record"]], [""]
+        return [data["record"]], [""], [{}]
     errors.append(InputError("missing table [record] (or [[records]])", file=file, key="record"))
-    return [], []
+    return [], [], []
 
 
 def _grid(spec: dict, file, errors: list) -> tuple[dict, dict]:
@@ -318,18 +376,28 @@ def _grid(spec: dict, file, errors: list) -> tuple[dict, dict]:
             if names is not None:
                 labels[key] = names
                 grid[key] = np.array([materials.MATERIALS.index(m) for m in names], dtype=float)
-        elif key not in NUMERIC_SCENE_KEYS:
+        elif key not in NUMERIC_SCENE_KEYS and key not in INTENSITY_KEYS:
             errors.append(
                 InputError(
-                    f"not a numeric scene key; a grid axis is one of {sorted(NUMERIC_SCENE_KEYS)}",
+                    "not a numeric scene key; a grid axis is one of "
+                    f"{sorted([*NUMERIC_SCENE_KEYS, *INTENSITY_KEYS])}",
                     file=file,
                     key=f"grid.{key}",
                 )
             )
         else:
             values = _grid_axis(key, axis, file, errors)
-            if values is not None:
+            if values is not None and key in INTENSITY_KEYS and not np.all(values > 0):
+                errors.append(InputError("intensities must be > 0 [g]", file=file,
+                                         key=f"grid.{key}"))  # fmt: skip
+            elif values is not None:
                 grid[key] = values
+    both = [k for k in INTENSITY_KEYS if k in spec]
+    if len(both) > 1:
+        errors.append(
+            InputError("give one intensity axis, record.pga_g or record.sa_g", file=file,
+                       key=f"grid.{both[1]}")
+        )  # fmt: skip
     return grid, labels
 
 
@@ -453,6 +521,7 @@ def _probe(study: Study, prefixes: list[str], file, errors: list) -> None:
     first = {
         key: float(value)
         for key, value in study.values_at((0,) * (len(study.grid) + 2), draws).items()
+        if key not in INTENSITY_KEYS  # not scene keys: they scale the record (see _intensity)
     }
     found = len(errors)
     for i in range(len(study.records)):
@@ -472,7 +541,11 @@ def _probe(study: Study, prefixes: list[str], file, errors: list) -> None:
             errors.append(InputError(err.message, file=file, key=key or None))
     if len(errors) > found or not study.records:
         return  # the scene itself is wrong: its varied values would repeat the problem
-    ranges = [(f"grid.{k}", k, v) for k, v in study.grid.items() if k != MATERIAL_KEY]
+    ranges = [
+        (f"grid.{k}", k, v)
+        for k, v in study.grid.items()
+        if k != MATERIAL_KEY and k not in INTENSITY_KEYS
+    ]
     ranges += [(f"sampling.vary.{k}", k, v) for k, v in draws.items()]
     for where, key, values in ranges:
         for value in dict.fromkeys((float(values.min()), float(values.max()))):
@@ -514,7 +587,7 @@ def study_from_text(text: str, *, file: str | Path | None = None) -> Study:
     if errors:  # the tables themselves are malformed: checking their keys would only add noise
         raise InputErrors(errors)
     head = _head(data, fname, errors)
-    records, prefixes = _records(data, fname, errors)
+    records, prefixes, meta = _records(data, fname, errors)
     scene = {k: data[k] for k in _SCENE_TABLES if k in data}
     grid, labels = _grid(data.get("grid", {}), fname, errors)
     spec = check_table(SAMPLING, data.get("sampling", {}), file=fname, prefix="sampling.",
@@ -540,7 +613,9 @@ def study_from_text(text: str, *, file: str | Path | None = None) -> Study:
         record_tables=[p[:-1] if p else "record" for p in prefixes],
         grid_labels=labels,
         material_variables=material_variables,
+        record_meta=meta if any(meta) else [],
     )
+    records_mod.check_intensity(study, prefixes, fname, errors)
     _probe(study, prefixes, fname, errors)
     if errors:
         raise InputErrors(errors)

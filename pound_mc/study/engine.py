@@ -26,14 +26,15 @@ from pound_mc._version import __version__
 from pound_mc.errors import InputError, InputErrors
 from pound_mc.integrators import kernels as integrators
 from pound_mc.integrators.threads import numba_threads
-from pound_mc.motions import load_record, record_arrays
+from pound_mc.motions import G, load_record, record_arrays
+from pound_mc.motions.intensity import sa_g
 from pound_mc.physics.contact import default_relation, reported_xi
 from pound_mc.physics.relations import restitution_of_xi
 from pound_mc.scene import Scene, scene_from_dict
 from pound_mc.study.dataset import CONTACT_VARIABLES, RESULT_VARIABLES
-from pound_mc.study.definition import MATERIAL_KEY, grid_dim_name, scene_model
+from pound_mc.study.definition import INTENSITY_KEYS, MATERIAL_KEY, grid_dim_name, scene_model
 
-__all__ = ["StudyEngine", "load_records"]
+__all__ = ["StudyEngine", "load_records", "load_traces"]
 
 # Scene keys the SDOF-pair batch kernel takes per simulation (defaults: the scene's value);
 # ``contact.beta`` stands for the stiffness, ``contact.k_N_per_m`` for the linear laws.
@@ -71,16 +72,28 @@ def load_records(study) -> list[tuple[float, np.ndarray]]:
         Every record that cannot be read, keyed in the study file (``record.duration_s``,
         ``records[2].source``); a problem inside a record file names that file too.
     """
+    return [record_arrays(trace) for trace in load_traces(study)]
+
+
+def load_traces(study) -> list:
+    """Read and preprocess every record of ``study``: the obspy Traces (with their metadata).
+
+    Raises
+    ------
+    InputError
+        As :func:`load_records`.
+    """
     fname = None if study.path is None else str(study.path)
     base_dir = None if study.path is None else study.path.parent
     out, errors = [], []
     for i, record in enumerate(study.records):
         spec = dict(record)
         spec.pop("name", None)
+        spec.pop("sa_period_s", None)  # the period of the record.sa_g axis, not a step
         source = spec.pop("source")
         where = study.record_table(i) + "."
         try:
-            out.append(record_arrays(load_record(source, base_dir=base_dir, **spec)))
+            out.append(load_record(source, base_dir=base_dir, **spec))
         except InputError as exc:
             key = exc.key or "record.source"
             key = where + key.split(".", 1)[-1] if key.startswith("record") else key
@@ -117,14 +130,72 @@ class StudyEngine:
         self.material_samples = study.draw_materials()
         #: The scene of the first simulation; its fixed values fill the keys nothing varies.
         self.scene = self.scene_of(0)
-        #: ``(dt_s, acceleration)`` of every record, read and preprocessed.
-        self.records = load_records(study)
+        traces = load_traces(study)
+        #: ``(dt_s, acceleration)`` of every record, read and preprocessed (unscaled by an
+        #: intensity axis: see :meth:`record_of`).
+        self.records = [record_arrays(trace) for trace in traces]
+        #: ``event`` and ``station`` of every record, as its source tells them ("" unknown).
+        self.record_labels = {
+            what: [str(t.stats.pound.get(what) or "") for t in traces]
+            for what in ("event", "station")
+        }
+        self._intensities()
         self._base = self._base_values(study.scene, self.scene)
         #: Whether a building is a shear building: then every simulation runs the modes of
         #: :attr:`arrays` (computed once) through the general batch, and the outputs include
         #: the per-contact arrays of :data:`~pound_mc.study.dataset.CONTACT_VARIABLES`.
         self.mdof = any(scene_model(study.scene, side) == "shear" for side in ("left", "right"))
         self.arrays = self.scene.modal_arrays() if self.mdof else None
+
+    def _intensities(self) -> None:
+        """Each record's own PGA and Sa, and the factors that scale it to the intensity axis."""
+        study = self.study
+        #: The intensity grid axis (``"record.pga_g"``, ``"record.sa_g"``) or None.
+        self.intensity_key = study.intensity_key
+        #: Unscaled PGA of every record [g].
+        self.record_pga_g = np.array([np.max(np.abs(acc)) / G for _dt, acc in self.records])
+        #: Period of each record's Sa [s] (NaN where the table has no ``sa_period_s``) and its
+        #: unscaled 5 %-damped Sa there [g] (None when no record has a period).
+        self.sa_period_s = np.array([float(r.get("sa_period_s", np.nan)) for r in study.records])
+        self.record_sa_g = None
+        if np.any(np.isfinite(self.sa_period_s)):
+            self.record_sa_g = np.array(
+                [
+                    sa_g(dt, acc, period) if np.isfinite(period) else np.nan
+                    for (dt, acc), period in zip(self.records, self.sa_period_s, strict=True)
+                ]
+            )
+        #: ``(n_records, n_intensities)`` factors ``target / own`` (None without an axis).
+        self.scale_factors = None
+        self._intensity_axis = None
+        if self.intensity_key is not None:
+            own = self.record_pga_g if self.intensity_key == "record.pga_g" else self.record_sa_g
+            targets = study.grid[self.intensity_key]
+            if not np.all(own > 0):
+                bad = int(np.flatnonzero(~(own > 0))[0])
+                raise InputError(
+                    f"the record's own {self.intensity_key.split('.')[1]} is zero: it cannot "
+                    "be scaled to a target",
+                    file=study.path,
+                    key=study.record_table(bad) + ".source",
+                )
+            self.scale_factors = targets[None, :] / own[:, None]
+            self._intensity_axis = list(study.grid).index(self.intensity_key) + 1
+
+    def record_of(self, index: int) -> tuple[float, np.ndarray]:
+        """``(dt_s, acceleration)`` simulation ``index`` runs: its record, scaled to its intensity.
+
+        :func:`pound_mc.scene.simulate` of :meth:`scene_of` with this record reproduces the
+        simulation.
+        """
+        idx = np.unravel_index(int(index), self.shape)
+        return self._scaled_record(int(idx[0]), int(idx[self._intensity_axis or 0]))
+
+    def _scaled_record(self, r: int, j: int) -> tuple[float, np.ndarray]:
+        dt_rec, acc = self.records[r]
+        if self.scale_factors is None:
+            return dt_rec, acc
+        return dt_rec, acc * self.scale_factors[r, j]
 
     def varied(self, indices) -> dict[str, np.ndarray]:
         """Values of the varied keys (grid axes, sampled keys) of the simulations ``indices``.
@@ -139,10 +210,15 @@ class StudyEngine:
 
         Grid values and sampled values replace the scene's own (a varied ``e`` drops a fixed
         ``xi`` and vice versa); :func:`pound_mc.scene.simulate` of it with the record
-        :attr:`records` ``[r]`` reproduces the simulation.
+        :meth:`record_of` ``(index)`` reproduces the simulation (the intensity axis scales the
+        record, not the scene).
         """
         record = int(np.unravel_index(int(index), self.shape)[0])
-        overrides = {key: float(value) for key, value in self.varied(int(index)).items()}
+        overrides = {
+            key: float(value)
+            for key, value in self.varied(int(index)).items()
+            if key not in INTENSITY_KEYS
+        }
         return scene_from_dict(self.study.scene_dict(record, overrides), file=self.study.path)
 
     # -- parameters -----------------------------------------------------------------------
@@ -270,9 +346,15 @@ class StudyEngine:
             "substeps": self._base["integrator.substeps"],
             "relation": self._base["contact.relation"] or None,
         }
-        for r in np.unique(p["record"]):
-            sel = np.flatnonzero(p["record"] == r)
-            dt_rec, acc = self.records[r]
+        # one batch per record and intensity (the intensity axis scales the record)
+        group = p["record"]
+        if self._intensity_axis is not None:
+            n_im = self.shape[self._intensity_axis]
+            group = group * n_im + np.unravel_index(indices, self.shape)[self._intensity_axis]
+        for g in np.unique(group):
+            sel = np.flatnonzero(group == g)
+            r, j = divmod(int(g), n_im) if self._intensity_axis is not None else (int(g), 0)
+            dt_rec, acc = self._scaled_record(r, j)
             common = {
                 "gap_m": p["contact.gap_m"][sel],
                 "beta": p["contact.beta"][sel],
@@ -361,6 +443,35 @@ class StudyEngine:
             out["material"] = ((grid_dim_name(MATERIAL_KEY),), names)
         if self.mdof:
             out.update(self.contact_coordinates())
+        out.update(self.record_variables())
+        return out
+
+    def record_variables(self) -> dict[str, tuple[tuple[str, ...], np.ndarray]]:
+        """Per-record metadata for the dataset (studies with an intensity axis or a suite/glob).
+
+        ``record_event``, ``record_station`` (text), ``record_pga_g`` and, where a record has
+        ``sa_period_s``, ``record_sa_period_s`` and ``record_sa_g`` (unscaled) [g], and with an
+        intensity axis ``scale_factor`` ``(record, intensity axis)`` [-].  Nothing for other
+        studies (their datasets stay as they were).
+        """
+        study = self.study
+        if self.intensity_key is None and not study.record_meta:
+            return {}
+        dims = ("record",)
+        meta = study.record_meta or [{} for _ in study.records]
+        out = {
+            name: (dims, np.asarray([m.get(what) or label for m, label in
+                                     zip(meta, self.record_labels[what], strict=True)],
+                                    dtype=object))
+            for name, what in (("record_event", "event"), ("record_station", "station"))
+        }  # fmt: skip
+        out["record_pga_g"] = (dims, self.record_pga_g)
+        if self.record_sa_g is not None:
+            out["record_sa_period_s"] = (dims, self.sa_period_s)
+            out["record_sa_g"] = (dims, self.record_sa_g)
+        if self.scale_factors is not None:
+            im_dims = ("record", grid_dim_name(self.intensity_key))
+            out["scale_factor"] = (im_dims, self.scale_factors)
         return out
 
     def contact_coordinates(self) -> dict[str, tuple[tuple[str, ...], np.ndarray]]:

@@ -31,6 +31,8 @@ __all__ = [
     "MAX_SAMPLES",
     "MATERIAL_KEY",
     "NUMERIC_SCENE_KEYS",
+    "INTENSITY_KEYS",
+    "GRID_DIGITS",
     "reference_markdown",
     "json_schema",
     "write_reference",
@@ -43,6 +45,17 @@ MAX_SAMPLES = 2**24
 MATERIAL_KEY = "contact.material"
 #: Scene keys that may be a grid axis or a sampled variable (scalar numbers).
 NUMERIC_SCENE_KEYS = frozenset(scene_schema.varied_keys())
+#: Grid axes that scale every record to a target intensity [g] (a multiple-stripe analysis):
+#: ``{key: description}``.  Grid axes only (not sampled keys), at most one per study.
+INTENSITY_KEYS = {
+    "record.pga_g": "peak ground acceleration: each record is scaled so that max |a| = value * g",
+    "record.sa_g": "5 %-damped pseudo-spectral acceleration at `sa_period_s` (a key of every "
+    "record table): each record is scaled so that Sa(sa_period_s) = value * g",
+}
+#: Significant digits ``{ start, stop, num }`` grid values snap to (from within 8 units in the
+#: last place), so that the value meant (1.0) is the value stored rather than
+#: ``np.linspace``'s 0.9999999999999999.
+GRID_DIGITS = 12
 
 STUDY = Table(
     "study",
@@ -60,10 +73,13 @@ STUDY = Table(
 GRID_AXIS = Table(
     "grid.KEY",
     "Axes of the spectra, keyed by the scene key they vary (`\"left.period_s\"`): a list of "
-    "distinct numbers, or `{ start, stop, num }` (evenly spaced, both ends included).  One "
+    "distinct numbers, or `{ start, stop, num }` (evenly spaced, both ends included; a value "
+    f"within 8 units in the last place of a {GRID_DIGITS}-significant-digit number is that "
+    "number, so that 1.0 is exactly 1.0).  One "
     f"non-numeric axis: `\"{MATERIAL_KEY}\" = [\"steel\", \"concrete\", ...]` (names of "
     "`pound_mc.physics.materials.MATERIALS`).  With a shear building only `contact.*` keys "
-    "and `integrator.dt_s` may vary.",
+    "and `integrator.dt_s` may vary.  Intensity axes `record.pga_g` and `record.sa_g` [g] scale "
+    "every record to each value (a multiple-stripe analysis; one of them per study).",
     (
         Field("start", "number", "First value.", unit="as the key", required=True),
         Field("stop", "number", "Last value (differs from start when num > 1).",
@@ -168,6 +184,8 @@ def reference_markdown() -> str:
     out += _table_markdown('[grid]: "KEY" = { start, stop, num } or a list', GRID_AXIS)
     keys = ", ".join(f"`{k}`" for k in sorted(NUMERIC_SCENE_KEYS))
     out += [f"Grid axes and sampled keys: {keys}; and the grid axis `{MATERIAL_KEY}`.", ""]
+    out += ["Intensity grid axes (one per study, grid only):", ""]
+    out += [f"- `{k}` [g]: {v}." for k, v in INTENSITY_KEYS.items()] + [""]
     out += _table_markdown("[sampling]", SAMPLING)
     for name, table in sampling.VARY_TABLES.items():
         out += _table_markdown(f'[sampling.vary] "KEY" = {{ {name} ... }}', table)
@@ -263,7 +281,7 @@ def json_schema() -> dict:
     grid = {
         "type": "object",
         "description": GRID_AXIS.description,
-        "propertyNames": {"enum": sorted([*NUMERIC_SCENE_KEYS, MATERIAL_KEY])},
+        "propertyNames": {"enum": sorted([*NUMERIC_SCENE_KEYS, *INTENSITY_KEYS, MATERIAL_KEY])},
         "additionalProperties": grid_values,
         "properties": {
             MATERIAL_KEY: {

@@ -1,0 +1,172 @@
+"""Charts of the risk outputs: fragility panels and the required gap on the probability chart.
+
+:func:`fragility_panels` draws :func:`~pound_mc.analysis.fragility_chart.fragility_chart` for
+each combination of the grid axes other than the intensity (e.g. one panel per gap);
+:func:`required_gap_chart` is :func:`~pound_mc.analysis.plot.probability_chart` (pounding
+probability against gap, one line per intensity, the separation rules marked) with the target
+probability and the required gap of each line (:func:`pound_mc.analysis.risk.required_gap`)
+and its confidence interval.
+"""
+
+from __future__ import annotations
+
+import itertools
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+from matplotlib.figure import Figure
+
+from pound_mc.analysis.fragility import fit_fragility
+from pound_mc.analysis.fragility_chart import fragility_chart
+from pound_mc.analysis.plot import _hold, _line_label, probability_chart, save
+from pound_mc.analysis.risk import GAP_DIM, _counts, _intensity_dim, required_gap
+from pound_mc.errors import InputError
+
+__all__ = ["fragility_panels", "required_gap_chart"]
+
+
+def fragility_panels(
+    ds: xr.Dataset,
+    path: str | Path | None = None,
+    *,
+    im: str | None = None,
+    event: str = "pounding",
+    sel: dict | None = None,
+    max_panels: int = 6,
+    n_boot: int = 1000,
+    seed: int = 0,
+) -> Figure:
+    """One fragility panel per combination of the other grid axes (at most ``max_panels``).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A study dataset with an intensity axis (or ``im``: a grid dimension with values > 0).
+    path : str or Path, optional
+        Where to write the PNG.
+    im, event, n_boot, seed
+        As :func:`pound_mc.analysis.risk.fragility`.
+    sel : dict, optional
+        ``{dim: value}``: hold these grid dims at one value (nearest) instead of a panel each.
+    max_panels : int
+        Most panels drawn (the first combinations).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        A panel without a fit says why.
+    """
+    dim = _intensity_dim(ds, im)
+    n_event, n_total = _counts(ds, event)
+    rest = [d for d in n_event.dims if d != dim]
+    held = _hold(ds, [d for d in rest if d in (sel or {})], sel)
+    free = [d for d in rest if d not in held]
+    combos = list(itertools.product(*(range(ds.sizes[d]) for d in free)))[:max_panels]
+    ncols = min(3, len(combos))
+    nrows = -(-len(combos) // ncols)
+    fig = Figure(figsize=(4.6 * ncols, 3.6 * nrows), layout="constrained")
+    axes = fig.subplots(nrows, ncols, squeeze=False).ravel()
+    x = np.asarray(ds[dim].values, dtype=float)
+    im_label = f"{ds[dim].attrs.get('long_name', dim)} [g]"
+    for ax, combo in zip(axes, combos, strict=False):
+        where = {**held, **dict(zip(free, combo, strict=True))}
+        z = n_event.isel(where).transpose(dim).values
+        n = n_total.isel(where).transpose(dim).values
+        title = ", ".join(_line_label(ds, d, i) for d, i in where.items()) or "all simulations"
+        try:
+            fit = fit_fragility(x, z, n, n_boot=n_boot, seed=seed)
+        except InputError as exc:
+            ax.plot(x, np.divide(z, n, out=np.full(x.shape, np.nan), where=n > 0), "o", c="k")
+            ax.set_title(f"{title}\nno fit: {exc.message[:70]}...", fontsize=7)
+            ax.set_xlabel(im_label)
+            ax.set_ylabel(f"P({event} | IM)")
+            ax.set_ylim(-0.02, 1.02)
+            continue
+        fragility_chart(fit, ax=ax, im_label=im_label, event_label=event)
+        ax.set_title(title, fontsize=8)
+    for ax in axes[len(combos) :]:
+        ax.set_visible(False)
+    fig.suptitle(
+        f"Fragility ({ds.attrs.get('study_name', '')}): P({event}) over records and samples, "
+        f"lognormal fit by maximum likelihood, {n_boot} bootstrap replicates",
+        fontsize=9,
+    )
+    return save(fig, path)
+
+
+def required_gap_chart(
+    ds: xr.Dataset,
+    path: str | Path | None = None,
+    *,
+    probability: float = 0.1,
+    line: str | None = None,
+    sel: dict | None = None,
+    rules="auto",
+    base_dir=None,
+) -> Figure:
+    """Pounding probability against gap, the rules, the target and the required gap per line.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A study dataset with two or more gaps on its grid.
+    path : str or Path, optional
+        Where to write the PNG.
+    probability : float, default 0.1
+        Target probability (a horizontal line); each line's required gap is marked on it with
+        its Wilson confidence interval.
+    line, sel, rules, base_dir
+        As :func:`pound_mc.analysis.plot.probability_chart` (all records pooled).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        ``fig.axes[0]``: the probability lines first (as the probability chart), then the
+        rules, then the target line and one errorbar marker per line with a required gap.
+    """
+    if GAP_DIM not in ds.dims:
+        raise InputError("the required gap needs a study with the gap on its grid")
+    fig = probability_chart(ds, None, line=line, sel=sel, rules=rules, base_dir=base_dir)
+    ax = fig.axes[0]
+    found = required_gap(ds, probability, rules=False)
+    ax.axhline(probability, color="grey", lw=0.9, ls="--", label=f"target {probability:g}")
+    rest = list(found["required_gap"].dims)
+    sel = dict(sel or {})
+    line = line if line is not None else (rest[0] if rest else None)
+    sel.pop(line, None)
+    hold = _hold(ds, [d for d in rest if d != line], sel)
+    labels = {"pounding probability": hold}
+    if line is not None:
+        labels = {_line_label(ds, line, i): {**hold, line: i} for i in range(ds.sizes[line])}
+    drawn = [ln for ln in ax.lines if ln.get_marker() == "o"]
+    first = True
+    for ln in drawn:
+        where = labels.get(ln.get_label())
+        if where is None:
+            continue
+        gap = float(found["required_gap"].isel(where))
+        if not np.isfinite(gap):
+            continue
+        lo, hi = found["required_gap_ci"].isel(where).values
+        err = [[(gap - lo) * 1e3], [(hi - gap) * 1e3 if np.isfinite(hi) else 0.0]]
+        ax.errorbar(
+            [gap * 1e3],
+            [probability],
+            xerr=err,
+            fmt="D",
+            color=ln.get_color(),
+            ms=6,
+            capsize=3,
+            label=f"required gap at P = {probability:g} (Wilson {found.attrs['ci']:g} CI)"
+            if first
+            else None,
+        )
+        first = False
+    ax.legend(fontsize=7, loc="upper right")
+    ax.set_title(
+        ax.get_title() + f"\ndiamonds: smallest gap with P <= {probability:g} (bars: Wilson "
+        "interval)",
+        fontsize=8,
+    )
+    return save(fig, path)

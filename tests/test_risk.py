@@ -1,0 +1,226 @@
+"""Record suites and globs in studies, intensity axes, fragility and required gap of a dataset."""
+
+import json
+import shutil
+
+import numpy as np
+import pytest
+import xarray as xr
+
+import pound_mc  # noqa: F401  (registers ds.pound)
+from pound_mc.analysis.fragility import fit_fragility, wilson_interval
+from pound_mc.analysis.risk_chart import required_gap_chart
+from pound_mc.cli import main
+from pound_mc.errors import InputError, InputErrors
+from pound_mc.motions.catalogue import _builtin_path
+from pound_mc.motions.intensity import sa_g
+from pound_mc.study.definition import grid_values, load_study, study_from_text
+from pound_mc.study.engine import StudyEngine
+from pound_mc.study.runner import run_study
+
+SCENE = """
+[left]
+period_s = 0.5
+mass_kg = 1e6
+[right]
+period_s = 1.0
+mass_kg = 1e6
+[contact]
+gap_m = 0.01
+beta = 2.75e9
+e = 0.65
+"""
+
+
+@pytest.fixture(scope="module")
+def glob_study(tmp_path_factory):
+    """Three built-in AT2 files behind a glob, 4 s each, Sa(1 s) axis, two gaps."""
+    root = tmp_path_factory.mktemp("risk")
+    (root / "records").mkdir()
+    for name in ("elcentro", "elcentro-270", "loma-prieta-corralitos-000"):
+        shutil.copy(_builtin_path(name), root / "records")
+    text = f"""
+[study]
+name = "risk"
+seed = 7
+[[records]]
+source = "records/*.AT2"
+duration_s = 4.0
+sa_period_s = 1.0
+{SCENE}
+[grid]
+"record.sa_g" = [0.3, 0.6, 1.2]
+"contact.gap_m" = [0.0, 0.05, 0.1, 0.3]
+"""
+    path = root / "risk.toml"
+    path.write_text(text)
+    return path
+
+
+def test_glob_expands_sorted_with_table_options(glob_study):
+    study = load_study(glob_study)
+    assert len(study.records) == 3
+    sources = [r["source"] for r in study.records]
+    assert sources == sorted(sources) and all(s.startswith("records/") for s in sources)
+    assert all(r["duration_s"] == 4.0 and r["sa_period_s"] == 1.0 for r in study.records)
+    assert study.shape == (3, 3, 4, 1)
+
+
+def test_sa_scaling_hits_the_target(glob_study):
+    engine = StudyEngine(load_study(glob_study))
+    targets = engine.study.grid["record.sa_g"]
+    for index in range(0, engine.study.n_simulations, 4):
+        dt, acc = engine.record_of(index)
+        r, j = np.unravel_index(index, engine.shape)[:2]
+        # the scaled record's own 5 %-damped Sa at 1 s equals the grid value
+        assert sa_g(dt, acc, 1.0) == pytest.approx(targets[j], rel=1e-6)
+        assert engine.scale_factors[r, j] == pytest.approx(targets[j] / engine.record_sa_g[r])
+
+
+@pytest.fixture(scope="module")
+def glob_dataset(glob_study, tmp_path_factory):
+    report = run_study(load_study(glob_study), tmp_path_factory.mktemp("out"), progress=False)
+    return xr.open_dataset(report.path).load(), report.path
+
+
+def test_dataset_record_variables(glob_dataset):
+    ds, _ = glob_dataset
+    assert ds["scale_factor"].dims == ("record", "sa_g")
+    assert ds["record_sa_g"].attrs["units"] == "1" and "long_name" in ds["record_pga_g"].attrs
+    np.testing.assert_allclose(
+        ds["scale_factor"].values, ds["sa_g"].values[None, :] / ds["record_sa_g"].values[:, None]
+    )
+    assert list(ds["record_event"].values[:2]) == ["Imperial Valley-02"] * 2
+
+
+def test_results_do_not_depend_on_chunks(glob_study, glob_dataset, tmp_path):
+    ds, _ = glob_dataset
+    report = run_study(load_study(glob_study), tmp_path, chunk_size=5, progress=False)
+    other = xr.open_dataset(report.path).load()
+    for name in ("peak_force", "impacts", "scale_factor"):
+        np.testing.assert_array_equal(ds[name].values, other[name].values)
+
+
+def test_fragility_accessor_matches_direct_fit(glob_dataset):
+    ds, _ = glob_dataset
+    fit = ds.pound.fragility(im="sa_g", n_boot=50)
+    assert fit["theta"].dims == ("contact_gap_m",) and fit["theta_ci"].dims[-1] == "bound"
+    for k in range(ds.sizes["contact_gap_m"]):
+        z = ((ds.impacts > 0) & (ds.status == 0)).isel(contact_gap_m=k).sum(("record", "sample"))
+        n = (ds.status == 0).isel(contact_gap_m=k).sum(("record", "sample"))
+        try:
+            ref = fit_fragility(ds.sa_g.values, z.values, n.values, n_boot=50)
+        except InputError as exc:
+            assert fit["fit_message"].values[k] == exc.message
+            continue
+        assert float(fit["theta"][k]) == ref.theta and float(fit["beta"][k]) == ref.beta
+
+
+def test_fragility_cli_json_and_errors(glob_dataset, capsys):
+    _, path = glob_dataset
+    assert main(["fragility", str(path), "--im", "sa_g", "--json", "--n-boot", "20"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert {"theta", "beta", "theta_ci", "beta_ci", "im", "event"} <= set(out)
+    assert out["im"] == "sa_g" and out["event"] == "pounding"
+    assert main(["fragility", str(path), "--event", "ductility>2"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and str(path) in err[0] and "ductility" in err[0]
+    assert main(["fragility", str(path), "--im", "nope"]) == 2
+
+
+def test_required_gap_against_hand_computation(glob_dataset):
+    ds, _ = glob_dataset
+    found = ds.pound.required_gap(probability=0.1, rules=False)
+    gaps = ds.contact_gap_m.values
+    for j in range(ds.sizes["sa_g"]):
+        hit = ((ds.impacts > 0) & (ds.status == 0)).isel(sa_g=j).sum(("record", "sample")).values
+        n = (ds.status == 0).isel(sa_g=j).sum(("record", "sample")).values
+        p = hit / n
+        above = np.flatnonzero(p > 0.1)
+        if above.size == 0:
+            expected = gaps[0]
+        elif above[-1] == gaps.size - 1:
+            assert np.isnan(found["required_gap"][j])
+            continue
+        else:  # linear interpolation between the last gap above and the next one
+            i = above[-1]
+            expected = gaps[i] + (p[i] - 0.1) / (p[i] - p[i + 1]) * (gaps[i + 1] - gaps[i])
+        assert float(found["required_gap"][j]) == pytest.approx(expected, rel=1e-12)
+        lower, upper = wilson_interval(p, n)
+        assert float(found["required_gap_ci"][j, 0]) <= float(found["required_gap"][j])
+
+
+def test_identical_buildings_at_gap_zero_do_not_pound():
+    # T1 from { start, stop, num } is exactly 1.0 (np.linspace gives 0.9999999999999999)
+    assert grid_values(0.1, 2.0, 20)[9] == 1.0
+    study = study_from_text(
+        f"""
+[study]
+name = "identical"
+seed = 1
+[record]
+source = "builtin:elcentro"
+duration_s = 5.0
+{SCENE.replace("gap_m = 0.01", "gap_m = 0.0")}
+[grid]
+"left.period_s" = {{ start = 0.1, stop = 2.0, num = 20 }}
+"""
+    )
+    engine = StudyEngine(study)
+    out = engine.run_indices(np.array([9]))
+    assert out["impacts"][0] == 0 and out["max_penetration"][0] == 0.0
+
+
+def test_suite_in_a_study_counts_without_reading():
+    study = study_from_text(
+        f"""
+[study]
+name = "suite"
+seed = 1
+[[records]]
+source = "suite:fema-p695-farfield"
+[[records]]
+source = "builtin:elcentro"
+{SCENE}
+"""
+    )
+    assert len(study.records) == 45 and study.records[-1]["source"] == "builtin:elcentro"
+    assert study.record_names[0] == "NORTHR/MUL009"
+    assert study.record_meta[0]["event"] == "Northridge"
+    with pytest.raises(InputErrors) as info:
+        study_from_text(
+            f'[study]\nname = "x"\nseed = 1\n[[records]]\nsource = "suite:nope"\n{SCENE}',
+            file="bad.toml",
+        )
+    assert "bad.toml" in str(info.value) and "records[0].source" in str(info.value)
+
+
+def test_intensity_axis_conflicts():
+    with pytest.raises(InputErrors) as info:
+        study_from_text(
+            f"""
+[study]
+name = "x"
+seed = 1
+[record]
+source = "builtin:elcentro"
+pga_g = 0.3
+{SCENE}
+[grid]
+"record.sa_g" = [0.1, 0.2]
+""",
+            file="s.toml",
+        )
+    text = str(info.value)
+    assert "record.pga_g" in text and "record.sa_period_s" in text
+
+
+def test_required_gap_chart_draws_the_dataset(glob_dataset):
+    ds, _ = glob_dataset
+    fig = required_gap_chart(ds, probability=0.1, rules=None)
+    ax = fig.axes[0]
+    lines = [ln for ln in ax.lines if ln.get_marker() == "o"]
+    p = ((ds.impacts > 0).where(ds.status == 0)).mean(("record", "sample"))
+    for j, ln in enumerate(lines):
+        np.testing.assert_allclose(ln.get_xdata(), ds.contact_gap_m.values * 1e3)
+        np.testing.assert_allclose(ln.get_ydata(), p.isel(sa_g=j).values)
