@@ -26,6 +26,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "stability": ("pound_mc.cli.scene", "stability_command"),
     "run": ("pound_mc.cli.study", "run_command"),
     "check": ("pound_mc.cli.study", "check_command"),
+    "compile": ("pound_mc.cli.study", "compile_command"),
     "plot": ("pound_mc.cli.analysis", "plot_command"),
     "report": ("pound_mc.cli.analysis", "report_command"),
 }
@@ -185,6 +186,27 @@ def _study(sub: argparse._SubParsersAction) -> None:
         "--calibrate", type=int, default=64, metavar="N", help="simulations timed for the estimate"
     )
     p.set_defaults(handler="check")
+
+    p = sub.add_parser(
+        "compile",
+        help="compile the kernels into the on-disk cache (cluster images, Dask workers)",
+        description=(
+            "Compile the numba kernels of the given methods and contact laws, for SDOF pairs "
+            "and shear buildings, into the user cache (POUND_MC_CACHE_DIR, else "
+            "XDG_CACHE_HOME/pound-mc, else ~/.cache/pound-mc). Later runs of the same source "
+            "load them instead of compiling; any edit of the compiled sources compiles again."
+        ),
+    )
+    p.add_argument("--methods", nargs="+", metavar="METHOD", help="methods (default all)")
+    p.add_argument("--laws", nargs="+", metavar="LAW", help="contact laws (default all)")
+    p.add_argument(
+        "--structures",
+        nargs="+",
+        choices=("sdof", "shear"),
+        default=["sdof", "shear"],
+        help="building pairs (default both)",
+    )
+    p.set_defaults(handler="compile")
 
 
 def _analysis(sub: argparse._SubParsersAction) -> None:
