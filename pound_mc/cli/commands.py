@@ -143,12 +143,20 @@ def _scene(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--dt", type=float, metavar="S", help="override [integrator] dt_s")
     p.set_defaults(handler="simulate")
 
-    p = sub.add_parser("bench", help="speed against accuracy of every method (B1 and MDOF)")
+    p = sub.add_parser(
+        "bench",
+        help="speed against accuracy: B1 head to head (ratios), then every method's sweep",
+    )
     p.add_argument("--json", action="store_true", help="print the table as JSON records")
     p.add_argument("--out", default="outputs", metavar="DIR", help="folder for CSV and PNG")
     p.add_argument("--repeats", type=int, default=7, help="timed runs per point (median)")
     p.add_argument("--methods", nargs="+", metavar="METHOD", help="methods to run (all)")
     p.add_argument("--scenes", nargs="+", metavar="SCENE", default=["B1", "shear-3-5"])
+    p.add_argument(
+        "--head-to-head-only",
+        action="store_true",
+        help="only the interleaved B1 comparison and its ratios (no work-precision sweep)",
+    )
     p.set_defaults(handler="bench")
 
     p = sub.add_parser("stability", help="map the largest stable step against contact stiffness")
