@@ -12,6 +12,15 @@ Entries are keyed by a hash of the package's compiled sources, so a fresh clone,
 a new Dask worker of the same version finds the kernels already compiled, while any edit of a
 kernel source compiles afresh.  Where that directory cannot be written, numba's default (a
 ``__pycache__`` beside the source) is used.
+
+What survives: a fresh clone, a reinstall (editable or not) and a new Dask worker of the same
+source on the same machine, or with the same cache directory mounted, find the kernels
+compiled; so does a different Python environment with the same numba version.  Any edit of a
+module that imports this one (by ``from pound_mc._jit import``) compiles every kernel again,
+as does another numba version or CPU.  ``pound-mc compile [--methods ...] [--laws ...]``
+fills the cache ahead of a run (cluster images, Dask workers); a study run compiles what it
+needs in one warm-up simulation before its progress bar starts
+(:mod:`pound_mc.study.warmup`).
 """
 
 from __future__ import annotations

@@ -26,6 +26,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "stability": ("pound_mc.cli.scene", "stability_command"),
     "run": ("pound_mc.cli.study", "run_command"),
     "check": ("pound_mc.cli.study", "check_command"),
+    "compile": ("pound_mc.cli.study", "compile_command"),
     "plot": ("pound_mc.cli.analysis", "plot_command"),
     "report": ("pound_mc.cli.analysis", "report_command"),
     "fragility": ("pound_mc.cli.analysis", "fragility_command"),
@@ -147,12 +148,20 @@ def _scene(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--dt", type=float, metavar="S", help="override [integrator] dt_s")
     p.set_defaults(handler="simulate")
 
-    p = sub.add_parser("bench", help="speed against accuracy of every method (B1 and MDOF)")
+    p = sub.add_parser(
+        "bench",
+        help="speed against accuracy: B1 head to head (ratios), then every method's sweep",
+    )
     p.add_argument("--json", action="store_true", help="print the table as JSON records")
     p.add_argument("--out", default="outputs", metavar="DIR", help="folder for CSV and PNG")
     p.add_argument("--repeats", type=int, default=7, help="timed runs per point (median)")
     p.add_argument("--methods", nargs="+", metavar="METHOD", help="methods to run (all)")
     p.add_argument("--scenes", nargs="+", metavar="SCENE", default=["B1", "shear-3-5"])
+    p.add_argument(
+        "--head-to-head-only",
+        action="store_true",
+        help="only the interleaved B1 comparison and its ratios (no work-precision sweep)",
+    )
     p.set_defaults(handler="bench")
 
     p = sub.add_parser("stability", help="map the largest stable step against contact stiffness")
@@ -190,6 +199,27 @@ def _study(sub: argparse._SubParsersAction) -> None:
         "--calibrate", type=int, default=64, metavar="N", help="simulations timed for the estimate"
     )
     p.set_defaults(handler="check")
+
+    p = sub.add_parser(
+        "compile",
+        help="compile the kernels into the on-disk cache (cluster images, Dask workers)",
+        description=(
+            "Compile the numba kernels of the given methods and contact laws, for SDOF pairs "
+            "and shear buildings, into the user cache (POUND_MC_CACHE_DIR, else "
+            "XDG_CACHE_HOME/pound-mc, else ~/.cache/pound-mc). Later runs of the same source "
+            "load them instead of compiling; any edit of the compiled sources compiles again."
+        ),
+    )
+    p.add_argument("--methods", nargs="+", metavar="METHOD", help="methods (default all)")
+    p.add_argument("--laws", nargs="+", metavar="LAW", help="contact laws (default all)")
+    p.add_argument(
+        "--structures",
+        nargs="+",
+        choices=("sdof", "shear"),
+        default=["sdof", "shear"],
+        help="building pairs (default both)",
+    )
+    p.set_defaults(handler="compile")
 
 
 def _analysis(sub: argparse._SubParsersAction) -> None:

@@ -15,7 +15,7 @@ from pound_mc.analysis.plot_numerics import (
 )
 from pound_mc.errors import InputError
 from pound_mc.integrators.kernels import METHODS
-from pound_mc.numerics.bench import SCENES, benchmark
+from pound_mc.numerics.bench import SCENES, benchmark, head_to_head
 from pound_mc.numerics.stability import stability_map
 from pound_mc.scene import load_scene, simulate
 
@@ -50,7 +50,12 @@ def simulate_command(args) -> int:
 
 
 def bench_command(args) -> int:
-    """``pound-mc bench``: speed against accuracy of every method."""
+    """``pound-mc bench``: B1 head to head with ratios, then the work-precision sweep.
+
+    ``--json`` prints one object: ``head_to_head`` (rows), ``ratios``, ``overheads``,
+    ``load_before`` / ``load_after`` (``os.getloadavg()``), ``repeats``, and ``sweep`` (the
+    work-precision rows, also written to ``bench.csv``; absent with ``--head-to-head-only``).
+    """
     for m in args.methods or []:
         if m not in METHODS:
             raise InputError(
@@ -59,11 +64,51 @@ def bench_command(args) -> int:
     for s in args.scenes:
         if s not in SCENES:
             raise InputError(f"unknown scene {s!r}; allowed: {', '.join(SCENES)}", key="--scenes")
+    if args.repeats < 1:
+        raise InputError(f"must be >= 1, got {args.repeats}", key="--repeats")
+    duel, info = head_to_head(repeats=args.repeats)
+    if not args.json:
+        _print_head_to_head(duel, info)
+    if args.head_to_head_only:
+        if args.json:
+            print(json.dumps({"head_to_head": duel.to_dict(orient="records"), **info}, indent=1))
+        return 0
     table = benchmark(args.scenes, args.methods, repeats=args.repeats, progress=not args.json)
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    table.to_csv(out / "bench.csv", index=False)
+    work_precision_chart(table, out / "work_precision.png")
+    if args.json:
+        sweep = json.loads(table.to_json(orient="records"))
+        print(json.dumps({"head_to_head": duel.to_dict(orient="records"), **info,
+                          "sweep": sweep}, indent=1))  # fmt: skip
+        return 0
     cols = ["scene", "method", "dt_s", "substeps", "seconds", "impacts", "err_peak_force",
             "err_peak_disp_left", "err_peak_disp_right", "status"]  # fmt: skip
-    _write_table(args, table, "bench.csv", work_precision_chart, "work_precision.png", ".3g", cols)
+    print("\nwork-precision sweep (median of each point after compilation, one thread):")
+    print(table[cols].to_string(index=False, float_format=lambda x: f"{x:.3g}"))
+    print(f"wrote {out / 'bench.csv'} and {out / 'work_precision.png'}")
     return 0
+
+
+def _print_head_to_head(duel, info) -> None:
+    """The head-to-head table, its ratios and the machine load, as text."""
+    load = " / ".join(f"{x:.2f}" for x in info["load_before"])
+    print(f"B1 head to head: one thread, interleaved, median of {info['repeats']} runs each; "
+          f"load average {load} (1/5/15 min) before")  # fmt: skip
+    print(f"{'contender':28s} {'time [ms]':>10s} {'x adaptive':>10s} {'peak-force error':>17s} "
+          f"{'impacts':>7s}")  # fmt: skip
+    for r in duel.itertuples():
+        print(f"{r.label:28s} {r.seconds * 1e3:10.3f} {r.x_adaptive:10.2f} "
+              f"{r.err_peak_force:17.2e} {r.impacts:7d}")  # fmt: skip
+    print("ratios (time over time):")
+    for name, value in info["ratios"].items():
+        print(f"  {name:42s} {value:8.2f}")
+    print("set-up of the public call (median over the rounds of simulate() minus the kernel):")
+    for name, value in info["overheads"].items():
+        print(f"  {name:42s} {value:8.3f}")
+    load = " / ".join(f"{x:.2f}" for x in info["load_after"])
+    print(f"load average after: {load}")
 
 
 def stability_command(args) -> int:

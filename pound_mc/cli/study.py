@@ -14,10 +14,17 @@ import xarray as xr
 from pound_mc.analysis.plot import spectrum_chart
 from pound_mc.analysis.risk_chart import fragility_panels, required_gap_chart
 from pound_mc.errors import InputError
+from pound_mc.integrators import METHODS
+from pound_mc.physics.contact import CONTACT_MODELS
 from pound_mc.study.definition import load_study
 from pound_mc.study.distributed import _import_distributed, run_study_distributed
 from pound_mc.study.engine import StudyEngine
-from pound_mc.study.runner import plan_text, run_study
+from pound_mc.study.runner import chunk_ranges, default_chunk_size, plan_text, run_study
+from pound_mc.study.warmup import NOTICE_AFTER_S, cache_directory, compile_kernels, warm_up
+
+#: Fixed cost per chunk of a local run (writing its file, Python around the batch call) [s],
+#: measured on a 2-core machine (README, "Throughput and scaling"); added to the estimate.
+CHUNK_OVERHEAD_S = 0.003
 
 
 def run_command(args) -> int:
@@ -69,6 +76,7 @@ def run_command(args) -> int:
     print(
         f"{report.n_simulations:,} simulations, {report.chunks_run} of {report.chunks_total} "
         f"chunks run in {report.seconds:.1f} s"
+        + (f" after {report.warmup_seconds:.1f} s of compiling" if compiled(report) else "")
         + (f" ({report.rate:,.0f} simulations/s)" if report.chunks_run else "")
         + f"; {time.perf_counter() - t0:.1f} s with the dataset"
     )
@@ -100,17 +108,57 @@ def _charts(study, path: Path, out: Path) -> list[Path]:
     return written
 
 
+def compiled(report) -> bool:
+    """Whether a run's warm-up compiled kernels (rather than loading them from the cache)."""
+    return report.warmup_seconds > NOTICE_AFTER_S
+
+
 def check_command(args) -> int:
-    """``pound-mc check``: validate a study, print its plan and cost; write nothing."""
+    """``pound-mc check``: validate a study, print its plan and cost; write no results.
+
+    The estimate times the study itself: the kernels are first compiled (or loaded from the
+    cache, see :mod:`pound_mc._jit`) by one warm-up simulation, then ``--calibrate``
+    simulations spread evenly over the study run with the given threads; their time per
+    simulation times the study's size, plus a fixed cost per chunk, is the estimate of the
+    run's chunk time (compile time excluded: the run warms up the same way, and after this
+    check the kernels are cached).
+    """
     study = load_study(args.study)
-    if args.threads is not None and args.threads < 1:
-        raise InputError(f"must be >= 1, got {args.threads}", key="--threads")
+    for key in ("threads", "chunk_size", "calibrate"):
+        value = getattr(args, key)
+        if value is not None and value < 1:
+            raise InputError(f"must be >= 1, got {value}", key="--" + key.replace("_", "-"))
     engine = StudyEngine(study)
-    seconds, compile_s = engine.calibrate(workers=args.threads, n=args.calibrate)
-    print(plan_text(study, chunk_size=args.chunk_size, seconds_per_simulation=seconds))
+    warm_s, did_compile = warm_up(engine)
+    seconds, _ = engine.calibrate(workers=args.threads, n=args.calibrate)
+    chunk_size = args.chunk_size or study.chunk_size or default_chunk_size(study.n_simulations)
+    n_chunks = len(chunk_ranges(study.n_simulations, chunk_size))
+    per_sim = seconds + n_chunks * CHUNK_OVERHEAD_S / study.n_simulations
+    print(plan_text(study, chunk_size=chunk_size, seconds_per_simulation=per_sim))
+    if did_compile:
+        where = f"kernels compiled now in {warm_s:.1f} s and cached; a run with them cached"
+    else:
+        where = f"kernels loaded from the cache in {warm_s:.2f} s; a run"
     print(
-        f"  calibration: {args.calibrate} simulations spread over the study; "
-        f"first call {compile_s:.1f} s (compilation or numba's cache)"
+        f"  calibration: {min(args.calibrate, study.n_simulations)} simulations spread over the "
+        f"study, plus {CHUNK_OVERHEAD_S * 1e3:.0f} ms per chunk; compile time not included "
+        f"({where} does not compile)"
     )
-    print("  (nothing written)")
+    print("  (no results written)")
+    return 0
+
+
+def compile_command(args) -> int:
+    """``pound-mc compile``: compile the kernels of methods and laws into the disk cache."""
+    for key, allowed, given in (
+        ("--methods", METHODS, args.methods),
+        ("--laws", tuple(CONTACT_MODELS), args.laws),
+    ):
+        bad = [v for v in given or () if v not in allowed]
+        if bad:
+            raise InputError(f"unknown {', '.join(bad)}; allowed: {', '.join(allowed)}", key=key)
+    print(f"compiling kernels into {cache_directory()}", flush=True)
+    rows = compile_kernels(args.methods, args.laws, args.structures, stream=sys.stdout)
+    total = sum(r["seconds"] for r in rows)
+    print(f"{len(rows)} combinations ready in {total:.1f} s")
     return 0

@@ -1,6 +1,13 @@
 """Speed against accuracy of every integration method (``pound-mc bench``).
 
-For scene B1 (``studies/scenes/b1.toml``, DESIGN.md section 5) and a shear-building pair
+Two parts.  :func:`head_to_head` times, in one process, on one thread and interleaved (every
+repeat runs each contender once, in turn, so a change of machine load hits all of them alike),
+``adaptive`` at the scene's settings, ``newmark`` at dt = 1e-3 s and 1e-4 s, a textbook Newmark
+loop (:func:`textbook_newmark`, this module's own code, the yardstick) at the same steps, and
+the public call :func:`pound_mc.scene.simulate` with ``adaptive`` and ``newmark``; it reports
+medians, peak-force errors against the SciPy reference, the ratios between them and the load
+average.  :func:`benchmark` is the work-precision sweep: for scene B1
+(``studies/scenes/b1.toml``, DESIGN.md section 5) and a shear-building pair
 (``studies/scenes/shear_3_5.toml``), every method runs on a ladder of step sizes (contact
 sub-steps per contact duration for ``adaptive``).  Time per simulation is the median of repeated
 runs after compilation, on one thread; errors are relative to a reference run: the SciPy
@@ -10,6 +17,8 @@ sub-steps at ``dt_s`` / 10.
 
 from __future__ import annotations
 
+import math
+import os
 import time
 from pathlib import Path
 
@@ -23,7 +32,15 @@ from pound_mc.integrators.reference import reference_solution
 from pound_mc.motions import record_arrays
 from pound_mc.scene import load_scene, simulate
 
-__all__ = ["SCENES", "LADDER", "benchmark", "reference_values"]
+__all__ = [
+    "SCENES",
+    "LADDER",
+    "CONTENDERS",
+    "benchmark",
+    "head_to_head",
+    "textbook_newmark",
+    "reference_values",
+]
 
 _STUDIES = Path(__file__).resolve().parents[2] / "studies" / "scenes"
 #: Benchmark scenes by label.
@@ -116,3 +133,223 @@ def benchmark(scenes=("B1", "shear-3-5"), methods=None, *, repeats: int = 7, pro
     finally:
         numba.set_num_threads(old)
     return pd.DataFrame(rows)
+
+
+# -- head to head on B1 ---------------------------------------------------------------------------
+
+#: Contenders of :func:`head_to_head`: label -> (how it is called, method, dt_s or None for
+#: the scene's own).  ``kernel``: :func:`pound_mc.integrators.run_kernel` on prepared arrays;
+#: ``textbook``: :func:`textbook_newmark`; ``simulate``: the public
+#: :func:`~pound_mc.scene.simulate`.
+CONTENDERS = {
+    "adaptive": ("kernel", "adaptive", None),
+    "newmark dt=1e-3": ("kernel", "newmark", 1e-3),
+    "newmark dt=1e-4": ("kernel", "newmark", 1e-4),
+    "textbook newmark dt=1e-3": ("textbook", "newmark", 1e-3),
+    "textbook newmark dt=1e-4": ("textbook", "newmark", 1e-4),
+    "simulate() adaptive": ("simulate", "adaptive", None),
+    "simulate() newmark dt=1e-3": ("simulate", "newmark", 1e-3),
+}
+
+
+# plain numba, not pound_mc._jit: the yardstick shares nothing with the package's kernels (and
+# stays out of the sources that key their cache)
+@numba.njit(cache=True, nogil=True)
+def textbook_newmark(ag, dt_rec, m1, k1, c1, m2, k2, c2, gap, beta, xi, dt):  # pragma: no cover
+    """Average-acceleration Newmark for two SDOF buildings with the Jankowski contact.
+
+    The textbook scheme (Chopra, Dynamics of Structures, section 5.4 with Newton-Raphson
+    iteration): constant step ``dt``, the record linearly interpolated at the steps, the
+    contact force F = beta delta^1.5 + c delta_dot while approaching (Jankowski 2008,
+    eq. 1.1), solved with the displacements by Newton's method in every step; peak force
+    over the steps.
+
+    Parameters
+    ----------
+    ag : numpy.ndarray
+        Ground acceleration at the record's samples [m/s^2].
+    dt_rec, dt : float
+        Record's sample interval and integration step [s].
+    m1, k1, c1, m2, k2, c2 : float
+        Mass [kg], stiffness [N/m] and damping [N s/m] of the left and right building.
+    gap, beta, xi : float
+        Gap [m], impact stiffness [N/m^1.5] and impact damping ratio [-].
+
+    Returns
+    -------
+    tuple of float
+        Peak force [N], number of impacts, peak |displacement| of the left and right
+        building [m].
+    """
+    n = int(round((ag.size - 1) * dt_rec / dt))
+    mr = m1 * m2 / (m1 + m2)
+    a0 = 4.0 / (dt * dt)
+    a1 = 2.0 / dt
+    kh1 = a0 * m1 + a1 * c1 + k1
+    kh2 = a0 * m2 + a1 * c2 + k2
+    x1 = v1 = x2 = v2 = 0.0
+    acc1 = -ag[0]
+    acc2 = -ag[0]
+    peak = 0.0
+    impacts = 0
+    was_in = False
+    u1max = 0.0
+    u2max = 0.0
+    for i in range(1, n + 1):
+        t = i * dt / dt_rec
+        j = min(int(t), ag.size - 2)
+        g = ag[j] + (t - j) * (ag[j + 1] - ag[j])
+        p1 = -m1 * g + m1 * (a0 * x1 + 4.0 / dt * v1 + acc1) + c1 * (a1 * x1 + v1)
+        p2 = -m2 * g + m2 * (a0 * x2 + 4.0 / dt * v2 + acc2) + c2 * (a1 * x2 + v2)
+        y1 = x1
+        y2 = x2
+        f = 0.0
+        for _ in range(50):
+            d = y1 - y2 - gap
+            w = a1 * (y1 - x1) - v1 - (a1 * (y2 - x2) - v2)  # delta_dot at the step's end
+            f = 0.0
+            kt = 0.0
+            if d > 0.0:
+                sd = math.sqrt(d)
+                f = beta * d * sd
+                kt = 1.5 * beta * sd
+                if w > 0.0:
+                    c = 2.0 * xi * math.sqrt(beta * sd * mr)
+                    f += c * w
+                    kt += c * w / (4.0 * d) + c * a1
+            r1 = kh1 * y1 + f - p1
+            r2 = kh2 * y2 - f - p2
+            j11 = kh1 + kt
+            j22 = kh2 + kt
+            det = j11 * j22 - kt * kt
+            dy1 = -(j22 * r1 + kt * r2) / det
+            dy2 = -(kt * r1 + j11 * r2) / det
+            y1 += dy1
+            y2 += dy2
+            if abs(dy1) + abs(dy2) <= 1e-12 * (abs(y1) + abs(y2) + gap):
+                break
+        w1 = a1 * (y1 - x1) - v1
+        w2 = a1 * (y2 - x2) - v2
+        acc1 = a0 * (y1 - x1) - 4.0 / dt * v1 - acc1
+        acc2 = a0 * (y2 - x2) - 4.0 / dt * v2 - acc2
+        x1, v1, x2, v2 = y1, w1, y2, w2
+        inside = x1 - x2 - gap > 0.0
+        if inside and not was_in:
+            impacts += 1
+        was_in = inside
+        peak = max(peak, f)
+        u1max = max(u1max, abs(x1))
+        u2max = max(u2max, abs(x2))
+    return peak, impacts, u1max, u2max
+
+
+def _textbook_args(scene, record, dt):
+    """Arguments of :func:`textbook_newmark` for an SDOF-pair scene."""
+    dt_rec, acc = record
+    args = []
+    for b in (scene.left, scene.right):
+        m = float(b.storey_mass_kg[0])
+        k = float(b.storey_stiffness_N_per_m[0])
+        args += [m, k, 2.0 * b.damping_ratio * math.sqrt(k * m)]
+    return (acc, float(dt_rec), *args, float(scene.gap_m[0]), float(scene.stiffness),
+            float(scene.xi), float(dt))  # fmt: skip
+
+
+def head_to_head(repeats: int = 15, contenders=None) -> tuple[pd.DataFrame, dict]:
+    """Time the :data:`CONTENDERS` on B1, interleaved, one thread; medians and ratios.
+
+    Every contender runs once before timing (compilation, the scene's cached record), then
+    ``repeats`` rounds each run every contender once in turn.
+
+    Returns
+    -------
+    table : pandas.DataFrame
+        One row per contender: ``label``, ``call``, ``method``, ``dt_s``, ``seconds``
+        (median), ``x_adaptive`` (its time over the ``adaptive`` kernel's, or for the public
+        calls over ``simulate()`` with ``adaptive``), ``peak_force`` [N], ``err_peak_force``
+        (relative, against the SciPy reference), ``impacts``.
+    info : dict
+        ``load_before`` and ``load_after`` (``os.getloadavg()``), ``reference_peak_force``,
+        ``repeats`` and the ``ratios`` named in words.
+    """
+    labels = list(CONTENDERS) if contenders is None else list(contenders)
+    scene = _scene("B1")
+    record = scene.record_arrays()
+    dt_rec, acc = record
+    arrays = scene.kernel_arrays()
+    ref = reference_solution(scene, record=record)
+    kw = dict(model=scene.contact_model, relation=scene.relation, substeps=scene.substeps)
+
+    def call(label):
+        how, method, dt = CONTENDERS[label]
+        if how == "kernel":
+            o = run_kernel(acc, dt_rec, **arrays, method=method, dt_s=dt or scene.dt_s, **kw)
+            return o.outputs["peak_force"], o.outputs["impacts"]
+        if how == "simulate":
+            o = simulate(scene, method=method, dt_s=dt)
+            return o.outputs["peak_force"], o.outputs["impacts"]
+        peak, impacts, _, _ = textbook_newmark(*_textbook_args(scene, record, dt))
+        return peak, impacts
+
+    load_before = os.getloadavg()
+    old = numba.get_num_threads()
+    times = {label: [] for label in labels}
+    try:
+        numba.set_num_threads(1)
+        results = {label: call(label) for label in labels}  # compile, read the record
+        for _ in range(repeats):
+            for label in labels:
+                t0 = time.perf_counter()
+                call(label)
+                times[label].append(time.perf_counter() - t0)
+    finally:
+        numba.set_num_threads(old)
+    med = {label: float(np.median(times[label])) for label in labels}
+    rows = []
+    for label in labels:
+        how, method, dt = CONTENDERS[label]
+        base = "simulate() adaptive" if how == "simulate" else "adaptive"
+        peak, impacts = results[label]
+        rows.append({
+            "label": label,
+            "call": how,
+            "method": method,
+            "dt_s": dt or scene.dt_s,
+            "seconds": med[label],
+            "x_adaptive": med[label] / med[base] if base in med else float("nan"),
+            "peak_force": float(peak),
+            "err_peak_force": abs(peak - ref["peak_force"]) / ref["peak_force"],
+            "impacts": int(impacts),
+        })  # fmt: skip
+
+    def ratio(a, b):
+        return med[a] / med[b] if a in med and b in med else None
+
+    ratios = {
+        "newmark dt=1e-3 / adaptive": ratio("newmark dt=1e-3", "adaptive"),
+        "newmark dt=1e-4 / adaptive": ratio("newmark dt=1e-4", "adaptive"),
+        "textbook dt=1e-3 / newmark dt=1e-3": ratio("textbook newmark dt=1e-3", "newmark dt=1e-3"),
+        "textbook dt=1e-4 / newmark dt=1e-4": ratio("textbook newmark dt=1e-4", "newmark dt=1e-4"),
+        "simulate() newmark / simulate() adaptive": ratio(
+            "simulate() newmark dt=1e-3", "simulate() adaptive"
+        ),
+    }
+    # paired: the difference within each round, so that load common to the round cancels
+    overhead = {
+        f"simulate() overhead {m} [ms]": float(np.median(np.subtract(times[s], times[k])) * 1e3)
+        for m, s, k in (
+            ("adaptive", "simulate() adaptive", "adaptive"),
+            ("newmark dt=1e-3", "simulate() newmark dt=1e-3", "newmark dt=1e-3"),
+        )
+        if s in med and k in med
+    }
+    info = {
+        "repeats": repeats,
+        "threads": 1,
+        "load_before": list(load_before),
+        "load_after": list(os.getloadavg()),
+        "reference_peak_force": float(ref["peak_force"]),
+        "ratios": {k: v for k, v in ratios.items() if v is not None},
+        "overheads": overhead,
+    }
+    return pd.DataFrame(rows), info

@@ -47,6 +47,7 @@ from pound_mc.errors import InputError
 from pound_mc.integrators.threads import numba_threads
 from pound_mc.study.dataset import build_dataset, write_netcdf
 from pound_mc.study.engine import StudyEngine
+from pound_mc.study.warmup import warm_up
 
 __all__ = [
     "Chunk",
@@ -105,6 +106,9 @@ class RunReport:
     complete: bool
     interrupted: bool = False
     simulations_run: int = 0
+    #: Seconds of the warm-up simulation before the chunks (compilation or cache load),
+    #: not counted in ``seconds``.
+    warmup_seconds: float = 0.0
 
     @property
     def rate(self) -> float:
@@ -361,6 +365,11 @@ def run_study(
     else:
         todo_now = todo
 
+    # compile (or load from the cache) the run's kernels before the bar starts, so that its
+    # rate and ETA measure simulations only
+    warmup_s = 0.0
+    if todo_now:
+        warmup_s, _ = warm_up(engine, todo_now[0].start, quiet=not progress)
     t0 = time.perf_counter()
     ran = 0
     simulations_run = 0
@@ -404,7 +413,8 @@ def run_study(
     seconds = time.perf_counter() - t0
     complete = ran == len(todo)
     if not complete:
-        return RunReport(None, n, len(ranges), ran, seconds, False, interrupted, simulations_run)
+        return RunReport(None, n, len(ranges), ran, seconds, False, interrupted, simulations_run,
+                         warmup_s)  # fmt: skip
 
     _pause_at("dataset")
     results = {name: a.reshape(study.shape + a.shape[1:]) for name, a in flat.items()}
@@ -413,4 +423,4 @@ def run_study(
     path = write_netcdf(ds, out_dir / f"{study.name}.nc")
     _pause_at("done")
     seconds = time.perf_counter() - t0
-    return RunReport(path, n, len(ranges), ran, seconds, True, False, simulations_run)
+    return RunReport(path, n, len(ranges), ran, seconds, True, False, simulations_run, warmup_s)

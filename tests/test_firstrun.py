@@ -1,0 +1,158 @@
+"""First-run experience: the scene's cache, the compile notice, ``compile``, ``check``, ``bench``.
+
+No timing is asserted: the notice's delay is set to zero where a test needs it shown, and the
+benchmark's figures are checked for their accuracy and layout, not their speed.
+"""
+
+from __future__ import annotations
+
+import io
+import json
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from pound_mc.cli import main
+from pound_mc.numerics import bench
+from pound_mc.scene import load_scene, simulate
+from pound_mc.study import warmup
+from pound_mc.study.definition import load_study
+from pound_mc.study.runner import run_study
+
+B1 = Path(__file__).resolve().parents[1] / "studies" / "scenes" / "b1.toml"
+#: DESIGN.md section 5: independent tight-tolerance SciPy solution of B1.
+B1_PEAK_FORCE = 7.0259e6
+
+
+@pytest.fixture(scope="module")
+def b1_first():
+    scene = load_scene(B1)
+    return scene, simulate(scene)
+
+
+def test_scene_caches_record_and_arrays(b1_first):
+    scene, first = b1_first
+    # DESIGN.md section 5: 22 impacts, peak 7.0259e6 N (adaptive's error is about 2e-5)
+    assert first.outputs["impacts"] == 22
+    assert first.outputs["peak_force"] == pytest.approx(B1_PEAK_FORCE, rel=1e-4)
+    record = scene.record_arrays()
+    assert scene.record_arrays()[1] is record[1]  # read once
+    assert scene.kernel_arrays() is scene.kernel_arrays()
+    again = simulate(scene)
+    assert again.outputs == first.outputs  # bitwise the same from the cached arrays
+
+
+def test_scene_cache_follows_edits(b1_first):
+    scene, first = b1_first
+    scene = replace(scene)  # a fresh scene of the same values: its own, empty cache
+    assert scene._cache == {}
+    assert simulate(scene).outputs == first.outputs
+    old = scene.record_arrays()[1]
+    scene.record["pga_g"] = 0.6  # in place: the record table is part of the key
+    doubled = scene.record_arrays()[1]
+    np.testing.assert_allclose(np.abs(doubled).max(), 0.6 * 9.80665, rtol=1e-12)
+    assert np.abs(old).max() == pytest.approx(0.3 * 9.80665, rel=1e-12)
+    scene.record["pga_g"] = 0.3
+    scene.gap_m[0] = 1.0  # no contact within 1 m of gap
+    assert simulate(scene).outputs["impacts"] == 0
+    scene.gap_m[0] = 0.01
+    assert simulate(scene).outputs == first.outputs
+    scene.xi = 0.1  # assigning a field drops the cache
+    assert scene._cache == {}
+    softer = simulate(scene)
+    assert softer.outputs["peak_force"] != first.outputs["peak_force"]
+    assert "record" not in replace(scene)._cache
+
+
+def test_compiling_notice_shown_and_not():
+    stream = io.StringIO()
+    with warmup.compiling_notice(stream, after_s=0.0) as state:
+        pass
+    # a zero delay shows the notice as soon as the timer runs (joined before the block ends)
+    assert state["shown"] and warmup.COMPILING_MESSAGE in stream.getvalue()
+    quiet = io.StringIO()
+    with warmup.compiling_notice(quiet, after_s=600.0) as state:
+        pass
+    assert not state["shown"] and quiet.getvalue() == ""
+
+
+def test_run_warms_up_before_the_bar(make_study, tmp_path, monkeypatch, capsys):
+    monkeypatch.setattr(warmup, "NOTICE_AFTER_S", 0.0)  # any warm-up counts as compiling
+    report = run_study(load_study(make_study()), tmp_path / "out", threads=1)
+    err = capsys.readouterr().err
+    assert report.complete
+    notice = err.index(warmup.COMPILING_MESSAGE)
+    # the notice, then the compile report, then the bar (its first draw shows the "sim/s" rate)
+    assert notice < err.index("kernels compiled in") < err.index("sim/s")
+    assert report.warmup_seconds > 0.0
+
+
+def test_run_without_progress_prints_no_notice(make_study, tmp_path, monkeypatch, capsys):
+    monkeypatch.setattr(warmup, "NOTICE_AFTER_S", 0.0)
+    run_study(load_study(make_study()), tmp_path / "out", threads=1, progress=False)
+    assert warmup.COMPILING_MESSAGE not in capsys.readouterr().err
+
+
+def test_compile_command(capsys):
+    args = ["compile", "--methods", "adaptive", "--laws", "jankowski", "--structures", "sdof"]
+    assert main(args) == 0
+    out = capsys.readouterr().out
+    assert warmup.cache_directory() in out
+    assert "1 combinations ready" in out
+    assert "sdof  adaptive" in out
+
+
+@pytest.mark.parametrize(
+    "args, key",
+    [(["--methods", "rk45"], "--methods"), (["--laws", "coulomb"], "--laws")],
+)
+def test_compile_command_rejects_unknown_names(args, key, capsys):
+    assert main(["compile", *args]) == 2
+    assert key in capsys.readouterr().err
+
+
+def test_check_says_compile_time_is_excluded(make_study, capsys):
+    assert main(["check", str(make_study()), "--threads", "1", "--calibrate", "4"]) == 0
+    out = capsys.readouterr().out
+    assert "estimated :" in out
+    assert "compile time not included" in out
+
+
+def test_textbook_newmark_matches_the_package_scheme():
+    scene = load_scene(B1)
+    record = scene.record_arrays()
+    peak, impacts, _, _ = bench.textbook_newmark(*bench._textbook_args(scene, record, 1e-3))
+    ours = simulate(scene, method="newmark", dt_s=1e-3).outputs
+    # the same average-acceleration scheme with Newton on the contact: equal to rounding
+    assert peak == pytest.approx(ours["peak_force"], rel=1e-9)
+    assert impacts == ours["impacts"] == 22
+    # DESIGN.md section 5: Newmark at dt = 1e-3 s is about 6e-4 from the SciPy solution
+    assert abs(peak - B1_PEAK_FORCE) / B1_PEAK_FORCE < 1e-3
+
+
+def test_bench_prints_ratios(capsys):
+    assert main(["bench", "--head-to-head-only", "--repeats", "1"]) == 0
+    out = capsys.readouterr().out
+    assert "load average" in out
+    for label in bench.CONTENDERS:
+        assert label in out
+    assert "newmark dt=1e-3 / adaptive" in out
+    assert "textbook dt=1e-3 / newmark dt=1e-3" in out
+    assert "simulate() newmark / simulate() adaptive" in out
+    assert "x adaptive" in out
+
+
+def test_bench_json(capsys):
+    assert main(["bench", "--head-to-head-only", "--repeats", "1", "--json"]) == 0
+    info = json.loads(capsys.readouterr().out)
+    rows = {r["label"]: r for r in info["head_to_head"]}
+    assert set(rows) == set(bench.CONTENDERS)
+    assert rows["adaptive"]["x_adaptive"] == 1.0
+    # DESIGN.md section 5 / README: adaptive's peak-force error is about 2e-5, newmark's at
+    # dt = 1e-3 s about 7e-4
+    assert rows["adaptive"]["err_peak_force"] < 3e-5
+    assert rows["newmark dt=1e-3"]["err_peak_force"] < 1e-3
+    assert info["reference_peak_force"] == pytest.approx(B1_PEAK_FORCE, rel=1e-5)
+    assert len(info["load_before"]) == 3 and "newmark dt=1e-4 / adaptive" in info["ratios"]
