@@ -15,6 +15,12 @@ Methods (names pinned by DESIGN.md section 4): ``adaptive`` (default,
 ``central-difference`` (:mod:`~pound_mc.integrators.fixed`, and
 :mod:`~pound_mc.integrators.pair` for SDOF pairs).
 
+Batches run on Python threads (as many as numba's thread count, see
+:func:`~pound_mc.integrators.numba_threads`), each calling a serial ``nogil`` kernel over a
+slice of the simulations; there is one such kernel per method family (``adaptive``, the
+fixed-step methods) and per structure (SDOF pairs, any pair of buildings), so that a run
+compiles only the method it uses.
+
 Every run returns the outputs of :data:`OUTPUTS` and a status: 0 ok, 1 unstable (non-finite or
 diverging state, or an energy balance broken either way by more than
 :data:`UNSTABLE_ENERGY_FRACTION` of the energy put in), 2 not converged (Newton).
