@@ -15,6 +15,12 @@ Methods (names pinned by DESIGN.md section 4): ``adaptive`` (default,
 ``central-difference`` (:mod:`~pound_mc.integrators.fixed`, and
 :mod:`~pound_mc.integrators.pair` for SDOF pairs).
 
+Batches run on Python threads (as many as numba's thread count, see
+:func:`~pound_mc.integrators.numba_threads`), each calling a serial ``nogil`` kernel over a
+slice of the simulations; there is one such kernel per method family (``adaptive``, the
+fixed-step methods) and per structure (SDOF pairs, any pair of buildings), so that a run
+compiles only the method it uses.
+
 Every run returns the outputs of :data:`OUTPUTS` and a status: 0 ok, 1 unstable (non-finite or
 diverging state, or an energy balance broken either way by more than
 :data:`UNSTABLE_ENERGY_FRACTION` of the energy put in), 2 not converged (Newton).
@@ -25,6 +31,7 @@ from __future__ import annotations
 
 import math
 from collections import namedtuple
+from concurrent.futures import ThreadPoolExecutor
 from typing import NamedTuple
 
 import numba
@@ -120,21 +127,36 @@ def kernel_settings(
     )
 
 
+@jit(inline=True)
+def _endless(ag, dt_rec, settings):
+    """Whether the step bound is so small (or not positive) that the run could not end."""
+    dt_s = settings.dt_s
+    return not (dt_s > 0.0) or (ag.size - 1) * dt_rec / dt_s > MAX_STEPS
+
+
 @jit
-def _run(
+def _run_adaptive(
     ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi, settings,
     q, v, out, cout, hx, hd, hf, pre,
 ):  # fmt: skip
-    dt_s = settings.dt_s
-    method = settings.method
-    if not (dt_s > 0.0) or (ag.size - 1) * dt_rec / dt_s > MAX_STEPS:
-        # a step so small that the run could not end: flagged as not converged
+    """One run of ``adaptive`` (method 0); a step that could not end is not converged."""
+    if _endless(ag, dt_rec, settings):
         fail(out, cout, STATUS_NOT_CONVERGED)
         return
-    if method == _ADAPTIVE:
-        adaptive(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi, settings,
-                 q, v, out, cout, hx, hd, hf, pre)  # fmt: skip
+    adaptive(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi, settings,
+             q, v, out, cout, hx, hd, hf, pre)  # fmt: skip
+
+
+@jit
+def _run_fixed(
+    ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi, settings,
+    q, v, out, cout, hx, hd, hf, pre,
+):  # fmt: skip
+    """One run of a fixed-step method: the scalar SDOF-pair kernel where it applies."""
+    if _endless(ag, dt_rec, settings):
+        fail(out, cout, STATUS_NOT_CONVERGED)
         return
+    method = settings.method
     if (
         (method == NEWMARK or method == NEWMARK_EXPLICIT) and omega.size == 2 and gap.size == 1
         and phi.shape[0] == 2 and phi[0, 1] == 0.0 and phi[1, 0] == 0.0 and hx.shape[0] == 0
@@ -144,6 +166,38 @@ def _run(
     else:
         fixed(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi, settings,
               q, v, out, cout, hx, hd, hf)  # fmt: skip
+
+
+#: One run of each method (same arguments), by method code: a run compiles only its method's
+#: kernel (numba compiles a kernel with everything it calls, on first use).
+_RUNS = {
+    _ADAPTIVE: _run_adaptive,
+    NEWMARK: _run_fixed,
+    NEWMARK_EXPLICIT: _run_fixed,
+    CENTRAL_DIFFERENCE: _run_fixed,
+}
+
+
+def _threaded(kernel, n: int, *args) -> None:
+    """Call ``kernel(*args, lo, hi)`` over slices of ``range(n)`` on Python threads.
+
+    As many threads as numba's thread count (:func:`~pound_mc.integrators.numba_threads`);
+    the kernels release the GIL and each simulation writes only its own slots, so the results
+    do not depend on the threads or on the slicing.
+    """
+    workers = min(numba.get_num_threads(), n)
+    if workers <= 1:
+        kernel(*args, 0, n)
+        return
+    # a few slices per thread balance simulations of unequal cost
+    bounds = [int(b) for b in np.linspace(0, n, min(n, 4 * workers) + 1).round()]
+    with ThreadPoolExecutor(workers) as pool:
+        done = [
+            pool.submit(kernel, *args, lo, hi)
+            for lo, hi in zip(bounds[:-1], bounds[1:], strict=True)
+        ]
+        for future in done:
+            future.result()
 
 
 def _named(out):
@@ -210,7 +264,7 @@ def run_kernel(
     hd = np.zeros((nh, nc))
     hf = np.zeros((nh, nc))
     f8 = np.float64
-    _run(
+    _RUNS[settings.method](
         np.ascontiguousarray(ag, dtype=f8), f8(dt_rec),
         np.ascontiguousarray(omega, dtype=f8), np.ascontiguousarray(zeta, dtype=f8),
         np.ascontiguousarray(gamma, dtype=f8), np.ascontiguousarray(phi, dtype=f8),
@@ -258,36 +312,57 @@ def _sdof_arrays(k, tl, zl, ml, tr, zr, mr, gap, beta, xi):
     return omega, zeta, gamma, phi, side, psi, g, me, be, x
 
 
-@jit(parallel=True)
-def _sdof_batch(
-    ag, dt_rec, tl, zl, ml, tr, zr, mr, gap, beta, xi, dt_s, settings, out, first, group, shared,
-):  # fmt: skip
-    # 1. adaptive: the linear response up to the first contact of each group of simulations
-    #    that differ only in contact parameters, once per group (``first`` = a member of it)
-    ngroup = first.size
+@jit
+def _sdof_groups(ag, dt_rec, tl, zl, ml, tr, zr, mr, gap, beta, xi, dt_s, settings, first,
+                 shared, lo, hi):  # fmt: skip
+    """``adaptive``: the linear response up to the first contact of groups ``lo:hi``.
+
+    A group gathers the simulations that differ only in contact parameters; its response is
+    run once, from ``first`` (a member of it), and every member resumes from ``shared``.
+    """
     empty = np.zeros((0, 2))
     empty1 = np.zeros((0, 1))
-    if settings.method == _ADAPTIVE:
-        for gi in numba.prange(ngroup):
-            k = first[gi]
-            omega, zeta, gamma, phi, side, psi, g, me, be, x = _sdof_arrays(
-                k, tl, zl, ml, tr, zr, mr, gap, beta, xi
-            )
-            shared[gi, PRE_MODE] = PRE_RUN_TO_CONTACT
-            _run(ag, dt_rec, omega, zeta, gamma, phi, side, psi, g, me, be, x,
-                 _with_step(settings, dt_s[k]), np.zeros(2), np.zeros(2), np.empty(N_OUT),
-                 np.empty((1, N_COUT)), empty, empty1, empty1, shared[gi])  # fmt: skip
-            shared[gi, PRE_MODE] = PRE_RESUME
-    # 2. every simulation, resumed from its group's shared state
-    nsim = tl.size
-    for k in numba.prange(nsim):
+    for gi in range(lo, hi):
+        k = first[gi]
         omega, zeta, gamma, phi, side, psi, g, me, be, x = _sdof_arrays(
             k, tl, zl, ml, tr, zr, mr, gap, beta, xi
         )
-        pre = shared[group[k]] if settings.method == _ADAPTIVE else np.zeros(0)
-        _run(ag, dt_rec, omega, zeta, gamma, phi, side, psi, g, me, be, x,
-             _with_step(settings, dt_s[k]), np.zeros(2), np.zeros(2), out[k],
-             np.empty((1, N_COUT)), empty, empty1, empty1, pre.copy())  # fmt: skip
+        shared[gi, PRE_MODE] = PRE_RUN_TO_CONTACT
+        _run_adaptive(ag, dt_rec, omega, zeta, gamma, phi, side, psi, g, me, be, x,
+                      _with_step(settings, dt_s[k]), np.zeros(2), np.zeros(2), np.empty(N_OUT),
+                      np.empty((1, N_COUT)), empty, empty1, empty1, shared[gi])  # fmt: skip
+        shared[gi, PRE_MODE] = PRE_RESUME
+
+
+@jit
+def _sdof_adaptive(ag, dt_rec, tl, zl, ml, tr, zr, mr, gap, beta, xi, dt_s, settings, out,
+                   group, shared, lo, hi):  # fmt: skip
+    """``adaptive``: simulations ``lo:hi``, each resumed from its group's shared state."""
+    empty = np.zeros((0, 2))
+    empty1 = np.zeros((0, 1))
+    for k in range(lo, hi):
+        omega, zeta, gamma, phi, side, psi, g, me, be, x = _sdof_arrays(
+            k, tl, zl, ml, tr, zr, mr, gap, beta, xi
+        )
+        _run_adaptive(ag, dt_rec, omega, zeta, gamma, phi, side, psi, g, me, be, x,
+                      _with_step(settings, dt_s[k]), np.zeros(2), np.zeros(2), out[k],
+                      np.empty((1, N_COUT)), empty, empty1, empty1,
+                      shared[group[k]].copy())  # fmt: skip
+
+
+@jit
+def _sdof_fixed(ag, dt_rec, tl, zl, ml, tr, zr, mr, gap, beta, xi, dt_s, settings, out, lo,
+                hi):  # fmt: skip
+    """A fixed-step method: simulations ``lo:hi``."""
+    empty = np.zeros((0, 2))
+    empty1 = np.zeros((0, 1))
+    for k in range(lo, hi):
+        omega, zeta, gamma, phi, side, psi, g, me, be, x = _sdof_arrays(
+            k, tl, zl, ml, tr, zr, mr, gap, beta, xi
+        )
+        _run_fixed(ag, dt_rec, omega, zeta, gamma, phi, side, psi, g, me, be, x,
+                   _with_step(settings, dt_s[k]), np.zeros(2), np.zeros(2), out[k],
+                   np.empty((1, N_COUT)), empty, empty1, empty1, np.zeros(0))  # fmt: skip
 
 
 def simulate_sdof_pairs(
@@ -309,7 +384,7 @@ def simulate_sdof_pairs(
     relation: str | None = None,
     substeps: int = 16,
 ) -> dict[str, np.ndarray]:
-    """Run many SDOF-pair simulations on one record in parallel threads.
+    """Run many SDOF-pair simulations on one record in threads.
 
     Every argument after ``dt_rec`` is an array with one value per simulation (or a scalar);
     ``xi`` is the damping ratio (the restitution ``e`` for ``hertzdamp``), ``relation`` the
@@ -326,34 +401,53 @@ def simulate_sdof_pairs(
     arrays = [np.ascontiguousarray(a.ravel()) for a in arrays]
     nsim = arrays[0].size
     out = np.empty((nsim, N_OUT))
+    acc = np.ascontiguousarray(acc, dtype=np.float64)
+    dt_rec = float(dt_rec)
+    if settings.method != _ADAPTIVE:
+        _threaded(_sdof_fixed, nsim, acc, dt_rec, *arrays, settings, out)
+        return _named(out)
     # simulations that differ only in contact parameters share their linear response up to
     # the first contact (periods, damping ratios, masses, gap and step define a group)
     linear = np.stack([arrays[k] for k in (0, 1, 2, 3, 4, 5, 6, 9)], axis=1)
     _, first, group = np.unique(linear, axis=0, return_index=True, return_inverse=True)
     shared = np.zeros((first.size, pre_size(2, 2)))
-    _sdof_batch(
-        np.ascontiguousarray(acc, dtype=np.float64), float(dt_rec), *arrays[:9], arrays[9],
-        settings, out, first.astype(np.int64), group.ravel().astype(np.int64), shared,
-    )  # fmt: skip
+    first = first.astype(np.int64)
+    group = group.ravel().astype(np.int64)
+    _threaded(_sdof_groups, first.size, acc, dt_rec, *arrays, settings, first, shared)
+    _threaded(_sdof_adaptive, nsim, acc, dt_rec, *arrays, settings, out, group, shared)
     return _named(out)
 
 
-@jit(parallel=True)
-def _scene_batch(
-    ag, dt_rec, omega, zeta, gamma, phi, side, psi, meff, gap, beta, xi, dt_s, settings, out,
-    cout,
-):  # fmt: skip
-    nsim = beta.size
+@jit
+def _scene_adaptive(ag, dt_rec, omega, zeta, gamma, phi, side, psi, meff, gap, beta, xi, dt_s,
+                    settings, out, cout, lo, hi):  # fmt: skip
+    """``adaptive``: simulations ``lo:hi`` of one pair of buildings."""
     n = omega.size
     nf = phi.shape[0]
     nc = psi.shape[0]
-    for k in numba.prange(nsim):
+    for k in range(lo, hi):
         empty = np.zeros((0, nf))
         empty1 = np.zeros((0, nc))
-        _run(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap[k].copy(), meff,
-             np.full(nc, beta[k]), np.full(nc, xi[k]), _with_step(settings, dt_s[k]),
-             np.zeros(n), np.zeros(n), out[k], cout[k], empty, empty1, empty1,
-             np.zeros(0))  # fmt: skip
+        _run_adaptive(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap[k].copy(), meff,
+                      np.full(nc, beta[k]), np.full(nc, xi[k]), _with_step(settings, dt_s[k]),
+                      np.zeros(n), np.zeros(n), out[k], cout[k], empty, empty1, empty1,
+                      np.zeros(0))  # fmt: skip
+
+
+@jit
+def _scene_fixed(ag, dt_rec, omega, zeta, gamma, phi, side, psi, meff, gap, beta, xi, dt_s,
+                 settings, out, cout, lo, hi):  # fmt: skip
+    """A fixed-step method: simulations ``lo:hi`` of one pair of buildings."""
+    n = omega.size
+    nf = phi.shape[0]
+    nc = psi.shape[0]
+    for k in range(lo, hi):
+        empty = np.zeros((0, nf))
+        empty1 = np.zeros((0, nc))
+        _run_fixed(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap[k].copy(), meff,
+                   np.full(nc, beta[k]), np.full(nc, xi[k]), _with_step(settings, dt_s[k]),
+                   np.zeros(n), np.zeros(n), out[k], cout[k], empty, empty1, empty1,
+                   np.zeros(0))  # fmt: skip
 
 
 def simulate_scene_batch(
@@ -409,7 +503,10 @@ def simulate_scene_batch(
     out = np.empty((nsim, N_OUT))
     cout = np.empty((nsim, nc, N_COUT))
     f8 = np.float64
-    _scene_batch(
+    kernel = _scene_adaptive if settings.method == _ADAPTIVE else _scene_fixed
+    _threaded(
+        kernel,
+        nsim,
         np.ascontiguousarray(acc, dtype=f8),
         f8(dt_rec),
         *(np.ascontiguousarray(arrays[k], dtype=f8) for k in ("omega", "zeta", "gamma", "phi")),

@@ -1,4 +1,8 @@
-"""How many threads the compiled batch kernels use, set for a block and restored after it."""
+"""How many threads the batches run on, set for a block and restored after it.
+
+The batches of :mod:`pound_mc.integrators.batch` start as many Python threads as numba's
+thread count, each running a serial ``nogil`` kernel over a slice of the simulations.
+"""
 
 from __future__ import annotations
 
