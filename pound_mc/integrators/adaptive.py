@@ -21,13 +21,6 @@ import math
 import numpy as np
 
 from pound_mc._jit import jit
-from pound_mc.integrators.floors import (
-    contact_floors,
-    floor_blocks,
-    floor_values,
-    penetrations,
-    track_floor_blocks,
-)
 from pound_mc.integrators.laws import (
     contact_forces,
     duration,
@@ -68,8 +61,10 @@ from pound_mc.integrators.toolkit import (
     hermite_root,
     mechanical_energy,
     powers,
+    refresh,
     rowdot,
     step_size,
+    track_floors,
 )
 
 # event kinds located inside a contact sub-step
@@ -156,15 +151,17 @@ def _screen_onsets(q, v, q1, v1, p0s, slope, s, hh, dc0, ddc0, dc1, ddc1, omega,
 
     A contact whose penetration ends the step positive crosses zero inside it; one that turns
     back inside the step is checked where the cubic Hermite bound says its maximum may reach
-    zero, on the exact solution.  ``dc1, ddc1``: the penetrations at the step's end.
+    zero, on the exact solution.  Fills ``dc1, ddc1`` with the penetrations at the step's end.
     """
     tau_on = np.inf
     c_on = -1
     for c in range(gap.size):
         d0 = dc0[c]
         dd0 = ddc0[c]
-        d1 = dc1[c]
-        dd1 = ddc1[c]
+        d1 = rowdot(psi, c, q1) - gap[c]
+        dd1 = rowdot(psi, c, v1)
+        dc1[c] = d1
+        ddc1[c] = dd1
         crossing = d1 > 0.0
         t_hi = hh
         if not crossing and dd0 > 0.0 and dd1 < 0.0:
@@ -206,12 +203,12 @@ def _linear_energies(hh, p0s, p1s, slope, en0, en1):
 
 
 @jit(inline=True)
-def _linear_floor_peaks(q, v, xf1, xfd1, p0s, slope, s, hh, phi, nphi, zf, xf0, xfd0, peaks,
+def _linear_floor_peaks(q, v, q1, v1, p0s, slope, s, hh, phi, nphi, zf, xf0, xfd0, peaks,
                         herm_tol, omega, zeta, gamma):  # fmt: skip
     """Continuous-time peak |x| of every floor over a linear step; ``xf0, xfd0`` move on."""
     for f in range(phi.shape[0]):
-        x1 = xf1[f]
-        xd1 = xfd1[f]
+        x1 = rowdot(phi, f, q1)
+        xd1 = rowdot(phi, f, v1)
         m = abs(x1)
         if m > peaks[f]:
             peaks[f] = m
@@ -465,10 +462,6 @@ def adaptive(
     ddc1 = np.empty(nc)
     xf0 = np.empty(nf)
     xfd0 = np.empty(nf)
-    xf1 = np.empty(nf)
-    xfd1 = np.empty(nf)
-    flo, fhi = floor_blocks(phi)  # each floor's own modes
-    cl, cr = contact_floors(phi, psi, flo, fhi)  # each contact's two floors
     en0 = np.empty(4)
     en1 = np.empty(4)
     nphi = -phi
@@ -530,12 +523,9 @@ def adaptive(
                 p1s = ag0 + slope * s_next
                 _exact_step(q, v, q1, v1, coef, regular, p0s, p1s, omega, zeta, gamma, hh)
                 if not fresh:
-                    floor_values(phi, flo, fhi, q, v, xf0, xfd0)
-                    penetrations(xf0, xfd0, q, v, psi, gap, cl, cr, dc0, ddc0)
-                    end_values(q, v, p0s, omega, zeta, gamma, en0)
+                    refresh(q, v, p0s, omega, zeta, gamma, phi, psi, gap, dc0, ddc0, xf0, xfd0,
+                            en0)  # fmt: skip
                     fresh = True
-                floor_values(phi, flo, fhi, q1, v1, xf1, xfd1)
-                penetrations(xf1, xfd1, q1, v1, psi, gap, cl, cr, dc1, ddc1)
                 c_on, tau_on = _screen_onsets(q, v, q1, v1, p0s, slope, s, hh, dc0, ddc0, dc1,
                                               ddc1, omega, zeta, gamma, psi, gap)  # fmt: skip
                 if c_on >= 0 and mode == PRE_RUN_TO_CONTACT:
@@ -544,13 +534,14 @@ def adaptive(
                     hh = tau_on
                     p1s = ag0 + slope * (s + hh)
                     _exact_step(q, v, q1, v1, coef, False, p0s, p1s, omega, zeta, gamma, hh)
-                    floor_values(phi, flo, fhi, q1, v1, xf1, xfd1)
-                    penetrations(xf1, xfd1, q1, v1, psi, gap, cl, cr, dc1, ddc1)
+                    for c in range(nc):
+                        dc1[c] = rowdot(psi, c, q1) - gap[c]
+                        ddc1[c] = rowdot(psi, c, v1)
                 end_values(q1, v1, p1s, omega, zeta, gamma, en1)
                 de_in, de_d = _linear_energies(hh, p0s, p1s, slope, en0, en1)
                 e_in += de_in
                 e_d += de_d
-                _linear_floor_peaks(q, v, xf1, xfd1, p0s, slope, s, hh, phi, nphi, zf, xf0, xfd0,
+                _linear_floor_peaks(q, v, q1, v1, p0s, slope, s, hh, phi, nphi, zf, xf0, xfd0,
                                     peaks, herm_tol, omega, zeta, gamma)  # fmt: skip
                 _shift(q, v, q1, v1, dc0, ddc0, dc1, ddc1, en0, en1)
                 s += hh
@@ -587,7 +578,7 @@ def adaptive(
                 peak_f, peak_t = _contact_peaks(q, v, q1, v1, a0, a1, psi, gap, beta, cd, zhd,
                                                 phase, model, fc0, fc, cimp, cout, hs,
                                                 i * dt_rec + s, peak_f, peak_t)  # fmt: skip
-                track_floor_blocks(phi, flo, fhi, q, v, q1, v1, hs, peaks)
+                track_floors(phi, side, q, v, q1, v1, hs, peaks)
                 for j in range(n):
                     q[j] = q1[j]
                     v[j] = v1[j]
