@@ -29,7 +29,7 @@ from hypothesis import strategies as st
 from test_runner import STUDY, N, _assert_identical
 
 from pound_mc.cli import main
-from pound_mc.integrators import kernels as integrators
+import pound_mc.integrators as integrators
 from pound_mc.physics.relations import xi_from_e
 from pound_mc.study.runner import PAUSE_ENV
 from studies import study_text
@@ -55,7 +55,7 @@ def torn(self, path=None, *args, **kwargs):
     time.sleep(600)
 
 xr.Dataset.to_netcdf = torn
-from pound_mc.integrators import kernels as integrators
+import pound_mc.integrators as integrators
 from pound_mc.cli import main
 from pound_mc.physics.relations import xi_from_e
 sys.exit(main(sys.argv[1:]))

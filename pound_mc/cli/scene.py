@@ -14,7 +14,7 @@ from pound_mc.analysis.plot_numerics import (
     work_precision_chart,
 )
 from pound_mc.errors import InputError
-from pound_mc.integrators.kernels import METHODS
+from pound_mc.integrators import METHODS
 from pound_mc.numerics.bench import SCENES, benchmark, head_to_head
 from pound_mc.numerics.stability import stability_map
 from pound_mc.scene import load_scene, simulate

@@ -268,29 +268,16 @@ def reference_solution(
             if phase[j] == _OPEN:
                 continue
 
-            def force_at(t, j=j):
-                s = dense(t)
-                return _contact_force(
-                    model,
-                    s[il[j]] - s[ir[j]] - gap[j],
-                    s[n + il[j]] - s[n + ir[j]],
-                    beta,
-                    xi,
-                    meff[j],
-                    zhd[j],
-                    phase[j],
-                )
+            def force_of(s, j=j):
+                # penetration and its rate from the state (displacements, then velocities)
+                d = s[il[j]] - s[ir[j]] - gap[j]
+                dd = s[n + il[j]] - s[n + ir[j]]
+                return _contact_force(model, d, dd, beta, xi, meff[j], zhd[j], phase[j])
 
-            fs = _contact_force(
-                model,
-                yy[il[j]] - yy[ir[j]] - gap[j],
-                yy[n + il[j]] - yy[n + ir[j]],
-                beta,
-                xi,
-                meff[j],
-                zhd[j],
-                phase[j],
-            )
+            def force_at(t, force_of=force_of):
+                return force_of(dense(t))
+
+            fs = force_of(yy)
             kk = int(np.argmax(fs))
             val = float(fs[kk])
             t_best = grid[kk]

@@ -11,7 +11,7 @@ and contact duration are accurate to about 1e-9.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 from scipy.integrate import solve_ivp
@@ -44,19 +44,8 @@ class DropTestResult:
     force_N: np.ndarray = field(repr=False)
 
     def as_dict(self) -> dict:
-        """Scalar results as a JSON-ready dict."""
-        return {
-            "model": self.model,
-            "mass_kg": self.mass_kg,
-            "velocity_m_s": self.velocity_m_s,
-            "beta": self.beta,
-            "xi": self.xi,
-            "m_eff_kg": self.m_eff_kg,
-            "restitution": self.restitution,
-            "max_penetration_m": self.max_penetration_m,
-            "peak_force_N": self.peak_force_N,
-            "contact_duration_s": self.contact_duration_s,
-        }
+        """Scalar results as a JSON-ready dict (every field but the time histories)."""
+        return {f.name: getattr(self, f.name) for f in fields(self) if f.repr}
 
 
 def _positive(name, value):

@@ -2,7 +2,7 @@
 
 A scene holds ``[record]``, ``[left]``, ``[right]``, ``[contact]`` and ``[integrator]``
 (``../shared/DESIGN.md`` section 6), declared in :mod:`pound_mc.scene.schema`.
-:func:`simulate` runs it through the compiled kernels of :mod:`pound_mc.integrators.kernels`.
+:func:`simulate` runs it through the compiled kernels of :mod:`pound_mc.integrators`.
 """
 
 from __future__ import annotations

@@ -22,7 +22,7 @@ from pathlib import Path
 from typing import Any
 
 from pound_mc.errors import InputError, InputErrors
-from pound_mc.integrators.kernels import METHODS
+from pound_mc.integrators import METHODS
 from pound_mc.motions import UNITS, builtin_catalogue, suites, synthetic
 from pound_mc.physics import contact
 from pound_mc.physics.contact import CONTACT_MODELS

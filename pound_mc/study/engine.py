@@ -7,7 +7,7 @@ range's results depend only on the study and the indices - not on threads, chunk
 backend.
 
 SDOF pairs run through :func:`~pound_mc.integrators.simulate_sdof_pairs`; a pair with a shear
-building through :func:`~pound_mc.integrators.kernels.simulate_scene_batch` with the modes of the
+building through :func:`~pound_mc.integrators.simulate_scene_batch` with the modes of the
 study's one structure (:meth:`~pound_mc.scene.Scene.modal_arrays`, computed once), and then
 also gives the per-contact outputs of :data:`~pound_mc.study.dataset.CONTACT_VARIABLES`.
 """
@@ -22,9 +22,9 @@ import numpy as np
 import scipy
 import xarray as xr
 
+import pound_mc.integrators as integrators
 from pound_mc._version import __version__
 from pound_mc.errors import InputError, InputErrors
-from pound_mc.integrators import kernels as integrators
 from pound_mc.integrators.threads import numba_threads
 from pound_mc.motions import G, load_record, record_arrays
 from pound_mc.motions.intensity import sa_g
