@@ -28,8 +28,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from test_runner import STUDY, N, _assert_identical
 
-from pound_mc.cli import main
 import pound_mc.integrators as integrators
+from pound_mc.cli import main
 from pound_mc.physics.relations import xi_from_e
 from pound_mc.study.runner import PAUSE_ENV
 from studies import study_text
