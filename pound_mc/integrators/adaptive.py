@@ -63,7 +63,7 @@ from pound_mc.integrators.toolkit import (
     powers,
     refresh,
     rowdot,
-    step_size,
+    run_sizes,
     track_floors,
 )
 
@@ -436,12 +436,7 @@ def adaptive(
     model = settings.model
     relation = settings.relation
     substeps = settings.substeps
-    n = q.size
-    nc = gap.size
-    nf = phi.shape[0]
-    npts = ag.size
-    m_sub, h = step_size(dt_rec, settings.dt_s)
-    cd = 2.0 * xi * np.sqrt(beta * meff)  # damping constants c0 of the force laws
+    n, nc, nf, npts, m_sub, h, cd = run_sizes(ag, dt_rec, phi, gap, meff, beta, xi, settings, q)
     coef = np.empty((n, 2, 4))
     for j in range(n):
         coef[j] = coefficients(omega[j], zeta[j], h)

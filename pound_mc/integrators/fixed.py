@@ -42,8 +42,9 @@ from pound_mc.integrators.toolkit import (
     mechanical_energy,
     powers,
     rowdot,
+    run_sizes,
     solve_small,
-    step_size,
+    trapezoid,
 )
 
 #: Method codes of this module (the boundary maps names to them).
@@ -134,12 +135,7 @@ def fixed(
     model = settings.model
     relation = settings.relation
     method = settings.method
-    n = q.size
-    nc = gap.size
-    nf = phi.shape[0]
-    npts = ag.size
-    m_sub, h = step_size(dt_rec, settings.dt_s)
-    cd = 2.0 * xi * np.sqrt(beta * meff)  # damping constants c0 of the force laws
+    n, nc, nf, npts, m_sub, h, cd = run_sizes(ag, dt_rec, phi, gap, meff, beta, xi, settings, q)
     n_steps = (npts - 1) * m_sub
     store = hx.shape[0] > 0
     a = np.empty(n)
@@ -242,9 +238,8 @@ def fixed(
             for c in range(nc):
                 pc1 += fc[c] * rowdot(psi, c, v)
             if step > 0:
-                e_in += 0.5 * h * (pin_prev + pin1)
-                e_d += 0.5 * h * (pd_prev + pd1)
-                w_c += 0.5 * h * (pc_prev + pc1)
+                e_in, e_d, w_c = trapezoid(h, e_in, e_d, w_c, pin_prev, pd_prev, pc_prev,
+                                           pin1, pd1, pc1)  # fmt: skip
                 for c in range(nc):
                     cout[c, C_IMPULSE] += 0.5 * h * (fprev[c] + fc[c])
             for c in range(nc):
@@ -254,9 +249,7 @@ def fixed(
                 if fc[c] > peak_f:
                     peak_f = fc[c]
                     peak_t = t1 - h
-            pin_prev = pin1
-            pd_prev = pd1
-            pc_prev = pc1
+            pin_prev, pd_prev, pc_prev = pin1, pd1, pc1
             for j in range(n):
                 qprev[j] = q[j]
                 q[j] = qn[j]
@@ -304,9 +297,8 @@ def fixed(
             pc1 = 0.0
             for c in range(nc):
                 pc1 += fn[c] * ddpen[c]
-            e_in += 0.5 * h * (pin_prev + pin1)
-            e_d += 0.5 * h * (pd_prev + pd1)
-            w_c += 0.5 * h * (pc_prev + pc1)
+            e_in, e_d, w_c = trapezoid(h, e_in, e_d, w_c, pin_prev, pd_prev, pc_prev,
+                                       pin1, pd1, pc1)  # fmt: skip
             for c in range(nc):
                 cout[c, C_IMPULSE] += 0.5 * h * (fc[c] + fn[c])
                 if fn[c] > cout[c, C_PEAK_FORCE]:
@@ -314,9 +306,7 @@ def fixed(
                 if fn[c] > peak_f:
                     peak_f = fn[c]
                     peak_t = t1
-            pin_prev = pin1
-            pd_prev = pd1
-            pc_prev = pc1
+            pin_prev, pd_prev, pc_prev = pin1, pd1, pc1
             for j in range(n):
                 q[j] = qn[j]
                 v[j] = vn[j]

@@ -12,20 +12,10 @@ import math
 import numpy as np
 
 from pound_mc._jit import jit
+from pound_mc.integrators import outputs
 from pound_mc.integrators.fixed import NEWMARK_EXPLICIT
 from pound_mc.integrators.laws import episode_zeta, force, newton_scalar, phase_of, stored
-from pound_mc.integrators.outputs import (
-    C_IMPACTS,
-    C_IMPULSE,
-    C_MAX_PENETRATION,
-    C_PEAK_FORCE,
-    DIVERGENCE_LIMIT_M,
-    STATUS_NOT_CONVERGED,
-    STATUS_OK,
-    STATUS_UNSTABLE,
-    finish,
-)
-from pound_mc.integrators.toolkit import step_size
+from pound_mc.integrators.toolkit import step_size, trapezoid
 
 
 @jit
@@ -83,7 +73,7 @@ def newmark_pair(
     peak_t = 0.0
     pk0 = 0.0
     pk1 = 0.0
-    status = STATUS_OK
+    status = outputs.STATUS_OK
     steps = 0
     for i in range(npts - 1):
         dag = (ag[i + 1] - ag[i]) * inv_m
@@ -98,7 +88,7 @@ def newmark_pair(
             elif dstar > 0.0:
                 fn, conv = newton_scalar(model, dstar, dpen, ddpen, gg, c2h, fc, b, cd, zhd)
                 if not conv:
-                    status = STATUS_NOT_CONVERGED
+                    status = outputs.STATUS_NOT_CONVERGED
             else:
                 fn = 0.0
             n0 = qs0 - fn * ps0 * ik0
@@ -125,16 +115,13 @@ def newmark_pair(
             pin1 = -ag1 * (g0 * v0 + g1 * v1)
             pd1 = zw0 * v0 * v0 + zw1 * v1 * v1
             pc1 = fn * dd1
-            e_in += 0.5 * h * (pin_prev + pin1)
-            e_d += 0.5 * h * (pd_prev + pd1)
-            w_c += 0.5 * h * (pc_prev + pc1)
+            e_in, e_d, w_c = trapezoid(h, e_in, e_d, w_c, pin_prev, pd_prev, pc_prev,
+                                       pin1, pd1, pc1)  # fmt: skip
             impulse += 0.5 * h * (fc + fn)
             if fn > peak_f:
                 peak_f = fn
                 peak_t = (i * m_sub + k + 1) * h
-            pin_prev = pin1
-            pd_prev = pd1
-            pc_prev = pc1
+            pin_prev, pd_prev, pc_prev = pin1, pd1, pc1
             fc = fn
             x0 = abs(f0 * q0)
             x1 = abs(f1 * q1)
@@ -142,16 +129,16 @@ def newmark_pair(
                 pk0 = x0
             if x1 > pk1:
                 pk1 = x1
-            if not (x0 < DIVERGENCE_LIMIT_M and x1 < DIVERGENCE_LIMIT_M):
-                status = STATUS_UNSTABLE
+            if not (x0 < outputs.DIVERGENCE_LIMIT_M and x1 < outputs.DIVERGENCE_LIMIT_M):
+                status = outputs.STATUS_UNSTABLE
                 break
-        if status == STATUS_UNSTABLE:
+        if status == outputs.STATUS_UNSTABLE:
             break
     q[0], q[1], v[0], v[1] = q0, q1, v0, v1
-    cout[0, C_PEAK_FORCE] = peak_f
-    cout[0, C_IMPACTS] = impacts
-    cout[0, C_MAX_PENETRATION] = maxpen
-    cout[0, C_IMPULSE] = impulse
+    cout[0, outputs.C_PEAK_FORCE] = peak_f
+    cout[0, outputs.C_IMPACTS] = impacts
+    cout[0, outputs.C_MAX_PENETRATION] = maxpen
+    cout[0, outputs.C_IMPULSE] = impulse
     peaks = np.empty(2)
     peaks[0] = pk0
     peaks[1] = pk1
@@ -160,5 +147,5 @@ def newmark_pair(
     if dpen > 0.0:
         stored_energy = stored(model, dpen, b)
         phase[0] = 1
-    finish(out, cout, peaks, side, phase, q, v, omega, e0, e_in, e_d, w_c, stored_energy,
-           peak_f, peak_t, steps, status)  # fmt: skip
+    outputs.finish(out, cout, peaks, side, phase, q, v, omega, e0, e_in, e_d, w_c, stored_energy,
+                   peak_f, peak_t, steps, status)  # fmt: skip

@@ -33,6 +33,32 @@ def step_size(dt_rec, dt_s):
     return m_sub, dt_rec / m_sub
 
 
+@jit(inline=True)
+def run_sizes(ag, dt_rec, phi, gap, meff, beta, xi, settings, q):
+    """Sizes, step and damping constants every kernel starts a run with.
+
+    Returns ``(n, nc, nf, npts, m_sub, h, cd)``: modes, contacts, floors, record samples,
+    steps per record interval and their length [s] (:func:`step_size`), and the damping
+    constants ``c0 = 2 xi sqrt(beta m_eff)`` of the force laws per contact.
+    """
+    m_sub, h = step_size(dt_rec, settings.dt_s)
+    cd = 2.0 * xi * np.sqrt(beta * meff)
+    return q.size, gap.size, phi.shape[0], ag.size, m_sub, h, cd
+
+
+@jit(inline=True)
+def trapezoid(h, e_in, e_d, w_c, pin0, pd0, pc0, pin1, pd1, pc1):
+    """Energy input, damping and contact work [J] after one trapezoidal step of ``h`` [s].
+
+    ``pin``, ``pd``, ``pc``: input, damping and contact powers [W] at the step's two ends.
+    """
+    return (
+        e_in + 0.5 * h * (pin0 + pin1),
+        e_d + 0.5 * h * (pd0 + pd1),
+        w_c + 0.5 * h * (pc0 + pc1),
+    )
+
+
 @jit
 def advance(q, v, p0, p1, w, z, h):
     """Exact state after ``h`` of ``q'' + 2 z w q' + w^2 q = p`` with ``p`` linear p0 -> p1.
