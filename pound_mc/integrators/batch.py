@@ -33,6 +33,7 @@ import numpy as np
 from pound_mc._jit import jit
 from pound_mc.errors import InputError
 from pound_mc.integrators.adaptive import adaptive
+from pound_mc.integrators.adaptive_pair import adaptive_pair
 from pound_mc.integrators.fixed import CENTRAL_DIFFERENCE, NEWMARK, NEWMARK_EXPLICIT, fixed
 from pound_mc.integrators.laws import LAW_CODES, RELATION_CODES
 from pound_mc.integrators.outputs import (
@@ -131,14 +132,19 @@ def _run(
         # a step so small that the run could not end: flagged as not converged
         fail(out, cout, STATUS_NOT_CONVERGED)
         return
+    pair = (
+        omega.size == 2 and gap.size == 1 and phi.shape[0] == 2 and phi[0, 1] == 0.0
+        and phi[1, 0] == 0.0
+    )  # fmt: skip
+    if method == _ADAPTIVE and pair:
+        adaptive_pair(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi,
+                      settings, q, v, out, cout, hx, hd, hf, pre)  # fmt: skip
+        return
     if method == _ADAPTIVE:
         adaptive(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi, settings,
                  q, v, out, cout, hx, hd, hf, pre)  # fmt: skip
         return
-    if (
-        (method == NEWMARK or method == NEWMARK_EXPLICIT) and omega.size == 2 and gap.size == 1
-        and phi.shape[0] == 2 and phi[0, 1] == 0.0 and phi[1, 0] == 0.0 and hx.shape[0] == 0
-    ):  # fmt: skip
+    if (method == NEWMARK or method == NEWMARK_EXPLICIT) and pair and hx.shape[0] == 0:
         newmark_pair(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi,
                      settings, q, v, out, cout)  # fmt: skip
     else:
