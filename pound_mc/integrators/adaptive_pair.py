@@ -13,6 +13,9 @@ holds it to the general kernel.
 Notation: mode ``j`` (0 left, 1 right) has circular frequency ``w_j`` [rad/s], damping ratio
 ``z_j``, participation ``g_j = sqrt(m_j)`` [kg^0.5] (mass-normalised, ``q_j = sqrt(m_j) x_j``);
 the penetration is ``delta = ps0 q0 + ps1 q1 - gap`` and floor ``j`` moves ``x_j = f_j q_j``.
+
+Longer than 600 lines because the scalar state of the two modes is spelled out (four scalars
+for every array of the general kernel) and the Jankowski approach phase has its own RK4 step.
 """
 
 from __future__ import annotations
@@ -22,7 +25,14 @@ import math
 import numpy as np
 
 from pound_mc._jit import jit
-from pound_mc.integrators.laws import duration, episode_zeta, force, force_rate, stored
+from pound_mc.integrators.laws import (
+    LAW_CODES,
+    duration,
+    episode_zeta,
+    force,
+    force_rate,
+    stored,
+)
 from pound_mc.integrators.outputs import (
     C_IMPACTS,
     C_IMPULSE,
@@ -57,6 +67,14 @@ _TWELFTH = 1.0 / 12.0
 #: Contact onset located to this fraction of the step [-] (1e-12 of a 0.01 s step: the
 #: penetration at the located onset is ~1e-14 v0, far below anything the contact phase resolves).
 ONSET_TOL = 1e-12
+_JANKOWSKI = LAW_CODES["jankowski"]
+#: Sub-steps after onset grow geometrically from ``RAMP_START`` of the contact sub-step by a
+#: factor ``1 + RAMP_GROWTH``; Jankowski's approach phase integrates ``u = v + psi D(delta)``
+#: (below), which takes the ``delta^0.25`` singularity out of the velocities and lets the ramp
+#: start later and grow faster at the same accuracy (B1: peak force +7e-6 against the SciPy
+#: reference, the general kernel's ramp +2.2e-5).
+RAMP_START, RAMP_GROWTH = 1e-3, 1.0
+RAMP_START_POT, RAMP_GROWTH_POT = 1e-2, 2.0
 
 
 @jit
@@ -177,7 +195,87 @@ def _stage(q0, q1, v0, v1, ag, k0, ww0, g0, k1, ww1, g1, ps0, ps1, gp, b, cd, zh
     return fc, dd, a0, a1
 
 
-@jit
+@jit(inline=True)
+def _stage_pot(q0, q1, u0, u1, ag, k0, ww0, g0, k1, ww1, g1, ps0, ps1, gp, b, cd, kpot):
+    """Jankowski approach phase at state ``(q, u)``: force, rate, ``v``, ``u'``, damping force.
+
+    ``u = v + psi D(delta)`` with ``D = 0.8 c0 delta^1.25``, whose rate is the damping force
+    ``c0 delta^0.25 delta_dot`` of the law (seed eq. (1.1)): ``u' = `` the accelerations without it.
+    """
+    d = ps0 * q0 + ps1 * q1 - gp
+    pot = 0.0
+    fel = 0.0
+    cq = 0.0
+    if d > 0.0:
+        sd = math.sqrt(d)
+        qd = math.sqrt(sd)
+        pot = kpot * d * qd
+        fel = b * d * sd
+        cq = cd * qd
+    v0 = u0 - ps0 * pot
+    v1 = u1 - ps1 * pot
+    dd = ps0 * v0 + ps1 * v1
+    fdamp = cq * dd
+    au0 = k0 * v0 - ww0 * q0 - g0 * ag - fel * ps0
+    au1 = k1 * v1 - ww1 * q1 - g1 * ag - fel * ps1
+    return fel, fdamp, dd, v0, v1, au0, au1
+
+
+@jit(inline=True)
+def _potential(q0, q1, ps0, ps1, gp, kpot):
+    """``D(delta) = 0.8 c0 delta^1.25`` (0 without contact)."""
+    d = ps0 * q0 + ps1 * q1 - gp
+    return kpot * d * math.sqrt(math.sqrt(d)) if d > 0.0 else 0.0
+
+
+@jit(inline=True)
+def _rk4_pot(
+    q0, q1, v0, v1, s, hs, ag0, slope, k0, ww0, g0, k1, ww1, g1, zw2_0, zw2_1, ps0, ps1, gp,
+    b, cd, kpot,
+):  # fmt: skip
+    """:func:`_rk4_pair` for Jankowski's approach phase, in ``(q, u = v + psi D(delta))``.
+
+    The damping force is the rate of ``D``: its impulse over the step is the change of ``D``
+    (exact), and ``u`` sees only the elastic force, which is smooth enough for RK4 from onset.
+    """
+    pot0 = _potential(q0, q1, ps0, ps1, gp, kpot)
+    u0 = v0 + ps0 * pot0
+    u1 = v1 + ps1 * pot0
+    h6 = hs / 6.0
+    e_in = e_d = w_c = imp = 0.0
+    sq0 = sq1 = su0 = su1 = 0.0
+    kq0 = kq1 = ku0 = ku1 = 0.0
+    fc_start = acc0 = acc1 = 0.0
+    for stage in range(4):
+        fac = 0.0 if stage == 0 else (hs if stage == 3 else 0.5 * hs)
+        wgt = 1.0 if stage == 0 or stage == 3 else 2.0
+        ag = ag0 + slope * (s + fac)
+        fel, fdamp, dd, wv0, wv1, au0, au1 = _stage_pot(
+            q0 + fac * kq0, q1 + fac * kq1, u0 + fac * ku0, u1 + fac * ku1, ag, k0, ww0, g0,
+            k1, ww1, g1, ps0, ps1, gp, b, cd, kpot,
+        )  # fmt: skip
+        fc = fel + fdamp
+        if stage == 0:
+            fc_start = fc
+            acc0 = au0 - ps0 * fdamp
+            acc1 = au1 - ps1 * fdamp
+        kq0, kq1, ku0, ku1 = wv0, wv1, au0, au1
+        sq0 += wgt * kq0
+        sq1 += wgt * kq1
+        su0 += wgt * ku0
+        su1 += wgt * ku1
+        e_in -= wgt * (ag * g0 * wv0 + ag * g1 * wv1)
+        e_d += wgt * (zw2_0 * wv0 * wv0 + zw2_1 * wv1 * wv1)
+        w_c += wgt * (fc * dd)
+        imp += wgt * fel
+    nq0 = q0 + h6 * sq0
+    nq1 = q1 + h6 * sq1
+    pot1 = _potential(nq0, nq1, ps0, ps1, gp, kpot)
+    return (nq0, nq1, u0 + h6 * su0 - ps0 * pot1, u1 + h6 * su1 - ps1 * pot1, h6 * e_in,
+            h6 * e_d, h6 * w_c, h6 * imp + (pot1 - pot0), fc_start, acc0, acc1)  # fmt: skip
+
+
+@jit(inline=True)
 def _rk4_pair(
     q0, q1, v0, v1, s, hs, ag0, slope, k0, ww0, g0, k1, ww1, g1, zw2_0, zw2_1, ps0, ps1, gp,
     b, cd, zhd, phase, model, have, fcs, as0, as1,
@@ -300,6 +398,10 @@ def adaptive_pair(
     in_contact = False
     fsal = False
     fc_end = ae0 = ae1 = 0.0
+    pot = model == _JANKOWSKI
+    kpot = 0.8 * cd
+    ramp_0 = RAMP_START_POT if pot else RAMP_START
+    ramp_k = RAMP_GROWTH_POT if pot else RAMP_GROWTH
     status = STATUS_OK
     store = hx.shape[0] > 0
     mode = int(pre[PRE_MODE]) if pre.size > 0 else 0
@@ -451,7 +553,7 @@ def adaptive_pair(
                 fresh = False
                 # sub-steps graded geometrically away from onset and towards separation,
                 # where the force law is not smooth (delta^0.25, delta^0.5 terms)
-                hs = min(hc, max(1.0 * (i * dt_rec + s - t_onset), hc * 1e-3))
+                hs = min(hc, max(ramp_k * (i * dt_rec + s - t_onset), hc * ramp_0))
                 if phase == 2:
                     ddc = ps0 * v0 + ps1 * v1
                     if ddc < 0.0:
@@ -459,10 +561,16 @@ def adaptive_pair(
                         hs = min(hs, max(-0.5 * dc / ddc, hc * 0.25))
                 if hs >= dt_rec - s or dt_rec - s - hs < 1e-9 * hc:
                     hs = dt_rec - s
-                (nq0, nq1, nv0, nv1, de_in, de_d, dw_c, cimp, fc0, ac0, ac1) = _rk4_pair(
-                    q0, q1, v0, v1, s, hs, ag0, slope, k0, ww0, g0, k1, ww1, g1, zw2_0, zw2_1,
-                    ps0, ps1, gp, b, cd, zhd, phase, model, fsal, fc_end, ae0, ae1,
-                )  # fmt: skip
+                if pot and phase == 1:
+                    (nq0, nq1, nv0, nv1, de_in, de_d, dw_c, cimp, fc0, ac0, ac1) = _rk4_pot(
+                        q0, q1, v0, v1, s, hs, ag0, slope, k0, ww0, g0, k1, ww1, g1, zw2_0,
+                        zw2_1, ps0, ps1, gp, b, cd, kpot,
+                    )  # fmt: skip
+                else:
+                    (nq0, nq1, nv0, nv1, de_in, de_d, dw_c, cimp, fc0, ac0, ac1) = _rk4_pair(
+                        q0, q1, v0, v1, s, hs, ag0, slope, k0, ww0, g0, k1, ww1, g1, zw2_0,
+                        zw2_1, ps0, ps1, gp, b, cd, zhd, phase, model, fsal, fc_end, ae0, ae1,
+                    )  # fmt: skip
                 fc1, _, ae0, ae1 = _stage(nq0, nq1, nv0, nv1, ag0 + slope * (s + hs), k0, ww0,
                                           g0, k1, ww1, g1, ps0, ps1, gp, b, cd, zhd, phase,
                                           model)  # fmt: skip
@@ -496,10 +604,16 @@ def adaptive_pair(
                 event = t_ev < _INF
                 if event and t_ev < hs:
                     hs = t_ev
-                    (nq0, nq1, nv0, nv1, de_in, de_d, dw_c, cimp, fc0, ac0, ac1) = _rk4_pair(
-                        q0, q1, v0, v1, s, hs, ag0, slope, k0, ww0, g0, k1, ww1, g1, zw2_0,
-                        zw2_1, ps0, ps1, gp, b, cd, zhd, phase, model, True, fc0, ac0, ac1,
-                    )  # fmt: skip
+                    if pot and phase == 1:
+                        (nq0, nq1, nv0, nv1, de_in, de_d, dw_c, cimp, fc0, ac0, ac1) = _rk4_pot(
+                            q0, q1, v0, v1, s, hs, ag0, slope, k0, ww0, g0, k1, ww1, g1, zw2_0,
+                            zw2_1, ps0, ps1, gp, b, cd, kpot,
+                        )  # fmt: skip
+                    else:
+                        (nq0, nq1, nv0, nv1, de_in, de_d, dw_c, cimp, fc0, ac0, ac1) = _rk4_pair(
+                            q0, q1, v0, v1, s, hs, ag0, slope, k0, ww0, g0, k1, ww1, g1, zw2_0,
+                            zw2_1, ps0, ps1, gp, b, cd, zhd, phase, model, True, fc0, ac0, ac1,
+                        )  # fmt: skip
                     fc1, _, ae0, ae1 = _stage(nq0, nq1, nv0, nv1, ag0 + slope * (s + hs), k0,
                                               ww0, g0, k1, ww1, g1, ps0, ps1, gp, b, cd,
                                               zhd, phase, model)  # fmt: skip
