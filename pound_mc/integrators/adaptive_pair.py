@@ -405,6 +405,7 @@ def adaptive_pair(
     fsal = False
     fc_end = ae0 = ae1 = 0.0
     pot = model == _JANKOWSKI
+    whole = m_sub == 1
     kpot = 0.8 * cd
     ramp_0 = RAMP_START_POT if pot else RAMP_START
     ramp_k = RAMP_GROWTH_POT if pot else RAMP_GROWTH
@@ -433,6 +434,59 @@ def adaptive_pair(
         s = 0.0
         k_grid = 0  # index of the next grid point within the interval
         fsal = False  # a new interval: new load, the next sub-step starts afresh
+        if whole and fresh and not in_contact:
+            # ---------------- the interval in one exact step (one step per interval) where
+            # nothing happens inside it: no onset, no turning penetration, no floor extremum;
+            # the same arithmetic as the general linear step below, which takes the others
+            p0s = ag0 + slope * s
+            p1s = ag0 + slope * dt_rec
+            p0 = -g0 * p0s
+            p1 = -g0 * p1s
+            nq0 = a00 * q0 + a01 * v0 + a02 * p0 + a03 * p1
+            nv0 = b00 * q0 + b01 * v0 + b02 * p0 + b03 * p1
+            p0 = -g1 * p0s
+            p1 = -g1 * p1s
+            nq1 = a10 * q1 + a11 * v1 + a12 * p0 + a13 * p1
+            nv1 = b10 * q1 + b11 * v1 + b12 * p0 + b13 * p1
+            d1 = ps0 * nq0 + ps1 * nq1 - gp
+            dd1 = ps0 * nv0 + ps1 * nv1
+            xb0, xdb0, xb1, xdb1 = f0 * nq0, f0 * nv0, f1 * nq1, f1 * nv1
+            # a turning penetration or floor matters only where the bound of its cubic Hermite
+            # says the general step's screen could act (margin and tolerance as there)
+            quiet = d1 <= 0.0
+            if quiet and ddc0 > 0.0 and dd1 < 0.0:
+                margin = 0.05 * (abs(ddc0) + abs(dd1)) * dt_rec
+                bnd = max(dc0, d1) + _hermite_spread(dc0, ddc0, d1, dd1, dt_rec)
+                quiet = bnd < -margin * (1.0 + 1e-9)
+            if quiet and (xfd0 > 0.0) != (xdb0 > 0.0):
+                bnd = max(abs(xf0), abs(xb0)) + _hermite_spread(xf0, xfd0, xb0, xdb0, dt_rec)
+                quiet = bnd * (1.0 + herm_tol + 1e-9) < pk0
+            if quiet and (xfd1 > 0.0) != (xdb1 > 0.0):
+                bnd = max(abs(xf1), abs(xb1)) + _hermite_spread(xf1, xfd1, xb1, xdb1, dt_rec)
+                quiet = bnd * (1.0 + herm_tol + 1e-9) < pk1
+            if quiet:
+                steps += 1
+                en1_0, en1_1, en1_2, en1_3 = _ends(nq0, nq1, nv0, nv1, p1s, k0, ww0, g0, k1, ww1,
+                                                   g1, zw2_0, zw2_1, zw4_0, zw4_1)  # fmt: skip
+                hh = dt_rec
+                pin0 = -p0s * en0_0
+                pin1 = -p1s * en1_0
+                dpin0 = -(slope * en0_0 + p0s * en0_1)
+                dpin1 = -(slope * en1_0 + p1s * en1_1)
+                hh12 = hh * hh * _TWELFTH
+                e_in += 0.5 * hh * (pin0 + pin1) + hh12 * (dpin0 - dpin1)
+                e_d += 0.5 * hh * (en0_2 + en1_2) + hh12 * (en0_3 - en1_3)
+                pk0 = max(pk0, abs(xb0))
+                pk1 = max(pk1, abs(xb1))
+                xf0, xfd0, xf1, xfd1 = xb0, xdb0, xb1, xdb1
+                dc0 = d1
+                ddc0 = dd1
+                en0_0, en0_1, en0_2, en0_3 = en1_0, en1_1, en1_2, en1_3
+                q0, q1, v0, v1 = nq0, nq1, nv0, nv1
+                if not math.isfinite(q0 + q1 + v0 + v1):
+                    status = STATUS_UNSTABLE
+                    break
+                continue
         while s < dt_rec * (1.0 - 1e-12):
             steps += 1
             if steps > budget:
@@ -717,6 +771,18 @@ def adaptive_pair(
         stored_energy = stored(model, ps0 * q0 + ps1 * q1 - gp, b)
     finish(out, cout, peaks, side, ph, q, v, omega, e0, e_in, e_d, w_c, stored_energy, peak_f,
            peak_t, steps, status)  # fmt: skip
+
+
+@jit(inline=True)
+def _hermite_spread(y0, yp0, y1, yp1, h):
+    """How far the cubic Hermite interpolant on ``[0, h]`` may exceed its larger end value.
+
+    Its rate is ``yp0 (1 - s) + yp1 s + C s (1 - s)`` per ``s = t / h``, with
+    ``C = 6 (y1 - y0) / h - 3 (yp0 + yp1)``, at most ``M = max|yp| + |C| / 4`` in magnitude;
+    the interpolant is within ``M h / 2`` of the nearer end, in value and in magnitude.
+    """
+    m = max(abs(yp0), abs(yp1)) + 0.25 * abs(6.0 * (y1 - y0) / h - 3.0 * (yp0 + yp1))
+    return 0.5 * m * h
 
 
 @jit(inline=True)
