@@ -40,6 +40,7 @@ import numpy as np
 from pound_mc._jit import jit
 from pound_mc.errors import InputError
 from pound_mc.integrators.adaptive import adaptive
+from pound_mc.integrators.adaptive_pair import adaptive_pair
 from pound_mc.integrators.fixed import CENTRAL_DIFFERENCE, NEWMARK, NEWMARK_EXPLICIT, fixed
 from pound_mc.integrators.laws import LAW_CODES, RELATION_CODES
 from pound_mc.integrators.outputs import (
@@ -142,6 +143,14 @@ def _run_adaptive(
     """One run of ``adaptive`` (method 0); a step that could not end is not converged."""
     if _endless(ag, dt_rec, settings):
         fail(out, cout, STATUS_NOT_CONVERGED)
+        return
+    if (
+        omega.size == 2 and gap.size == 1 and phi.shape[0] == 2 and phi[0, 1] == 0.0
+        and phi[1, 0] == 0.0
+    ):  # fmt: skip
+        # an SDOF pair: the scalar-state kernel (histories included)
+        adaptive_pair(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi,
+                      settings, q, v, out, cout, hx, hd, hf, pre)  # fmt: skip
         return
     adaptive(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi, settings,
              q, v, out, cout, hx, hd, hf, pre)  # fmt: skip

@@ -1,0 +1,827 @@
+"""The ``adaptive`` method for an SDOF pair (two modes, one contact) with scalar state.
+
+:func:`adaptive_pair` is :func:`pound_mc.integrators.adaptive.adaptive` specialised to two
+single-storey buildings that meet at one contact: the modal state is four scalars, the step
+coefficients are scalars computed once, and no array is touched in the hot loop.  Same
+algorithm (exact Nigam-Jennings steps between contacts, contact onset located on the exact
+solution, Runge-Kutta sub-steps during contact with every switch of the force law located),
+same outputs, the same status and energy logic and the same ``pre`` protocol (the shared
+linear response before the first contact, see :mod:`pound_mc.integrators.outputs`) and the
+same histories.  ``tests/test_adaptive_pair.py``
+holds it to the general kernel.
+
+Notation: mode ``j`` (0 left, 1 right) has circular frequency ``w_j`` [rad/s], damping ratio
+``z_j``, participation ``g_j = sqrt(m_j)`` [kg^0.5] (mass-normalised, ``q_j = sqrt(m_j) x_j``);
+the penetration is ``delta = ps0 q0 + ps1 q1 - gap`` and floor ``j`` moves ``x_j = f_j q_j``.
+
+Longer than 600 lines because the scalar state of the two modes is spelled out (four scalars
+for every array of the general kernel) and the Jankowski approach phase has its own RK4 step.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from pound_mc._jit import jit
+from pound_mc.integrators.laws import (
+    LAW_CODES,
+    duration,
+    episode_zeta,
+    force,
+    force_rate,
+    stored,
+)
+from pound_mc.integrators.outputs import (
+    C_IMPACTS,
+    C_IMPULSE,
+    C_MAX_PENETRATION,
+    C_PEAK_FORCE,
+    PRE_E0,
+    PRE_E_D,
+    PRE_E_IN,
+    PRE_INTERVAL,
+    PRE_MODE,
+    PRE_RESUME,
+    PRE_RUN_TO_CONTACT,
+    PRE_STATE,
+    PRE_STEPS,
+    STATUS_NOT_CONVERGED,
+    STATUS_OK,
+    STATUS_UNSTABLE,
+    finish,
+)
+from pound_mc.integrators.toolkit import (
+    advance,
+    coefficients,
+    hermite_max,
+    hermite_root,
+    step_size,
+)
+
+__all__ = ["adaptive_pair"]
+
+_INF = math.inf
+_TWELFTH = 1.0 / 12.0
+#: Contact onset located to this fraction of the step [-] (1e-12 of a 0.01 s step: the
+#: penetration at the located onset is ~1e-14 v0, far below anything the contact phase resolves).
+ONSET_TOL = 1e-12
+_JANKOWSKI = LAW_CODES["jankowski"]
+#: Sub-steps after onset grow geometrically from ``RAMP_START`` of the contact sub-step by a
+#: factor ``1 + RAMP_GROWTH``; Jankowski's approach phase integrates ``u = v + psi D(delta)``
+#: (below), which takes the ``delta^0.25`` singularity out of the velocities and lets the ramp
+#: start later and grow faster at the same accuracy (B1: peak force +7e-6 against the SciPy
+#: reference, the general kernel's ramp +2.2e-5).
+RAMP_START, RAMP_GROWTH = 1e-3, 1.0
+RAMP_START_POT, RAMP_GROWTH_POT = 1e-2, 2.0
+#: In restitution, a sub-step spans at most ``TAIL`` of the time left to separation at the
+#: current rate, and no less than ``TAIL_MIN`` of the contact sub-step (Jankowski: ``*_POT``;
+#: its restitution force ``beta delta^1.5`` is smooth enough for the coarser tail, B1 unchanged
+#: to 1e-6 with 38 sub-steps fewer).
+TAIL, TAIL_MIN = 0.5, 0.25
+TAIL_POT, TAIL_MIN_POT = 1.0, 0.5
+
+
+@jit
+def _exact_pen(
+    q0, q1, v0, v1, p0s, slope, tau, w0, z0, g0, w1, z1, g1, c0, c1, off,
+):  # fmt: skip
+    """``c0 x0 + c1 x1 - off`` with its rate and acceleration ``tau`` into a linear step.
+
+    On the exact solution (no contact force); ``c0, c1`` weight the modal coordinates
+    (``psi`` for the penetration, ``+-f_j`` and 0 for a floor's displacement).
+    """
+    d = -off
+    dd = 0.0
+    ddd = 0.0
+    ag = p0s + slope * tau
+    if c0 != 0.0:
+        qm, vm = advance(q0, v0, -g0 * p0s, -g0 * ag, w0, z0, tau)
+        am = -2.0 * z0 * w0 * vm - w0 * w0 * qm - g0 * ag
+        d += c0 * qm
+        dd += c0 * vm
+        ddd += c0 * am
+    if c1 != 0.0:
+        qm, vm = advance(q1, v1, -g1 * p0s, -g1 * ag, w1, z1, tau)
+        am = -2.0 * z1 * w1 * vm - w1 * w1 * qm - g1 * ag
+        d += c1 * qm
+        dd += c1 * vm
+        ddd += c1 * am
+    return d, dd, ddd
+
+
+@jit
+def _exact_root_pair(
+    q0, q1, v0, v1, p0s, slope, guess, lo, hi, which, w0, z0, g0, w1, z1, g1, c0, c1, off, tol,
+):  # fmt: skip
+    """Root in ``[lo, hi]`` of :func:`_exact_pen` (``which = 0``, from below) or of its rate.
+
+    ``which = 1``: a root of the rate from above (a maximum).  Newton from ``guess``, kept in
+    the bracket, as ``toolkit.exact_root``, until a Newton step is below ``tol`` of the
+    bracket's end (``exact_root``: 1e-15).
+    """
+    t = guess
+    if not (lo < t < hi):
+        t = 0.5 * (lo + hi)
+    for _ in range(60):
+        d, dd, ddd = _exact_pen(q0, q1, v0, v1, p0s, slope, t, w0, z0, g0, w1, z1, g1, c0, c1,
+                                off)  # fmt: skip
+        g = d if which == 0 else -dd
+        gp = dd if which == 0 else -ddd
+        if g > 0.0:
+            hi = t
+        else:
+            lo = t
+        t_new = t - g / gp if gp != 0.0 else 0.5 * (lo + hi)
+        if not (lo < t_new < hi):
+            t_new = 0.5 * (lo + hi)
+        if abs(t_new - t) <= tol * (hi + 1e-300) or hi - lo <= 1e-15 * hi:
+            t = t_new
+            break
+        t = t_new
+    return t
+
+
+@jit
+def _exact_max(
+    q0, q1, v0, v1, p0s, slope, guess, hh, w0, z0, g0, w1, z1, g1, c0, c1, off,
+):  # fmt: skip
+    """Local maximum of :func:`_exact_pen` near ``guess`` (the cubic Hermite estimate).
+
+    One Newton step for the root of the rate from the exact value, rate and acceleration at
+    ``guess``, and the value there from the second-order Taylor polynomial: the Hermite
+    estimate is off by O((omega h)^3 h), so the value is off by O(third derivative dt^3),
+    far below round-off of the amplitude at the steps linear phases take.
+    Returns ``(value, time)``.
+    """
+    d, dd, ddd = _exact_pen(q0, q1, v0, v1, p0s, slope, guess, w0, z0, g0, w1, z1, g1, c0, c1,
+                            off)  # fmt: skip
+    if ddd >= 0.0:
+        return d, guess  # not a maximum here: the value at the estimate
+    dt = -dd / ddd
+    t = guess + dt
+    if t < 0.0 or t > hh:
+        return d, guess
+    return d + 0.5 * dd * dt, t
+
+
+@jit(inline=True)
+def _ends(q0, q1, v0, v1, ag, k0, ww0, g0, k1, ww1, g1, zw2_0, zw2_1, zw4_0, zw4_1):
+    """Sums for the energy integrals without contact force (``toolkit.end_values``).
+
+    ``k_j = -2 z_j w_j``, ``ww_j = w_j^2``, ``zw2_j = 2 z_j w_j``, ``zw4_j = 4 z_j w_j``.
+    Returns ``sum g v``, ``sum g a``, the damping power and its rate.
+    """
+    a0 = k0 * v0 - ww0 * q0 - g0 * ag
+    a1 = k1 * v1 - ww1 * q1 - g1 * ag
+    sgv = g0 * v0
+    sgv += g1 * v1
+    sga = g0 * a0
+    sga += g1 * a1
+    pd = zw2_0 * v0 * v0
+    pd += zw2_1 * v1 * v1
+    dpd = zw4_0 * v0 * a0
+    dpd += zw4_1 * v1 * a1
+    return sgv, sga, pd, dpd
+
+
+@jit(inline=True)
+def _stage(q0, q1, v0, v1, ag, k0, ww0, g0, k1, ww1, g1, ps0, ps1, gp, b, cd, zhd, phase,
+           model):  # fmt: skip
+    """Contact force [N], penetration rate [m/s] and modal accelerations at one state."""
+    d = ps0 * q0 + ps1 * q1 - gp
+    dd = ps0 * v0 + ps1 * v1
+    fc = force(model, d, dd, b, cd, zhd, phase)
+    a0 = k0 * v0 - ww0 * q0 - g0 * ag
+    a1 = k1 * v1 - ww1 * q1 - g1 * ag
+    if fc != 0.0:
+        a0 -= fc * ps0
+        a1 -= fc * ps1
+    return fc, dd, a0, a1
+
+
+@jit(inline=True)
+def _stage_pot(q0, q1, u0, u1, ag, k0, ww0, g0, k1, ww1, g1, ps0, ps1, gp, b, cd, kpot):
+    """Jankowski approach phase at state ``(q, u)``: force, rate, ``v``, ``u'``, damping force.
+
+    ``u = v + psi D(delta)`` with ``D = 0.8 c0 delta^1.25``, whose rate is the damping force
+    ``c0 delta^0.25 delta_dot`` of the law (seed eq. (1.1)): ``u' = `` the accelerations without it.
+    """
+    d = ps0 * q0 + ps1 * q1 - gp
+    pot = 0.0
+    fel = 0.0
+    cq = 0.0
+    if d > 0.0:
+        sd = math.sqrt(d)
+        qd = math.sqrt(sd)
+        pot = kpot * d * qd
+        fel = b * d * sd
+        cq = cd * qd
+    v0 = u0 - ps0 * pot
+    v1 = u1 - ps1 * pot
+    dd = ps0 * v0 + ps1 * v1
+    fdamp = cq * dd
+    au0 = k0 * v0 - ww0 * q0 - g0 * ag - fel * ps0
+    au1 = k1 * v1 - ww1 * q1 - g1 * ag - fel * ps1
+    return fel, fdamp, dd, v0, v1, au0, au1
+
+
+@jit(inline=True)
+def _potential(q0, q1, ps0, ps1, gp, kpot):
+    """``D(delta) = 0.8 c0 delta^1.25`` (0 without contact)."""
+    d = ps0 * q0 + ps1 * q1 - gp
+    return kpot * d * math.sqrt(math.sqrt(d)) if d > 0.0 else 0.0
+
+
+@jit(inline=True)
+def _rk4_pot(
+    q0, q1, v0, v1, s, hs, ag0, slope, k0, ww0, g0, k1, ww1, g1, zw2_0, zw2_1, ps0, ps1, gp,
+    b, cd, kpot,
+):  # fmt: skip
+    """:func:`_rk4_pair` for Jankowski's approach phase, in ``(q, u = v + psi D(delta))``.
+
+    The damping force is the rate of ``D``: its impulse over the step is the change of ``D``
+    (exact), and ``u`` sees only the elastic force, which is smooth enough for RK4 from onset.
+    """
+    pot0 = _potential(q0, q1, ps0, ps1, gp, kpot)
+    u0 = v0 + ps0 * pot0
+    u1 = v1 + ps1 * pot0
+    h6 = hs / 6.0
+    e_in = e_d = w_c = imp = 0.0
+    sq0 = sq1 = su0 = su1 = 0.0
+    kq0 = kq1 = ku0 = ku1 = 0.0
+    fc_start = acc0 = acc1 = 0.0
+    for stage in range(4):
+        fac = 0.0 if stage == 0 else (hs if stage == 3 else 0.5 * hs)
+        wgt = 1.0 if stage == 0 or stage == 3 else 2.0
+        ag = ag0 + slope * (s + fac)
+        fel, fdamp, dd, wv0, wv1, au0, au1 = _stage_pot(
+            q0 + fac * kq0, q1 + fac * kq1, u0 + fac * ku0, u1 + fac * ku1, ag, k0, ww0, g0,
+            k1, ww1, g1, ps0, ps1, gp, b, cd, kpot,
+        )  # fmt: skip
+        fc = fel + fdamp
+        if stage == 0:
+            fc_start = fc
+            acc0 = au0 - ps0 * fdamp
+            acc1 = au1 - ps1 * fdamp
+        kq0, kq1, ku0, ku1 = wv0, wv1, au0, au1
+        sq0 += wgt * kq0
+        sq1 += wgt * kq1
+        su0 += wgt * ku0
+        su1 += wgt * ku1
+        e_in -= wgt * (ag * g0 * wv0 + ag * g1 * wv1)
+        e_d += wgt * (zw2_0 * wv0 * wv0 + zw2_1 * wv1 * wv1)
+        w_c += wgt * (fc * dd)
+        imp += wgt * fel
+    nq0 = q0 + h6 * sq0
+    nq1 = q1 + h6 * sq1
+    pot1 = _potential(nq0, nq1, ps0, ps1, gp, kpot)
+    return (nq0, nq1, u0 + h6 * su0 - ps0 * pot1, u1 + h6 * su1 - ps1 * pot1, h6 * e_in,
+            h6 * e_d, h6 * w_c, h6 * imp + (pot1 - pot0), fc_start, acc0, acc1)  # fmt: skip
+
+
+@jit(inline=True)
+def _rk4_pair(
+    q0, q1, v0, v1, s, hs, ag0, slope, k0, ww0, g0, k1, ww1, g1, zw2_0, zw2_1, ps0, ps1, gp,
+    b, cd, zhd, phase, model, have, fcs, as0, as1,
+):  # fmt: skip
+    """One classical Runge-Kutta step of length ``hs`` from local time ``s``.
+
+    ``have``: ``fcs, as0, as1`` are the force and modal accelerations at the start (the end
+    of the previous sub-step, same phase and record interval), not evaluated again.
+    Returns the new state, the increments of input energy, damping energy, contact work and
+    impulse, the force at the start and the modal accelerations at the start.
+    """
+    h6 = hs / 6.0
+    w_end = 1.0 * hs / 6.0
+    w_mid = 2.0 * hs / 6.0
+    half = 0.5 * hs
+    # stage 1
+    ag = ag0 + slope * s
+    if have:
+        fc, dd, a0, a1 = fcs, ps0 * v0 + ps1 * v1, as0, as1
+    else:
+        fc, dd, a0, a1 = _stage(q0, q1, v0, v1, ag, k0, ww0, g0, k1, ww1, g1, ps0, ps1, gp, b,
+                                cd, zhd, phase, model)  # fmt: skip
+    fc_start = fc
+    acc0 = a0
+    acc1 = a1
+    kq0, kq1, kv0, kv1 = v0, v1, a0, a1
+    sq0, sq1, sv0, sv1 = kq0, kq1, kv0, kv1
+    pin = -(ag * g0 * v0)
+    pin -= ag * g1 * v1
+    pd = zw2_0 * v0 * v0
+    pd += zw2_1 * v1 * v1
+    e_in = w_end * pin
+    e_d = w_end * pd
+    w_c = w_end * (fc * dd)
+    imp = w_end * fc
+    # stages 2 and 3 (half step), 4 (full step)
+    for stage in range(1, 4):
+        fac = hs if stage == 3 else half
+        wgt = w_end if stage == 3 else w_mid
+        wq0 = q0 + fac * kq0
+        wq1 = q1 + fac * kq1
+        wv0 = v0 + fac * kv0
+        wv1 = v1 + fac * kv1
+        ag = ag0 + slope * (s + fac)
+        fc, dd, a0, a1 = _stage(wq0, wq1, wv0, wv1, ag, k0, ww0, g0, k1, ww1, g1, ps0, ps1, gp,
+                                b, cd, zhd, phase, model)  # fmt: skip
+        kq0, kq1, kv0, kv1 = wv0, wv1, a0, a1
+        if stage == 3:
+            sq0 += kq0
+            sq1 += kq1
+            sv0 += kv0
+            sv1 += kv1
+        else:
+            sq0 += 2.0 * kq0
+            sq1 += 2.0 * kq1
+            sv0 += 2.0 * kv0
+            sv1 += 2.0 * kv1
+        pin = -(ag * g0 * wv0)
+        pin -= ag * g1 * wv1
+        pd = zw2_0 * wv0 * wv0
+        pd += zw2_1 * wv1 * wv1
+        e_in += wgt * pin
+        e_d += wgt * pd
+        w_c += wgt * (fc * dd)
+        imp += wgt * fc
+    return (q0 + h6 * sq0, q1 + h6 * sq1, v0 + h6 * sv0, v1 + h6 * sv1, e_in, e_d, w_c, imp,
+            fc_start, acc0, acc1)  # fmt: skip
+
+
+@jit
+def adaptive_pair(
+    ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi, settings,
+    q, v, out, cout, hx, hd, hf, pre,
+):  # fmt: skip
+    """:func:`~pound_mc.integrators.adaptive.adaptive` for an SDOF pair, state in scalars.
+
+    Same arguments and outputs; ``phi`` is diagonal (floor ``j`` is mode ``j``), one contact.
+    ``hx, hd, hf``: histories at the record's samples (empty arrays: none).  ``pre``: the shared
+    linear response before the first contact (layout in :mod:`pound_mc.integrators.outputs`;
+    floor peaks after the state), empty for a plain run.  Longer than 150 lines for the reason
+    the general kernel is: its scalar state lives in locals across both kinds of step.
+    """
+    model = settings.model
+    relation = settings.relation
+    substeps = settings.substeps
+    npts = ag.size
+    m_sub, h = step_size(dt_rec, settings.dt_s)
+    inv_dt = 1.0 / dt_rec
+    w0, w1, z0, z1, g0, g1 = omega[0], omega[1], zeta[0], zeta[1], gamma[0], gamma[1]
+    k0, k1 = -2.0 * z0 * w0, -2.0 * z1 * w1
+    ww0, ww1 = w0 * w0, w1 * w1
+    zw2_0, zw2_1 = 2.0 * z0 * w0, 2.0 * z1 * w1
+    zw4_0, zw4_1 = 4.0 * z0 * w0, 4.0 * z1 * w1
+    ps0, ps1, f0, f1 = psi[0, 0], psi[0, 1], phi[0, 0], phi[1, 1]
+    gp, b, me, xi0 = gap[0], beta[0], meff[0], xi[0]
+    cd = 2.0 * xi0 * math.sqrt(b * me)  # damping constant c0 of the force laws
+    cf = coefficients(w0, z0, h)
+    a00, a01, a02, a03 = cf[0, 0], cf[0, 1], cf[0, 2], cf[0, 3]
+    b00, b01, b02, b03 = cf[1, 0], cf[1, 1], cf[1, 2], cf[1, 3]
+    cf = coefficients(w1, z1, h)
+    a10, a11, a12, a13 = cf[0, 0], cf[0, 1], cf[0, 2], cf[0, 3]
+    b10, b11, b12, b13 = cf[1, 0], cf[1, 1], cf[1, 2], cf[1, 3]
+    q0, q1, v0, v1 = q[0], q[1], v[0], v[1]
+    phase = 0
+    zhd = pk0 = pk1 = e_in = e_d = w_c = 0.0
+    e0 = 0.5 * (v0 * v0 + w0 * w0 * q0 * q0)
+    e0 += 0.5 * (v1 * v1 + w1 * w1 * q1 * q1)
+    peak_f = peak_t = impacts = impulse = 0.0
+    maxpen = -_INF
+    steps = 0
+    hc = h
+    fresh = False
+    dc0 = ddc0 = xf0 = xf1 = xfd0 = xfd1 = en0_0 = en0_1 = en0_2 = en0_3 = 0.0
+    # error bound of the cubic Hermite maximum in a linear step, (omega h)^4 / 384 of the
+    # amplitude, with a safety factor of 4: a candidate below the peak by more is no new peak
+    wmax = max(w0, w1)
+    herm_tol = 4.0 * (wmax * h) ** 4 / 384.0
+    t_onset = 0.0
+    budget = 200 * (npts - 1) * m_sub + 1_000_000
+    in_contact = False
+    fsal = False
+    fc_end = ae0 = ae1 = 0.0
+    pot = model == _JANKOWSKI
+    whole = m_sub == 1
+    kpot = 0.8 * cd
+    ramp_0 = RAMP_START_POT if pot else RAMP_START
+    ramp_k = RAMP_GROWTH_POT if pot else RAMP_GROWTH
+    tail = TAIL_POT if pot else TAIL
+    tail_min = TAIL_MIN_POT if pot else TAIL_MIN
+    status = STATUS_OK
+    store = hx.shape[0] > 0
+    mode = int(pre[PRE_MODE]) if pre.size > 0 else 0
+    i_first = 0
+    if mode == PRE_RESUME:
+        i_first = int(pre[PRE_INTERVAL])
+        e_in = pre[PRE_E_IN]
+        e_d = pre[PRE_E_D]
+        steps = int(pre[PRE_STEPS])
+        e0 = pre[PRE_E0]
+        q0, q1, v0, v1 = pre[PRE_STATE], pre[PRE_STATE + 1], pre[PRE_STATE + 2], pre[PRE_STATE + 3]
+        pk0, pk1 = pre[PRE_STATE + 4], pre[PRE_STATE + 5]
+    for i in range(i_first, npts - 1):
+        if mode == PRE_RUN_TO_CONTACT:
+            _snapshot_pair(pre, i, e_in, e_d, steps, e0, q0, q1, v0, v1, pk0, pk1)
+        if store:
+            _store_pair(i, q0, q1, v0, v1, f0, f1, ps0, ps1, gp, b, cd, zhd, phase, model, hx,
+                        hd, hf)  # fmt: skip
+        ag0 = ag[i]
+        slope = (ag[i + 1] - ag[i]) * inv_dt
+        s = 0.0
+        k_grid = 0  # index of the next grid point within the interval
+        fsal = False  # a new interval: new load, the next sub-step starts afresh
+        if whole and fresh and not in_contact:
+            # ---------------- the interval in one exact step (one step per interval) where
+            # nothing happens inside it: no onset, no turning penetration, no floor extremum;
+            # the same arithmetic as the general linear step below, which takes the others
+            p0s = ag0 + slope * s
+            p1s = ag0 + slope * dt_rec
+            p0 = -g0 * p0s
+            p1 = -g0 * p1s
+            nq0 = a00 * q0 + a01 * v0 + a02 * p0 + a03 * p1
+            nv0 = b00 * q0 + b01 * v0 + b02 * p0 + b03 * p1
+            p0 = -g1 * p0s
+            p1 = -g1 * p1s
+            nq1 = a10 * q1 + a11 * v1 + a12 * p0 + a13 * p1
+            nv1 = b10 * q1 + b11 * v1 + b12 * p0 + b13 * p1
+            d1 = ps0 * nq0 + ps1 * nq1 - gp
+            dd1 = ps0 * nv0 + ps1 * nv1
+            xb0, xdb0, xb1, xdb1 = f0 * nq0, f0 * nv0, f1 * nq1, f1 * nv1
+            # a turning penetration or floor matters only where the bound of its cubic Hermite
+            # says the general step's screen could act (margin and tolerance as there)
+            quiet = d1 <= 0.0
+            if quiet and ddc0 > 0.0 and dd1 < 0.0:
+                margin = 0.05 * (abs(ddc0) + abs(dd1)) * dt_rec
+                bnd = max(dc0, d1) + _hermite_spread(dc0, ddc0, d1, dd1, dt_rec)
+                quiet = bnd < -margin * (1.0 + 1e-9)
+            if quiet and (xfd0 > 0.0) != (xdb0 > 0.0):
+                bnd = max(abs(xf0), abs(xb0)) + _hermite_spread(xf0, xfd0, xb0, xdb0, dt_rec)
+                quiet = bnd * (1.0 + herm_tol + 1e-9) < pk0
+            if quiet and (xfd1 > 0.0) != (xdb1 > 0.0):
+                bnd = max(abs(xf1), abs(xb1)) + _hermite_spread(xf1, xfd1, xb1, xdb1, dt_rec)
+                quiet = bnd * (1.0 + herm_tol + 1e-9) < pk1
+            if quiet:
+                steps += 1
+                en1_0, en1_1, en1_2, en1_3 = _ends(nq0, nq1, nv0, nv1, p1s, k0, ww0, g0, k1, ww1,
+                                                   g1, zw2_0, zw2_1, zw4_0, zw4_1)  # fmt: skip
+                hh = dt_rec
+                pin0 = -p0s * en0_0
+                pin1 = -p1s * en1_0
+                dpin0 = -(slope * en0_0 + p0s * en0_1)
+                dpin1 = -(slope * en1_0 + p1s * en1_1)
+                hh12 = hh * hh * _TWELFTH
+                e_in += 0.5 * hh * (pin0 + pin1) + hh12 * (dpin0 - dpin1)
+                e_d += 0.5 * hh * (en0_2 + en1_2) + hh12 * (en0_3 - en1_3)
+                pk0 = max(pk0, abs(xb0))
+                pk1 = max(pk1, abs(xb1))
+                xf0, xfd0, xf1, xfd1 = xb0, xdb0, xb1, xdb1
+                dc0 = d1
+                ddc0 = dd1
+                en0_0, en0_1, en0_2, en0_3 = en1_0, en1_1, en1_2, en1_3
+                q0, q1, v0, v1 = nq0, nq1, nv0, nv1
+                if not math.isfinite(q0 + q1 + v0 + v1):
+                    status = STATUS_UNSTABLE
+                    break
+                continue
+        while s < dt_rec * (1.0 - 1e-12):
+            steps += 1
+            if steps > budget:
+                status = STATUS_NOT_CONVERGED
+                break
+            if not in_contact:
+                # ---------------- exact linear step to the next grid point
+                s_next = (k_grid + 1) * h
+                if k_grid + 1 == m_sub:
+                    s_next = dt_rec
+                hh = s_next - s
+                p0s = ag0 + slope * s
+                p1s = ag0 + slope * s_next
+                if abs(hh - h) <= 1e-12 * h:
+                    p0 = -g0 * p0s
+                    p1 = -g0 * p1s
+                    nq0 = a00 * q0 + a01 * v0 + a02 * p0 + a03 * p1
+                    nv0 = b00 * q0 + b01 * v0 + b02 * p0 + b03 * p1
+                    p0 = -g1 * p0s
+                    p1 = -g1 * p1s
+                    nq1 = a10 * q1 + a11 * v1 + a12 * p0 + a13 * p1
+                    nv1 = b10 * q1 + b11 * v1 + b12 * p0 + b13 * p1
+                else:
+                    nq0, nv0 = advance(q0, v0, -g0 * p0s, -g0 * p1s, w0, z0, hh)
+                    nq1, nv1 = advance(q1, v1, -g1 * p0s, -g1 * p1s, w1, z1, hh)
+                if not fresh:
+                    dc0 = ps0 * q0 + ps1 * q1 - gp
+                    ddc0 = ps0 * v0 + ps1 * v1
+                    xf0 = f0 * q0
+                    xf1 = f1 * q1
+                    xfd0 = f0 * v0
+                    xfd1 = f1 * v1
+                    en0_0, en0_1, en0_2, en0_3 = _ends(
+                        q0, q1, v0, v1, p0s, k0, ww0, g0, k1, ww1, g1, zw2_0, zw2_1, zw4_0, zw4_1
+                    )
+                    fresh = True
+                # onset screening
+                d0 = dc0
+                dd0 = ddc0
+                d1 = ps0 * nq0 + ps1 * nq1 - gp
+                dd1 = ps0 * nv0 + ps1 * nv1
+                dc1 = d1
+                ddc1 = dd1
+                crossing = d1 > 0.0
+                t_hi = hh
+                if not crossing and dd0 > 0.0 and dd1 < 0.0:
+                    hm, tg = hermite_max(d0, dd0, d1, dd1, hh)
+                    margin = 0.05 * (abs(dd0) + abs(dd1)) * hh
+                    if hm > -margin:
+                        # exact maximum of delta in the step: root of delta_dot
+                        dm, tm = _exact_max(q0, q1, v0, v1, p0s, slope, tg, hh, w0, z0, g0, w1,
+                                            z1, g1, ps0, ps1, gp)  # fmt: skip
+                        if dm > 0.0:
+                            crossing = True
+                            t_hi = tm
+                            d1 = dm
+                            dd1 = 0.0
+                onset = False
+                if crossing and d0 <= 0.0:
+                    # locate delta = 0 on the exact solution (safeguarded Newton)
+                    tg = hermite_root(d0, dd0, d1, dd1, t_hi)
+                    hh = _exact_root_pair(q0, q1, v0, v1, p0s, slope, tg, 0.0, t_hi, 0, w0, z0,
+                                          g0, w1, z1, g1, ps0, ps1, gp, ONSET_TOL)  # fmt: skip
+                    onset = True
+                    if mode == PRE_RUN_TO_CONTACT:
+                        return
+                    p1s = ag0 + slope * (s + hh)
+                    nq0, nv0 = advance(q0, v0, -g0 * p0s, -g0 * p1s, w0, z0, hh)
+                    nq1, nv1 = advance(q1, v1, -g1 * p0s, -g1 * p1s, w1, z1, hh)
+                    dc1 = ps0 * nq0 + ps1 * nq1 - gp
+                    ddc1 = ps0 * nv0 + ps1 * nv1
+                # energies by the corrected trapezoidal rule (exact to O(h^5) per step)
+                en1_0, en1_1, en1_2, en1_3 = _ends(nq0, nq1, nv0, nv1, p1s, k0, ww0, g0, k1, ww1,
+                                                   g1, zw2_0, zw2_1, zw4_0, zw4_1)  # fmt: skip
+                pin0 = -p0s * en0_0
+                pin1 = -p1s * en1_0
+                dpin0 = -(slope * en0_0 + p0s * en0_1)
+                dpin1 = -(slope * en1_0 + p1s * en1_1)
+                hh12 = hh * hh * _TWELFTH
+                e_in += 0.5 * hh * (pin0 + pin1) + hh12 * (dpin0 - dpin1)
+                e_d += 0.5 * hh * (en0_2 + en1_2) + hh12 * (en0_3 - en1_3)
+                # peak floor displacements: where the cubic Hermite bound says an extremum
+                # inside the step may be a new peak, find it on the exact solution
+                for fl in range(2):
+                    if fl == 0:
+                        ff, xa, xda, xb, xdb, pk = f0, xf0, xfd0, f0 * nq0, f0 * nv0, pk0
+                    else:
+                        ff, xa, xda, xb, xdb, pk = f1, xf1, xfd1, f1 * nq1, f1 * nv1, pk1
+                    m = abs(xb)
+                    if m > pk:
+                        pk = m
+                    if (xda > 0.0) != (xdb > 0.0):
+                        # one extremum inside: a maximum of x where the velocity turns
+                        # from + to -, else of -x (the cubic has no other)
+                        sign = 1.0 if xda > 0.0 else -1.0
+                        hm, tg = hermite_max(sign * xa, sign * xda, sign * xb, sign * xdb, hh)
+                        if hm > pk - herm_tol * abs(hm):
+                            c0 = sign * ff if fl == 0 else 0.0
+                            c1 = sign * ff if fl == 1 else 0.0
+                            xm, _ = _exact_max(q0, q1, v0, v1, p0s, slope, tg, hh, w0, z0, g0,
+                                               w1, z1, g1, c0, c1, 0.0)  # fmt: skip
+                            if xm > pk:
+                                pk = xm
+                    if fl == 0:
+                        pk0, xf0, xfd0 = pk, xb, xdb
+                    else:
+                        pk1, xf1, xfd1 = pk, xb, xdb
+                dc0 = dc1
+                ddc0 = ddc1
+                en0_0, en0_1, en0_2, en0_3 = en1_0, en1_1, en1_2, en1_3
+                q0, q1, v0, v1 = nq0, nq1, nv0, nv1
+                s += hh
+                if onset:
+                    v0c = ps0 * v0 + ps1 * v1
+                    phase = 1
+                    impacts += 1.0
+                    zhd = episode_zeta(model, relation, xi0, v0c, zhd)
+                    hc = min(h, duration(model, v0c, b, me) / substeps)
+                    t_onset = i * dt_rec + s
+                    in_contact = True
+                    fsal = False
+                else:
+                    k_grid += 1
+            else:
+                # ---------------- contact sub-step (RK4) with located switches
+                fresh = False
+                # sub-steps graded geometrically away from onset and towards separation,
+                # where the force law is not smooth (delta^0.25, delta^0.5 terms)
+                hs = min(hc, max(ramp_k * (i * dt_rec + s - t_onset), hc * ramp_0))
+                if phase == 2:
+                    ddc = ps0 * v0 + ps1 * v1
+                    if ddc < 0.0:
+                        dc = ps0 * q0 + ps1 * q1 - gp
+                        hs = min(hs, max(-tail * dc / ddc, hc * tail_min))
+                if hs >= dt_rec - s or dt_rec - s - hs < 1e-9 * hc:
+                    hs = dt_rec - s
+                if pot and phase == 1:
+                    (nq0, nq1, nv0, nv1, de_in, de_d, dw_c, cimp, fc0, ac0, ac1) = _rk4_pot(
+                        q0, q1, v0, v1, s, hs, ag0, slope, k0, ww0, g0, k1, ww1, g1, zw2_0,
+                        zw2_1, ps0, ps1, gp, b, cd, kpot,
+                    )  # fmt: skip
+                else:
+                    (nq0, nq1, nv0, nv1, de_in, de_d, dw_c, cimp, fc0, ac0, ac1) = _rk4_pair(
+                        q0, q1, v0, v1, s, hs, ag0, slope, k0, ww0, g0, k1, ww1, g1, zw2_0,
+                        zw2_1, ps0, ps1, gp, b, cd, zhd, phase, model, fsal, fc_end, ae0, ae1,
+                    )  # fmt: skip
+                fc1, _, ae0, ae1 = _stage(nq0, nq1, nv0, nv1, ag0 + slope * (s + hs), k0, ww0,
+                                          g0, k1, ww1, g1, ps0, ps1, gp, b, cd, zhd, phase,
+                                          model)  # fmt: skip
+                fc_end = fc1
+                # switches of the force law: located by Hermite interpolation in the step
+                d0 = ps0 * q0 + ps1 * q1 - gp
+                d1 = ps0 * nq0 + ps1 * nq1 - gp
+                dd0 = ps0 * v0 + ps1 * v1
+                dd1 = ps0 * nv0 + ps1 * nv1
+                ddd0 = ps0 * ac0 + ps1 * ac1
+                ddd1 = ps0 * ae0 + ps1 * ae1
+                t_ev = _INF
+                kind = 0
+                if phase == 0:
+                    if d1 > 0.0 and d0 <= 0.0:
+                        t_ev = hermite_root(d0, dd0, d1, dd1, hs)
+                        kind = 1  # onset
+                elif phase == 1:
+                    if dd1 <= 0.0 and dd0 > 0.0:
+                        t_ev = hermite_root(dd0, ddd0, dd1, ddd1, hs)
+                        kind = 2  # approach -> restitution
+                else:
+                    if d1 <= 0.0 and d0 > 0.0:
+                        t_ev = hermite_root(d0, dd0, d1, dd1, hs)
+                        kind = 3  # separation
+                    if dd1 > 0.0 and dd0 <= 0.0:
+                        t2 = hermite_root(dd0, ddd0, dd1, ddd1, hs)
+                        if t2 < t_ev:
+                            t_ev = t2
+                            kind = 4  # restitution -> approach
+                event = t_ev < _INF
+                if event and t_ev < hs:
+                    hs = t_ev
+                    if pot and phase == 1:
+                        (nq0, nq1, nv0, nv1, de_in, de_d, dw_c, cimp, fc0, ac0, ac1) = _rk4_pot(
+                            q0, q1, v0, v1, s, hs, ag0, slope, k0, ww0, g0, k1, ww1, g1, zw2_0,
+                            zw2_1, ps0, ps1, gp, b, cd, kpot,
+                        )  # fmt: skip
+                    else:
+                        (nq0, nq1, nv0, nv1, de_in, de_d, dw_c, cimp, fc0, ac0, ac1) = _rk4_pair(
+                            q0, q1, v0, v1, s, hs, ag0, slope, k0, ww0, g0, k1, ww1, g1, zw2_0,
+                            zw2_1, ps0, ps1, gp, b, cd, zhd, phase, model, True, fc0, ac0, ac1,
+                        )  # fmt: skip
+                    fc1, _, ae0, ae1 = _stage(nq0, nq1, nv0, nv1, ag0 + slope * (s + hs), k0,
+                                              ww0, g0, k1, ww1, g1, ps0, ps1, gp, b, cd,
+                                              zhd, phase, model)  # fmt: skip
+                    fc_end = fc1
+                    d1 = ps0 * nq0 + ps1 * nq1 - gp
+                    dd1 = ps0 * nv0 + ps1 * nv1
+                    ddd1 = ps0 * ae0 + ps1 * ae1
+                e_in += de_in
+                e_d += de_d
+                w_c += dw_c
+                impulse += cimp
+                # peak force (Hermite on F with its rate), penetration
+                if phase != 0:
+                    fm = fc1
+                    tm = hs
+                    # an interior maximum exceeds the step's end values by far less than 10 %
+                    # (sub-steps are a fraction of the contact duration): interpolate only
+                    # where it could raise the peak
+                    if max(fc0, fc1) >= 0.9 * peak_f and d0 > 0.25 * d1:
+                        r0 = force_rate(model, d0, dd0, ddd0, b, cd, zhd, phase)
+                        r1 = force_rate(model, d1, dd1, ddd1, b, cd, zhd, phase)
+                        if r0 > 0.0 and r1 < 0.0:
+                            hm, th = hermite_max(fc0, r0, fc1, r1, hs)
+                            if hm > fm:
+                                fm = hm
+                                tm = th
+                    if fc0 > fm:
+                        fm = fc0
+                        tm = 0.0
+                    if fm > peak_f:
+                        peak_f = fm
+                        peak_t = i * dt_rec + s + tm
+                    dm = max(d0, d1)
+                    if dd0 > 0.0 and dd1 < 0.0:
+                        hm, _ = hermite_max(d0, dd0, d1, dd1, hs)
+                        if hm > dm:
+                            dm = hm
+                    if dm > maxpen:
+                        maxpen = dm
+                # peak floor displacements over the sub-step (Hermite)
+                pk0 = _track_floor(f0 * q0, f0 * v0, f0 * nq0, f0 * nv0, hs, pk0)
+                pk1 = _track_floor(f1 * q1, f1 * v1, f1 * nq1, f1 * nv1, hs, pk1)
+                q0, q1, v0, v1 = nq0, nq1, nv0, nv1
+                s += hs
+                # the force and accelerations at the end start the next sub-step (first same as
+                # last) unless the force law switched there
+                fsal = not event
+                if event and hs == t_ev:
+                    if kind == 1:
+                        phase = 1
+                        impacts += 1.0
+                        v0c = ps0 * v0 + ps1 * v1
+                        zhd = episode_zeta(model, relation, xi0, v0c, zhd)
+                        hc = min(hc, duration(model, v0c, b, me) / substeps)
+                        t_onset = i * dt_rec + s
+                    elif kind == 2:
+                        phase = 2
+                    elif kind == 3:
+                        phase = 0
+                        in_contact = False
+                        hc = h
+                    else:
+                        phase = 1
+                # continue with exact steps from here to the next grid point
+                k_grid = int(math.floor(s / h + 1e-9))
+                if k_grid >= m_sub:
+                    k_grid = m_sub - 1
+            # divergence / non-finite guard
+            if not math.isfinite(q0 + q1 + v0 + v1):  # inf or nan in any of them
+                status = STATUS_UNSTABLE
+                break
+        if status != 0:
+            break
+    if mode == PRE_RUN_TO_CONTACT:
+        # no contact in the whole record: the end state is shared
+        _snapshot_pair(pre, npts - 1, e_in, e_d, steps, e0, q0, q1, v0, v1, pk0, pk1)
+        return
+    if store and status == STATUS_OK:
+        _store_pair(npts - 1, q0, q1, v0, v1, f0, f1, ps0, ps1, gp, b, cd, zhd, phase, model,
+                    hx, hd, hf)  # fmt: skip
+    q[0], q[1], v[0], v[1] = q0, q1, v0, v1
+    cout[0, C_PEAK_FORCE] = peak_f
+    cout[0, C_IMPACTS] = impacts
+    cout[0, C_MAX_PENETRATION] = maxpen
+    cout[0, C_IMPULSE] = impulse
+    peaks = np.empty(2)
+    peaks[0] = pk0
+    peaks[1] = pk1
+    ph = np.zeros(1, dtype=np.int64)
+    ph[0] = phase
+    stored_energy = 0.0
+    if phase != 0:
+        stored_energy = stored(model, ps0 * q0 + ps1 * q1 - gp, b)
+    finish(out, cout, peaks, side, ph, q, v, omega, e0, e_in, e_d, w_c, stored_energy, peak_f,
+           peak_t, steps, status)  # fmt: skip
+
+
+@jit(inline=True)
+def _hermite_spread(y0, yp0, y1, yp1, h):
+    """How far the cubic Hermite interpolant on ``[0, h]`` may exceed its larger end value.
+
+    Its rate is ``yp0 (1 - s) + yp1 s + C s (1 - s)`` per ``s = t / h``, with
+    ``C = 6 (y1 - y0) / h - 3 (yp0 + yp1)``, at most ``M = max|yp| + |C| / 4`` in magnitude;
+    the interpolant is within ``M h / 2`` of the nearer end, in value and in magnitude.
+    """
+    m = max(abs(yp0), abs(yp1)) + 0.25 * abs(6.0 * (y1 - y0) / h - 3.0 * (yp0 + yp1))
+    return 0.5 * m * h
+
+
+@jit(inline=True)
+def _track_floor(x0, xd0, x1, xd1, h, peak):
+    """Peak ``|x|`` of a floor updated over a step (cubic Hermite), as ``_track_floors``."""
+    m = abs(x1)
+    if m > peak:
+        peak = m
+    if (xd0 > 0.0) != (xd1 > 0.0):
+        hm, _ = hermite_max(x0, xd0, x1, xd1, h)
+        if hm > peak:
+            peak = hm
+        hm, _ = hermite_max(-x0, -xd0, -x1, -xd1, h)
+        if hm > peak:
+            peak = hm
+    return peak
+
+
+@jit(inline=True)
+def _snapshot_pair(pre, i, e_in, e_d, steps, e0, q0, q1, v0, v1, pk0, pk1):
+    """:func:`~pound_mc.integrators.outputs.snapshot` of the scalar state."""
+    pre[PRE_INTERVAL] = i
+    pre[PRE_E_IN] = e_in
+    pre[PRE_E_D] = e_d
+    pre[PRE_STEPS] = steps
+    pre[PRE_E0] = e0
+    pre[PRE_STATE] = q0
+    pre[PRE_STATE + 1] = q1
+    pre[PRE_STATE + 2] = v0
+    pre[PRE_STATE + 3] = v1
+    pre[PRE_STATE + 4] = pk0
+    pre[PRE_STATE + 5] = pk1
+
+
+@jit(inline=True)
+def _store_pair(i, q0, q1, v0, v1, f0, f1, ps0, ps1, gp, b, cd, zhd, phase, model, hx, hd, hf):
+    """Floor displacements, penetration and force at record sample ``i``."""
+    hx[i, 0] = f0 * q0
+    hx[i, 1] = f1 * q1
+    d = ps0 * q0 + ps1 * q1 - gp
+    hd[i, 0] = d
+    hf[i, 0] = force(model, d, ps0 * v0 + ps1 * v1, b, cd, zhd, phase)
