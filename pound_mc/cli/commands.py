@@ -65,6 +65,12 @@ kind                file
 """
 
 
+def _json_and_plot(parser: argparse.ArgumentParser, plot_help: str) -> None:
+    """The ``--json`` and ``--plot FILE.png`` options of a command that prints one result."""
+    parser.add_argument("--json", action="store_true", help="print one JSON object")
+    parser.add_argument("--plot", metavar="FILE.png", help=plot_help)
+
+
 def add_commands(sub: argparse._SubParsersAction) -> None:
     """Add every sub-command to the ``pound-mc`` parser, in the order of ``--help``."""
     for group in (_physics, _records, _scene, _study, _analysis):
@@ -99,8 +105,7 @@ def _physics(sub: argparse._SubParsersAction) -> None:
     group.add_argument("--xi", type=float, help="impact damping ratio")
     p.add_argument("--relation", default=None, help="xi-e relation (default jankowski2008)")
     p.add_argument("--model", default="jankowski", help="contact law (default jankowski)")
-    p.add_argument("--json", action="store_true", help="print one JSON object")
-    p.add_argument("--plot", metavar="FILE.png", help="write the force time history chart")
+    _json_and_plot(p, "write the force time history chart")
     p.add_argument(
         "--out",
         metavar="DIR",
@@ -125,8 +130,7 @@ def _records(sub: argparse._SubParsersAction) -> None:
         metavar="NAME|PATH",
         help="builtin:NAME, synthetic:MODEL, a bare builtin name or a file",
     )
-    q.add_argument("--json", action="store_true", help="print one JSON object")
-    q.add_argument("--plot", metavar="FILE.png", help="acceleration and 5%%-damped PSA chart")
+    _json_and_plot(q, "acceleration and 5%%-damped PSA chart")
     q.add_argument("--units", help="units of the file's values: g, gal or m/s^2")
     q.add_argument("--component", help="component of a multi-trace file")
     q.add_argument("--seed", type=int, default=0, help="realisation of a synthetic motion")
@@ -142,8 +146,7 @@ def _scene(sub: argparse._SubParsersAction) -> None:
     """Single scenes and the numerics: ``simulate``, ``bench``, ``stability``."""
     p = sub.add_parser("simulate", help="run one scene (TOML) and print its results")
     p.add_argument("scene", metavar="SCENE.toml")
-    p.add_argument("--json", action="store_true", help="print one JSON object")
-    p.add_argument("--plot", metavar="FILE.png", help="chart of displacements, penetration, force")
+    _json_and_plot(p, "chart of displacements, penetration, force")
     p.add_argument("--method", help="override [integrator] method")
     p.add_argument("--dt", type=float, metavar="S", help="override [integrator] dt_s")
     p.set_defaults(handler="simulate")

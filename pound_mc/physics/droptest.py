@@ -189,19 +189,6 @@ def drop_test(
     pen = np.concatenate([ya[0], yb[0]])
     vel = np.concatenate([ya[1], yb[1]])
     force = np.array([force_law(d, v, beta, xi, m_eff) for d, v in zip(pen, vel, strict=True)])
-    return DropTestResult(
-        model=model,
-        mass_kg=m1,
-        velocity_m_s=v0,
-        beta=beta,
-        xi=xi,
-        m_eff_kg=m_eff,
-        restitution=abs(v_f) / v0,
-        max_penetration_m=d_max,
-        peak_force_N=peak,
-        contact_duration_s=t2,
-        time_s=time,
-        penetration_m=pen,
-        velocity_history_m_s=vel,
-        force_N=force,
-    )
+    # fields in their declared order: the scalars, then the histories
+    return DropTestResult(model, m1, v0, beta, xi, m_eff, abs(v_f) / v0, d_max, peak, t2,
+                          time, pen, vel, force)  # fmt: skip
