@@ -144,7 +144,7 @@ def check_command(args) -> int:
         f"study, plus {CHUNK_OVERHEAD_S * 1e3:.0f} ms per chunk; compile time not included "
         f"({where} does not compile)"
     )
-    print("  (no results written)")
+    print("  (nothing written)")
     return 0
 
 
