@@ -140,20 +140,41 @@ def _run_adaptive(
     ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi, settings,
     q, v, out, cout, hx, hd, hf, pre,
 ):  # fmt: skip
-    """One run of ``adaptive`` (method 0); a step that could not end is not converged."""
+    """One run of ``adaptive`` (method 0) on any pair of buildings (the general modal kernel).
+
+    A step that could not end is not converged.
+    """
     if _endless(ag, dt_rec, settings):
         fail(out, cout, STATUS_NOT_CONVERGED)
         return
-    if (
-        omega.size == 2 and gap.size == 1 and phi.shape[0] == 2 and phi[0, 1] == 0.0
-        and phi[1, 0] == 0.0
-    ):  # fmt: skip
-        # an SDOF pair: the scalar-state kernel (histories included)
-        adaptive_pair(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi,
-                      settings, q, v, out, cout, hx, hd, hf, pre)  # fmt: skip
-        return
     adaptive(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi, settings,
              q, v, out, cout, hx, hd, hf, pre)  # fmt: skip
+
+
+@jit
+def _run_adaptive_pair(
+    ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi, settings,
+    q, v, out, cout, hx, hd, hf, pre,
+):  # fmt: skip
+    """One run of ``adaptive`` on an SDOF pair: the scalar-state kernel (histories included).
+
+    Chosen in Python (:func:`_is_sdof_pair`), so that SDOF studies never compile the general
+    modal kernel.
+    """
+    if _endless(ag, dt_rec, settings):
+        fail(out, cout, STATUS_NOT_CONVERGED)
+        return
+    adaptive_pair(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi,
+                  settings, q, v, out, cout, hx, hd, hf, pre)  # fmt: skip
+
+
+def _is_sdof_pair(omega, gap, phi) -> bool:
+    """Two single-mode buildings and one contact (diagonal floor map)."""
+    phi = np.asarray(phi)
+    return (
+        np.size(omega) == 2 and np.size(gap) == 1 and phi.shape == (2, 2)
+        and phi[0, 1] == 0.0 and phi[1, 0] == 0.0
+    )  # fmt: skip
 
 
 @jit
@@ -273,7 +294,10 @@ def run_kernel(
     hd = np.zeros((nh, nc))
     hf = np.zeros((nh, nc))
     f8 = np.float64
-    _RUNS[settings.method](
+    run = _RUNS[settings.method]
+    if run is _run_adaptive and _is_sdof_pair(omega, gap, phi):
+        run = _run_adaptive_pair
+    run(
         np.ascontiguousarray(ag, dtype=f8), f8(dt_rec),
         np.ascontiguousarray(omega, dtype=f8), np.ascontiguousarray(zeta, dtype=f8),
         np.ascontiguousarray(gamma, dtype=f8), np.ascontiguousarray(phi, dtype=f8),
@@ -337,7 +361,7 @@ def _sdof_groups(ag, dt_rec, tl, zl, ml, tr, zr, mr, gap, beta, xi, dt_s, settin
             k, tl, zl, ml, tr, zr, mr, gap, beta, xi
         )
         shared[gi, PRE_MODE] = PRE_RUN_TO_CONTACT
-        _run_adaptive(ag, dt_rec, omega, zeta, gamma, phi, side, psi, g, me, be, x,
+        _run_adaptive_pair(ag, dt_rec, omega, zeta, gamma, phi, side, psi, g, me, be, x,
                       _with_step(settings, dt_s[k]), np.zeros(2), np.zeros(2), np.empty(N_OUT),
                       np.empty((1, N_COUT)), empty, empty1, empty1, shared[gi])  # fmt: skip
         shared[gi, PRE_MODE] = PRE_RESUME
@@ -353,7 +377,7 @@ def _sdof_adaptive(ag, dt_rec, tl, zl, ml, tr, zr, mr, gap, beta, xi, dt_s, sett
         omega, zeta, gamma, phi, side, psi, g, me, be, x = _sdof_arrays(
             k, tl, zl, ml, tr, zr, mr, gap, beta, xi
         )
-        _run_adaptive(ag, dt_rec, omega, zeta, gamma, phi, side, psi, g, me, be, x,
+        _run_adaptive_pair(ag, dt_rec, omega, zeta, gamma, phi, side, psi, g, me, be, x,
                       _with_step(settings, dt_s[k]), np.zeros(2), np.zeros(2), out[k],
                       np.empty((1, N_COUT)), empty, empty1, empty1,
                       shared[group[k]].copy())  # fmt: skip
