@@ -2,6 +2,7 @@
 
 import json
 import shutil
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -224,3 +225,33 @@ def test_required_gap_chart_draws_the_dataset(glob_dataset):
     for j, ln in enumerate(lines):
         np.testing.assert_allclose(ln.get_xdata(), ds.contact_gap_m.values * 1e3)
         np.testing.assert_allclose(ln.get_ydata(), p.isel(sa_g=j).values)
+
+
+@pytest.mark.slow
+def test_quickstart_chart_draws_its_dataset(tmp_path):
+    # the README's main job end to end: the written charts, and the required-gap chart's
+    # probability lines and required-gap markers equal to the dataset's own values
+    study = Path(__file__).resolve().parents[1] / "studies" / "quickstart.toml"
+    assert main(["run", str(study), "--out", str(tmp_path)]) == 0
+    for name in ("quickstart.nc", "quickstart_required_gap.png", "quickstart_fragility.png"):
+        assert (tmp_path / name).stat().st_size > 0
+    with xr.open_dataset(tmp_path / "quickstart.nc") as ds:
+        ds.load()
+    assert ds.sizes["record"] == 44  # FEMA P695 far field, 22 x 2 components
+    fig = required_gap_chart(ds, probability=0.1, base_dir=study.parent)
+    ax = fig.axes[0]
+    lines = [ln for ln in ax.lines if ln.get_marker() == "o"]
+    assert len(lines) == ds.sizes["pga_g"]
+    ok = ds.status == 0
+    p = (ds.impacts > 0).where(ok).mean(("record", "sample"))
+    found = ds.pound.required_gap(probability=0.1, rules=False)
+    for j, ln in enumerate(lines):
+        np.testing.assert_allclose(ln.get_xdata(), ds.contact_gap_m.values * 1e3)
+        np.testing.assert_allclose(ln.get_ydata(), p.isel(pga_g=j).values)
+    # the probability falls with the gap and rises with the intensity: not a flat line
+    assert float(p.isel(pga_g=-1, contact_gap_m=0)) > float(p.isel(pga_g=-1, contact_gap_m=-1))
+    assert float(p.isel(pga_g=-1, contact_gap_m=1)) > float(p.isel(pga_g=0, contact_gap_m=1))
+    # one marker per line with a required gap, at the accessor's value [mm]
+    markers = sorted(float(x) for c in ax.containers for x in np.atleast_1d(c.lines[0].get_xdata()))
+    expected = sorted(float(g) * 1e3 for g in found["required_gap"].values if np.isfinite(g))
+    np.testing.assert_allclose(markers, expected)
