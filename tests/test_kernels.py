@@ -46,3 +46,27 @@ def test_pair_kernel_equals_general_kernel(record, method, contact):
     assert fast["energy_residual"] == pytest.approx(general["energy_residual"], abs=1e-9)
     for name in cf:
         np.testing.assert_allclose(cf[name], cg[name], rtol=1e-9, err_msg=name)
+
+
+@pytest.mark.parametrize(
+    "method", ["adaptive", "newmark", "newmark-explicit", "central-difference"]
+)
+def test_round_off_contact_is_no_impact(record, method):
+    # identical buildings but for the last bit of a period (np.linspace's 0.9999999999999999
+    # against 1.0) at gap 0 touch by 1e-16 m: no impact (outputs.IMPACT_MIN_PENETRATION_M,
+    # 1e-9 m), as with exactly identical buildings
+    dt, acc = record
+    period = np.nextafter(1.0, 0.0)
+    sc = scene_from_dict(
+        {
+            "record": {"source": "builtin:knet-akt013", "duration_s": 8.0, "pga_g": 0.5},
+            "left": {"model": "sdof", "period_s": period, "damping_ratio": 0.05, "mass_kg": 1e6},
+            "right": {"model": "sdof", "period_s": 1.0, "damping_ratio": 0.05, "mass_kg": 1e6},
+            "contact": {"gap_m": 0.0, "beta": 2.75e9, "xi": 0.35},
+        }
+    )
+    out, _, _ = run_kernel(acc, dt, **sc.modal_arrays(), model="jankowski", method=method,
+                           dt_s=1e-3 if method != "central-difference" else 1e-4)  # fmt: skip
+    assert out["status"] == 0
+    assert out["impacts"] == 0
+    assert out["max_penetration"] == 0.0

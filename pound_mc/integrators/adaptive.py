@@ -34,6 +34,7 @@ from pound_mc.integrators.outputs import (
     C_IMPULSE,
     C_MAX_PENETRATION,
     C_PEAK_FORCE,
+    IMPACT_MIN_PENETRATION_M,
     PRE_E0,
     PRE_E_D,
     PRE_E_IN,
@@ -310,7 +311,7 @@ def _locate_switch(q, v, q1, v1, a0, a1, psi, gap, phase, hs):
 
 @jit(inline=True)
 def _contact_peaks(q, v, q1, v1, a0, a1, psi, gap, beta, cd, zhd, phase, model, fc0, fc, cimp,
-                   cout, hs, t, peak_f, peak_t):  # fmt: skip
+                   cout, pending, hs, t, peak_f, peak_t):  # fmt: skip
     """Peak force per contact (Hermite on F with its rate), penetration and impulse.
 
     Returns the run's peak force and its time, raised where this sub-step holds a new one.
@@ -353,15 +354,22 @@ def _contact_peaks(q, v, q1, v1, a0, a1, psi, gap, beta, cd, zhd, phase, model, 
                 dm = hm
         if dm > cout[c, C_MAX_PENETRATION]:
             cout[c, C_MAX_PENETRATION] = dm
+        if pending[c] and dm > IMPACT_MIN_PENETRATION_M:
+            cout[c, C_IMPACTS] += 1.0  # the episode is an impact
+            pending[c] = False
     return peak_f, peak_t
 
 
 @jit(inline=True)
-def _open_contact(c, v, psi, xi, beta, meff, zhd, phase, cout, model, relation, substeps, hc):
-    """Contact ``c`` starts an impact: its phase, count, episode damping and sub-step bound."""
+def _open_contact(c, v, psi, xi, beta, meff, zhd, phase, pending, model, relation, substeps, hc):
+    """Contact ``c`` starts an episode: its phase, episode damping and sub-step bound.
+
+    The episode counts as an impact once its penetration exceeds ``IMPACT_MIN_PENETRATION_M``
+    (:func:`_contact_peaks`).
+    """
     v0c = rowdot(psi, c, v)
     phase[c] = 1
-    cout[c, C_IMPACTS] += 1.0
+    pending[c] = True
     zhd[c] = episode_zeta(model, relation, xi[c], v0c, zhd[c])
     return min(hc, duration(model, v0c, beta[c], meff[c]) / substeps)
 
@@ -449,6 +457,7 @@ def adaptive(
     fc0 = np.zeros(nc)
     cimp = np.zeros(nc)
     phase = np.zeros(nc, dtype=np.int64)
+    pending = np.zeros(nc, dtype=np.bool_)  # an episode not yet counted as an impact
     zhd = np.zeros(nc)
     peaks = np.zeros(nf)
     dc0 = np.empty(nc)
@@ -541,7 +550,7 @@ def adaptive(
                 _shift(q, v, q1, v1, dc0, ddc0, dc1, ddc1, en0, en1)
                 s += hh
                 if c_on >= 0:
-                    hc = _open_contact(c_on, v, psi, xi, beta, meff, zhd, phase, cout, model,
+                    hc = _open_contact(c_on, v, psi, xi, beta, meff, zhd, phase, pending, model,
                                        relation, substeps, h)  # fmt: skip
                     t_onset = i * dt_rec + s
                     in_contact = True
@@ -571,7 +580,7 @@ def adaptive(
                 e_d += de_d
                 w_c += dw_c
                 peak_f, peak_t = _contact_peaks(q, v, q1, v1, a0, a1, psi, gap, beta, cd, zhd,
-                                                phase, model, fc0, fc, cimp, cout, hs,
+                                                phase, model, fc0, fc, cimp, cout, pending, hs,
                                                 i * dt_rec + s, peak_f, peak_t)  # fmt: skip
                 track_floors(phi, side, q, v, q1, v1, hs, peaks)
                 for j in range(n):
@@ -580,7 +589,7 @@ def adaptive(
                 s += hs
                 if c_ev >= 0 and hs == t_ev:
                     if kind == _ONSET:
-                        hc = _open_contact(c_ev, v, psi, xi, beta, meff, zhd, phase, cout,
+                        hc = _open_contact(c_ev, v, psi, xi, beta, meff, zhd, phase, pending,
                                            model, relation, substeps, hc)  # fmt: skip
                         t_onset = i * dt_rec + s
                     elif kind == _TO_RESTITUTION:

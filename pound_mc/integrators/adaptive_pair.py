@@ -38,6 +38,7 @@ from pound_mc.integrators.outputs import (
     C_IMPULSE,
     C_MAX_PENETRATION,
     C_PEAK_FORCE,
+    IMPACT_MIN_PENETRATION_M,
     PRE_E0,
     PRE_E_D,
     PRE_E_IN,
@@ -390,6 +391,7 @@ def adaptive_pair(
     e0 = 0.5 * (v0 * v0 + w0 * w0 * q0 * q0)
     e0 += 0.5 * (v1 * v1 + w1 * w1 * q1 * q1)
     peak_f = peak_t = impacts = impulse = 0.0
+    pending = False  # an episode not yet counted as an impact
     maxpen = -_INF
     steps = 0
     hc = h
@@ -602,7 +604,7 @@ def adaptive_pair(
                 if onset:
                     v0c = ps0 * v0 + ps1 * v1
                     phase = 1
-                    impacts += 1.0
+                    pending = True
                     zhd = episode_zeta(model, relation, xi0, v0c, zhd)
                     hc = min(h, duration(model, v0c, b, me) / substeps)
                     t_onset = i * dt_rec + s
@@ -715,6 +717,9 @@ def adaptive_pair(
                             dm = hm
                     if dm > maxpen:
                         maxpen = dm
+                    if pending and dm > IMPACT_MIN_PENETRATION_M:
+                        impacts += 1.0  # the episode is an impact
+                        pending = False
                 # peak floor displacements over the sub-step (Hermite)
                 pk0 = _track_floor(f0 * q0, f0 * v0, f0 * nq0, f0 * nv0, hs, pk0)
                 pk1 = _track_floor(f1 * q1, f1 * v1, f1 * nq1, f1 * nv1, hs, pk1)
@@ -726,7 +731,7 @@ def adaptive_pair(
                 if event and hs == t_ev:
                     if kind == 1:
                         phase = 1
-                        impacts += 1.0
+                        pending = True
                         v0c = ps0 * v0 + ps1 * v1
                         zhd = episode_zeta(model, relation, xi0, v0c, zhd)
                         hc = min(hc, duration(model, v0c, b, me) / substeps)

@@ -31,6 +31,7 @@ from pound_mc.integrators.outputs import (
     C_MAX_PENETRATION,
     C_PEAK_FORCE,
     DIVERGENCE_LIMIT_M,
+    IMPACT_MIN_PENETRATION_M,
     STATUS_NOT_CONVERGED,
     STATUS_OK,
     STATUS_UNSTABLE,
@@ -152,6 +153,7 @@ def fixed(
     dpen = np.zeros(nc)
     ddpen = np.zeros(nc)
     was_in = np.zeros(nc, dtype=np.bool_)
+    pending = np.zeros(nc, dtype=np.bool_)  # an episode not yet counted as an impact
     g = np.zeros((nc, nc))
     jac = np.zeros((nc, nc))
     rhs = np.zeros(nc)
@@ -281,8 +283,11 @@ def fixed(
             d1 = rowdot(psi, c, qn if method != CENTRAL_DIFFERENCE else q) - gap[c]
             dd1 = rowdot(psi, c, vn)
             if d1 > 0.0 and not was_in[c]:
-                cout[c, C_IMPACTS] += 1.0
+                pending[c] = True  # an episode: an impact once it is deep enough
                 zhd[c] = episode_zeta(model, relation, xi[c], dd1, zhd[c])
+            if pending[c] and d1 > IMPACT_MIN_PENETRATION_M:
+                cout[c, C_IMPACTS] += 1.0
+                pending[c] = False
             was_in[c] = d1 > 0.0
             dpen[c] = d1
             ddpen[c] = dd1

@@ -53,6 +53,11 @@ STATUS_OK, STATUS_UNSTABLE, STATUS_NOT_CONVERGED = 0, 1, 2
 UNSTABLE_ENERGY_FRACTION = 0.5
 #: A displacement beyond this [m] is a diverging run.
 DIVERGENCE_LIMIT_M = 1.0e3
+#: A contact episode counts as an impact only once its penetration exceeds this [m]: far above
+#: the round-off of floor displacements (1e-16 of metres), far below any physical contact
+#: (B1's impacts reach 1e-4 m).  Episodes of identical buildings that differ in the last bit
+#: of a period (6e-17 m) are no impacts.
+IMPACT_MIN_PENETRATION_M = 1.0e-9
 
 # Shared linear response before the first contact (``pre`` of the adaptive kernel): slots of
 # the run mode, the record interval reached, input and damping energy, steps and initial

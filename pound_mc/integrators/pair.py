@@ -68,6 +68,7 @@ def newmark_pair(
     w_c = 0.0
     impulse = 0.0
     impacts = 0.0
+    pending = False  # an episode not yet counted as an impact
     maxpen = -np.inf
     peak_f = 0.0
     peak_t = 0.0
@@ -103,8 +104,11 @@ def newmark_pair(
             d1 = ps0 * q0 + ps1 * q1 - gp
             dd1 = ps0 * v0 + ps1 * v1
             if d1 > 0.0 and not was_in:
-                impacts += 1.0
+                pending = True  # an episode: an impact once it is deep enough
                 zhd = episode_zeta(model, relation, xi[0], dd1, zhd)
+            if pending and d1 > outputs.IMPACT_MIN_PENETRATION_M:
+                impacts += 1.0
+                pending = False
             was_in = d1 > 0.0
             dpen = d1
             ddpen = dd1

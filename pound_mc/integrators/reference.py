@@ -45,6 +45,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.optimize import minimize_scalar
 
+from pound_mc.integrators.outputs import IMPACT_MIN_PENETRATION_M
 from pound_mc.motions import record_arrays
 from pound_mc.physics.relations import HERTZDAMP_RELATIONS
 
@@ -238,6 +239,7 @@ def reference_solution(
     peak_f = np.zeros(nc)
     peak_f_time = 0.0
     impacts = np.zeros(nc, dtype=int)
+    pending = np.zeros(nc, dtype=bool)  # episodes not yet counted as impacts
     max_pen = np.full(nc, -np.inf)
     impact_times: list[float] = []
     segments = 0
@@ -349,7 +351,7 @@ def reference_solution(
                 j, kind = kinds[idx]
                 if kind == "onset":
                     phase[j] = _APPROACH
-                    impacts[j] += 1
+                    pending[j] = True  # an impact once the penetration is deep enough
                     impact_times.append(t)
                     if model == "hertzdamp":
                         vimp = y[n + il[j]] - y[n + ir[j]]
@@ -357,7 +359,11 @@ def reference_solution(
                     h_last = None  # let the solver choose a step for the stiff contact
                 elif kind == "turn":
                     phase[j] = _RESTITUTION
-                    max_pen[j] = max(max_pen[j], y[il[j]] - y[ir[j]] - gap[j])
+                    pen = y[il[j]] - y[ir[j]] - gap[j]  # a maximum of the penetration
+                    max_pen[j] = max(max_pen[j], pen)
+                    if pending[j] and pen > IMPACT_MIN_PENETRATION_M:
+                        impacts[j] += 1
+                        pending[j] = False
                 elif kind == "separation":
                     phase[j] = _OPEN
                 else:
