@@ -58,6 +58,7 @@ from pound_mc.integrators.toolkit import (
     coefficients,
     hermite_max,
     hermite_root,
+    newton_in_bracket,
     step_size,
 )
 
@@ -128,19 +129,9 @@ def _exact_root_pair(
     for _ in range(60):
         d, dd, ddd = _exact_pen(q0, q1, v0, v1, p0s, slope, t, w0, z0, g0, w1, z1, g1, c0, c1,
                                 off)  # fmt: skip
-        g = d if which == 0 else -dd
-        gp = dd if which == 0 else -ddd
-        if g > 0.0:
-            hi = t
-        else:
-            lo = t
-        t_new = t - g / gp if gp != 0.0 else 0.5 * (lo + hi)
-        if not (lo < t_new < hi):
-            t_new = 0.5 * (lo + hi)
-        if abs(t_new - t) <= tol * (hi + 1e-300) or hi - lo <= 1e-15 * hi:
-            t = t_new
+        t, lo, hi, done = newton_in_bracket(t, d, dd, ddd, which, lo, hi, tol)
+        if done:
             break
-        t = t_new
     return t
 
 

@@ -321,6 +321,27 @@ def exact_delta(q, v, p0s, slope, s, tau, c, omega, zeta, gamma, psi, gap):
     return d, dd, ddd
 
 
+@jit(inline=True)
+def newton_in_bracket(t, d, dd, ddd, which, lo, hi, tol):
+    """One safeguarded Newton step for a root of delta (``which = 0``) or of its rate.
+
+    The bracket ``[lo, hi]`` shrinks to the side of ``t`` that keeps the root; a step leaving
+    it is replaced by bisection.  Returns ``(t, lo, hi, done)``, done when the step is below
+    ``tol`` of the bracket's end or the bracket below 1e-15 of it.
+    """
+    g = d if which == 0 else -dd
+    gp = dd if which == 0 else -ddd
+    if g > 0.0:
+        hi = t
+    else:
+        lo = t
+    t_new = t - g / gp if gp != 0.0 else 0.5 * (lo + hi)
+    if not (lo < t_new < hi):
+        t_new = 0.5 * (lo + hi)
+    done = abs(t_new - t) <= tol * (hi + 1e-300) or hi - lo <= 1e-15 * hi
+    return t_new, lo, hi, done
+
+
 @jit
 def exact_root(q, v, p0s, slope, s, guess, lo, hi, which, c, omega, zeta, gamma, psi, gap):
     """Root in ``[lo, hi]`` on the exact linear solution.
@@ -333,19 +354,9 @@ def exact_root(q, v, p0s, slope, s, guess, lo, hi, which, c, omega, zeta, gamma,
         t = 0.5 * (lo + hi)
     for _ in range(60):
         d, dd, ddd = exact_delta(q, v, p0s, slope, s, t, c, omega, zeta, gamma, psi, gap)
-        g = d if which == 0 else -dd
-        gp = dd if which == 0 else -ddd
-        if g > 0.0:
-            hi = t
-        else:
-            lo = t
-        t_new = t - g / gp if gp != 0.0 else 0.5 * (lo + hi)
-        if not (lo < t_new < hi):
-            t_new = 0.5 * (lo + hi)
-        if abs(t_new - t) <= 1e-15 * (hi + 1e-300) or hi - lo <= 1e-15 * hi:
-            t = t_new
+        t, lo, hi, done = newton_in_bracket(t, d, dd, ddd, which, lo, hi, 1e-15)
+        if done:
             break
-        t = t_new
     return t
 
 
