@@ -28,7 +28,11 @@ __all__ = [
     "shear_building",
     "building_from_dict",
     "contacts_between",
+    "HYSTERESIS",
 ]
+
+#: Hysteresis laws of a building's storeys (DESIGN.md section 9); the first is the default.
+HYSTERESIS = ("elastic", "bilinear")
 
 #: Floors whose elevations differ by less than this are at equal height [m].
 HEIGHT_TOLERANCE_M = 1e-6
@@ -50,6 +54,14 @@ class Building:
         Floor elevations above the ground [m] (``None`` for an SDOF without a height).
     damping_ratio : float
         Damping ratio of every mode [-].
+    hysteresis : {"elastic", "bilinear"}
+        Storey law: linear elastic, or bilinear with kinematic hardening (storey force
+        ``alpha k u + (1 - alpha) k z``, ``z`` elastic-perfectly-plastic with ``|z| <= u_y``).
+        The modes, and the damping built from them, are those of the initial elastic building.
+    yield_disp_m : numpy.ndarray or None
+        Storey drift at yield ``u_y`` per storey [m] (bilinear only).
+    post_yield_ratio : float
+        Post-yield stiffness over the elastic stiffness ``alpha`` [-] (bilinear only).
     """
 
     model: str
@@ -60,6 +72,9 @@ class Building:
     omega: np.ndarray = field(init=False, repr=False)
     phi: np.ndarray = field(init=False, repr=False)
     gamma: np.ndarray = field(init=False, repr=False)
+    hysteresis: str = "elastic"
+    yield_disp_m: np.ndarray | None = None
+    post_yield_ratio: float = 0.0
 
     def __post_init__(self):
         omega, phi = _modes(self.mass_matrix(), self.stiffness_matrix())
@@ -72,6 +87,23 @@ class Building:
     def n_floors(self) -> int:
         """Number of floors (degrees of freedom)."""
         return int(self.storey_mass_kg.size)
+
+    @property
+    def inelastic(self) -> bool:
+        """Whether the storeys can yield (a hysteresis other than ``"elastic"``)."""
+        return self.hysteresis != "elastic"
+
+    @property
+    def storey_height_m(self) -> np.ndarray:
+        """Storey heights [m], bottom to top (NaN for an SDOF without a height)."""
+        if self.elevation_m is None:
+            return np.full(self.n_floors, np.nan)
+        return np.diff(np.r_[0.0, self.elevation_m])
+
+    def drift_matrix(self) -> np.ndarray:
+        """Storey drifts over floor displacements ``u = B x`` (storeys x floors)."""
+        n = self.n_floors
+        return np.eye(n) - np.eye(n, k=-1)
 
     @property
     def periods_s(self) -> np.ndarray:
@@ -133,12 +165,49 @@ def _check_damping(value, *, key: str, file=None) -> float:
     return float(value)
 
 
+def _hysteresis(hysteresis, yield_disp, ratio, n: int, *, yield_key: str, file, prefix: str):
+    """Checked ``(hysteresis, yield drifts [m] or None, post-yield ratio)`` of a building."""
+    if hysteresis not in HYSTERESIS:
+        raise InputError(
+            f"unknown hysteresis {hysteresis!r}; allowed: {', '.join(map(repr, HYSTERESIS))}",
+            file=file,
+            key=f"{prefix}hysteresis",
+        )
+    if hysteresis == "elastic":
+        for key, value in ((yield_key, yield_disp), ("post_yield_ratio", ratio)):
+            if value is not None:
+                raise InputError(
+                    "applies only to hysteresis = 'bilinear'", file=file, key=prefix + key
+                )
+        return "elastic", None, 0.0
+    if yield_disp is None:
+        raise InputError(
+            f"is required for hysteresis = {hysteresis!r}", file=file, key=prefix + yield_key
+        )
+    uy = _check_positive(yield_disp, key=prefix + yield_key, file=file)
+    if uy.size == 1:
+        uy = np.full(n, uy[0])
+    elif uy.size != n:
+        raise InputError(
+            f"gives {uy.size} yield drifts for {n} storeys", file=file, key=prefix + yield_key
+        )
+    ratio = 0.0 if ratio is None else ratio
+    if not (isinstance(ratio, int | float) and not isinstance(ratio, bool) and 0 <= ratio < 1):
+        raise InputError(
+            f"must be a number in [0, 1), got {ratio!r}", file=file, key=prefix + "post_yield_ratio"
+        )
+    return hysteresis, uy, float(ratio)
+
+
 def sdof(
     period_s: float,
     mass_kg: float,
     damping_ratio: float = 0.05,
     height_m: float | None = None,
     *,
+    hysteresis: str = "elastic",
+    yield_disp_m: float | None = None,
+    post_yield_ratio: float | None = None,
     file=None,
     prefix: str = "",
 ) -> Building:
@@ -154,6 +223,12 @@ def sdof(
         Viscous damping ratio [-].
     height_m : float, optional
         Height of the mass [m]; needed only to pair it with a shear building's floors.
+    hysteresis : {"elastic", "bilinear"}
+        Law of the storey (:class:`Building`).
+    yield_disp_m : float, optional
+        Displacement at yield [m] (bilinear).
+    post_yield_ratio : float, optional
+        Post-yield over elastic stiffness [-] (bilinear, default 0: elastic-perfectly-plastic).
     """
     t = _check_positive(period_s, key=f"{prefix}period_s", file=file)[0]
     m = _check_positive(mass_kg, key=f"{prefix}mass_kg", file=file)[0]
@@ -162,7 +237,9 @@ def sdof(
     if height_m is not None:
         elevation = _check_positive(height_m, key=f"{prefix}height_m", file=file)
     k = m * (2.0 * math.pi / t) ** 2
-    return Building("sdof", np.array([m]), np.array([k]), elevation, z)
+    hyst = _hysteresis(hysteresis, yield_disp_m, post_yield_ratio, 1, yield_key="yield_disp_m",
+                       file=file, prefix=prefix)  # fmt: skip
+    return Building("sdof", np.array([m]), np.array([k]), elevation, z, *hyst)
 
 
 def shear_building(
@@ -171,6 +248,9 @@ def shear_building(
     storey_height_m,
     damping_ratio: float = 0.05,
     *,
+    hysteresis: str = "elastic",
+    storey_yield_disp_m=None,
+    post_yield_ratio: float | None = None,
     file=None,
     prefix: str = "",
 ) -> Building:
@@ -186,6 +266,12 @@ def shear_building(
         Storey heights, bottom to top [m]; floor elevations are their cumulative sums.
     damping_ratio : float
         Damping ratio of every mode [-].
+    hysteresis : {"elastic", "bilinear"}
+        Law of the storeys (:class:`Building`).
+    storey_yield_disp_m : array_like, optional
+        Inter-storey drift at yield per storey (or one for all) [m] (bilinear).
+    post_yield_ratio : float, optional
+        Post-yield over elastic stiffness [-] (bilinear, default 0).
     """
     m = _check_positive(storey_mass_kg, key=f"{prefix}storey_mass_kg", file=file)
     k = _check_positive(
@@ -200,7 +286,9 @@ def shear_building(
             key=f"{prefix}storey_mass_kg",
         )
     z = _check_damping(damping_ratio, key=f"{prefix}damping_ratio", file=file)
-    return Building("shear", m, k, np.cumsum(h), z)
+    hyst = _hysteresis(hysteresis, storey_yield_disp_m, post_yield_ratio, m.size,
+                       yield_key="storey_yield_disp_m", file=file, prefix=prefix)  # fmt: skip
+    return Building("shear", m, k, np.cumsum(h), z, *hyst)
 
 
 def building_from_dict(spec: dict, *, file=None, side: str = "left") -> Building:
@@ -208,7 +296,8 @@ def building_from_dict(spec: dict, *, file=None, side: str = "left") -> Building
     prefix = f"{side}."
     model = spec.get("model", "sdof")
     if model == "sdof":
-        allowed = {"model", "period_s", "mass_kg", "damping_ratio", "height_m"}
+        allowed = {"model", "period_s", "mass_kg", "damping_ratio", "height_m", "hysteresis",
+                   "yield_disp_m", "post_yield_ratio"}  # fmt: skip
         _unknown(spec, allowed, file=file, prefix=prefix)
         for key in ("period_s", "mass_kg"):
             if key not in spec:
@@ -218,6 +307,9 @@ def building_from_dict(spec: dict, *, file=None, side: str = "left") -> Building
             spec["mass_kg"],
             spec.get("damping_ratio", 0.05),
             spec.get("height_m"),
+            hysteresis=spec.get("hysteresis", "elastic"),
+            yield_disp_m=spec.get("yield_disp_m"),
+            post_yield_ratio=spec.get("post_yield_ratio"),
             file=file,
             prefix=prefix,
         )
@@ -228,6 +320,9 @@ def building_from_dict(spec: dict, *, file=None, side: str = "left") -> Building
             "storey_stiffness_N_per_m",
             "storey_height_m",
             "damping_ratio",
+            "hysteresis",
+            "storey_yield_disp_m",
+            "post_yield_ratio",
         }
         _unknown(spec, allowed, file=file, prefix=prefix)
         for key in ("storey_mass_kg", "storey_stiffness_N_per_m", "storey_height_m"):
@@ -238,6 +333,9 @@ def building_from_dict(spec: dict, *, file=None, side: str = "left") -> Building
             spec["storey_stiffness_N_per_m"],
             spec["storey_height_m"],
             spec.get("damping_ratio", 0.05),
+            hysteresis=spec.get("hysteresis", "elastic"),
+            storey_yield_disp_m=spec.get("storey_yield_disp_m"),
+            post_yield_ratio=spec.get("post_yield_ratio"),
             file=file,
             prefix=prefix,
         )

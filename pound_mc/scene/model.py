@@ -228,9 +228,14 @@ def _building(spec, side: str, file, errors: list) -> Building | None:
     try:
         if model == "sdof":
             return sdof(v["period_s"], v["mass_kg"], v["damping_ratio"], v.get("height_m"),
-                        file=file, prefix=f"{side}.")  # fmt: skip
+                        hysteresis=v["hysteresis"], yield_disp_m=v.get("yield_disp_m"),
+                        post_yield_ratio=v.get("post_yield_ratio"), file=file,
+                        prefix=f"{side}.")  # fmt: skip
         return shear_building(v["storey_mass_kg"], v["storey_stiffness_N_per_m"],
-                              v["storey_height_m"], v["damping_ratio"], file=file,
+                              v["storey_height_m"], v["damping_ratio"],
+                              hysteresis=v["hysteresis"],
+                              storey_yield_disp_m=v.get("storey_yield_disp_m"),
+                              post_yield_ratio=v.get("post_yield_ratio"), file=file,
                               prefix=f"{side}.")  # fmt: skip
     except InputError as exc:  # rules across keys: storey lists of equal length
         errors.append(exc)

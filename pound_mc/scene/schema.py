@@ -26,6 +26,7 @@ from pound_mc.integrators import METHODS
 from pound_mc.motions import UNITS, builtin_catalogue, suites, synthetic
 from pound_mc.physics import contact
 from pound_mc.physics.contact import CONTACT_MODELS
+from pound_mc.physics.structures import HYSTERESIS
 
 __all__ = [
     "Field",
@@ -353,6 +354,16 @@ _BUILDING_DAMPING = Field(
     default=0.05, minimum=0.0, maximum=1.0, exclusive_maximum=True, varied=True,
 )  # fmt: skip
 
+_HYSTERESIS = Field(
+    "hysteresis", "string", "Storey law: `elastic`, or `bilinear` (kinematic hardening: storey "
+    "force alpha k u + (1 - alpha) k z, z elastic-perfectly-plastic with |z| <= yield drift); "
+    "damping from the initial elastic modes.", default="elastic", choices=HYSTERESIS,
+)  # fmt: skip
+_POST_YIELD = Field(
+    "post_yield_ratio", "number", "Post-yield over elastic storey stiffness alpha (bilinear; "
+    "default 0, elastic-perfectly-plastic).", minimum=0.0, maximum=1.0, exclusive_maximum=True,
+)  # fmt: skip
+
 SDOF = Table(
     "sdof",
     "A single-degree-of-freedom building (`[left]` or `[right]` with `model = \"sdof\"`, the "
@@ -366,6 +377,10 @@ SDOF = Table(
         _BUILDING_DAMPING,
         Field("height_m", "number", "Height of the mass; needed only to pair it with a shear "
               "building's floors.", unit="m", minimum=0.0, exclusive_minimum=True),
+        _HYSTERESIS,
+        Field("yield_disp_m", "number", "Displacement at yield (required for bilinear).",
+              unit="m", minimum=0.0, exclusive_minimum=True),
+        _POST_YIELD,
     ),
     variant="model = 'sdof'",
 )  # fmt: skip
@@ -386,6 +401,11 @@ SHEAR = Table(
               "are their cumulative sums).", unit="m", required=True, minimum=0.0,
               exclusive_minimum=True),
         _BUILDING_DAMPING,
+        _HYSTERESIS,
+        Field("storey_yield_disp_m", "numbers", "Inter-storey drift at yield, bottom to top, "
+              "or one for every storey (required for bilinear).", unit="m", minimum=0.0,
+              exclusive_minimum=True),
+        _POST_YIELD,
     ),
     variant="model = 'shear'",
 )  # fmt: skip
