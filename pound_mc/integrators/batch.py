@@ -42,6 +42,7 @@ from pound_mc.errors import InputError
 from pound_mc.integrators.adaptive import adaptive
 from pound_mc.integrators.adaptive_pair import adaptive_pair
 from pound_mc.integrators.fixed import CENTRAL_DIFFERENCE, NEWMARK, NEWMARK_EXPLICIT, fixed
+from pound_mc.integrators.hysteretic import N_STOREY_COLUMNS, newmark_hysteretic
 from pound_mc.integrators.laws import LAW_CODES, RELATION_CODES
 from pound_mc.integrators.outputs import (
     CONTACT_OUTPUTS,
@@ -198,6 +199,44 @@ def _run_fixed(
               q, v, out, cout, hx, hd, hf)  # fmt: skip
 
 
+def _check_inelastic(settings, history: bool) -> None:
+    """Refuse what the inelastic kernel does not do, naming the key."""
+    if settings.method not in (NEWMARK, NEWMARK_EXPLICIT):
+        raise InputError(
+            "buildings with hysteresis other than 'elastic' run with method = 'newmark' (or "
+            "'newmark-explicit'); set it and a step dt_s (1e-3 s or less)",
+            key="integrator.method",
+        )
+    if history:
+        raise InputError("histories of inelastic buildings are not recorded", key="history")
+
+
+def _inelastic_run(storeys):
+    """A run of the inelastic kernel with the storeys bound (the signature of ``_RUNS``)."""
+    dmat = np.ascontiguousarray(storeys[0], dtype=np.float64)
+    store = np.ascontiguousarray(storeys[1], dtype=np.float64).reshape(-1, N_STOREY_COLUMNS)
+
+    def run(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi, settings, q, v,
+            out, cout, hx, hd, hf, pre):  # fmt: skip
+        _run_inelastic(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi,
+                       settings, q, v, out, cout, dmat, store)  # fmt: skip
+
+    return run
+
+
+@jit
+def _run_inelastic(
+    ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi, settings,
+    q, v, out, cout, dmat, store,
+):  # fmt: skip
+    """One run of the inelastic ``newmark`` kernel; a step that could not end is not converged."""
+    if _endless(ag, dt_rec, settings):
+        fail(out, cout, STATUS_NOT_CONVERGED)
+        return
+    newmark_hysteretic(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi,
+                       settings, q, v, out, cout, dmat, store)  # fmt: skip
+
+
 #: One run of each method (same arguments), by method code: a run compiles only its method's
 #: kernel (numba compiles a kernel with everything it calls, on first use).
 _RUNS = {
@@ -261,6 +300,7 @@ def run_kernel(
     q0=None,
     v0=None,
     history: bool = False,
+    storeys=None,
 ) -> KernelResult:
     """Run one simulation on prepared modal arrays.
 
@@ -280,8 +320,13 @@ def run_kernel(
         Initial modal state (default at rest).
     history : bool
         Also return histories at the record's samples.
+    storeys : tuple (drift rows, storey table), optional
+        Yielding storeys (:meth:`pound_mc.scene.Scene.storey_arrays`): run the inelastic
+        kernel (``newmark`` or ``newmark-explicit``; no histories).
     """
     settings = kernel_settings(model, method, relation=relation, dt_s=dt_s, substeps=substeps)
+    if storeys is not None:
+        _check_inelastic(settings, history)
     n = omega.size
     nc = gap.size
     nf = phi.shape[0]
@@ -297,6 +342,8 @@ def run_kernel(
     run = _RUNS[settings.method]
     if run is _run_adaptive and _is_sdof_pair(omega, gap, phi):
         run = _run_adaptive_pair
+    if storeys is not None:
+        run = _inelastic_run(storeys)
     run(
         np.ascontiguousarray(ag, dtype=f8), f8(dt_rec),
         np.ascontiguousarray(omega, dtype=f8), np.ascontiguousarray(zeta, dtype=f8),

@@ -28,12 +28,29 @@ OUTPUTS = (
     "input_energy",
     "steps",
     "peak_force_time",
+    # inelastic buildings (NaN from the elastic kernels): DESIGN.md section 9
+    "peak_ductility_left",
+    "peak_ductility_right",
+    "peak_drift_left",
+    "peak_drift_right",
+    "residual_drift_left",
+    "residual_drift_right",
+    "hysteretic_energy",
+    "peak_floor_accel_left",
+    "peak_floor_accel_right",
 )
 N_OUT = len(OUTPUTS)
 (
     PEAK_FORCE, IMPACTS, MAX_PENETRATION, PEAK_DISP_LEFT, PEAK_DISP_RIGHT, IMPULSE,
     DISSIPATED_ENERGY, ENERGY_RESIDUAL, STATUS, INPUT_ENERGY, STEPS, PEAK_FORCE_TIME,
-) = range(N_OUT)  # fmt: skip
+) = range(12)  # fmt: skip
+(
+    PEAK_DUCTILITY_LEFT, PEAK_DUCTILITY_RIGHT, PEAK_DRIFT_LEFT, PEAK_DRIFT_RIGHT,
+    RESIDUAL_DRIFT_LEFT, RESIDUAL_DRIFT_RIGHT, HYSTERETIC_ENERGY, PEAK_FLOOR_ACCEL_LEFT,
+    PEAK_FLOOR_ACCEL_RIGHT,
+) = range(12, 21)  # fmt: skip
+#: Outputs of inelastic runs only (the storeys' responses), NaN from the elastic kernels.
+INELASTIC_OUTPUTS = OUTPUTS[PEAK_DUCTILITY_LEFT : PEAK_FLOOR_ACCEL_RIGHT + 1]
 #: Outputs that are NaN for a run that is not ok (no plain numbers to be taken for results).
 _NAN_WHEN_FAILED = (
     PEAK_FORCE, MAX_PENETRATION, PEAK_DISP_LEFT, PEAK_DISP_RIGHT, IMPULSE, DISSIPATED_ENERGY,
@@ -153,6 +170,8 @@ def finish(out, cout, peaks, side, phase, q, v, omega, e0, e_in, e_d, w_c, store
     out[INPUT_ENERGY] = e_in
     out[STEPS] = steps
     out[PEAK_FORCE_TIME] = peak_t
+    for k in range(PEAK_DUCTILITY_LEFT, PEAK_FLOOR_ACCEL_RIGHT + 1):
+        out[k] = np.nan  # filled by the inelastic kernel after this
     if status != STATUS_OK:
         # unstable or not converged: no plain numbers that could be taken for results
         for k in _NAN_WHEN_FAILED:

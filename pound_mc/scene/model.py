@@ -59,6 +59,7 @@ class Scene:
     substeps: int = 16
     file: str | None = None
     base_dir: Path | None = None
+    tail_s: float = 5.0
     _cache: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     def __setattr__(self, name, value):
@@ -130,6 +131,34 @@ class Scene:
             "beta": np.full(nc, float(self.stiffness)),
             "xi": np.full(nc, float(xi if xi is not None else 0.0)),
         }
+
+    @property
+    def inelastic(self) -> bool:
+        """Whether a building's storeys can yield (the inelastic kernel runs it)."""
+        return self.left.inelastic or self.right.inelastic
+
+    def storey_arrays(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """Storeys of both buildings for the inelastic kernel; None when both are elastic.
+
+        Returns the drift rows in modal coordinates (storeys x modes, ``u = D q``) and the
+        storey table (stiffness [N/m], yield drift [m] (inf where elastic), post-yield ratio,
+        storey height [m] (NaN: none), building 0 left / 1 right), left storeys first.
+        """
+        if not self.inelastic:
+            return None
+        nl, nr = self.left.omega.size, self.right.omega.size
+        dmat = np.zeros((self.left.n_floors + self.right.n_floors, nl + nr))
+        rows = []
+        start = 0
+        for b, (bld, cols) in enumerate(((self.left, slice(0, nl)), (self.right, slice(nl, None)))):
+            ns = bld.n_floors
+            dmat[start : start + ns, cols] = bld.drift_matrix() @ bld.phi
+            uy = bld.yield_disp_m if bld.inelastic else np.full(ns, np.inf)
+            for s in range(ns):
+                rows.append([bld.storey_stiffness_N_per_m[s], uy[s], bld.post_yield_ratio,
+                             bld.storey_height_m[s], b])  # fmt: skip
+            start += ns
+        return dmat, np.array(rows, dtype=float)
 
     def load_record(self):
         """The scene's record as an obspy Trace [m/s^2], preprocessed."""
@@ -352,9 +381,19 @@ def scene_from_dict(data: dict, *, file: str | Path | None = None) -> Scene:
         method=it["method"],
         dt_s=float(it["dt_s"]),
         substeps=it["substeps"],
+        tail_s=float(it["tail_s"]),
         file=file_s,
         base_dir=base_dir,
     )
+
+
+def with_tail(acc, dt_rec: float, tail_s: float) -> np.ndarray:
+    """The record followed by ``tail_s`` [s] of free vibration (zero ground acceleration).
+
+    The ground acceleration falls linearly from the last sample to zero over one interval.
+    """
+    n_tail = int(round(tail_s / dt_rec))
+    return np.r_[np.asarray(acc, dtype=float), np.zeros(n_tail)]
 
 
 def load_scene(path: str | Path) -> Scene:
@@ -403,6 +442,9 @@ def simulate(
     dt_rec, acc = record
     arrays = scene.kernel_arrays()
     m = method or scene.method
+    storeys = scene.storey_arrays()
+    if storeys is not None:
+        acc = with_tail(acc, dt_rec, scene.tail_s)
     outputs, contacts, hist = run_kernel(
         acc,
         dt_rec,
@@ -413,6 +455,7 @@ def simulate(
         dt_s=dt_s or scene.dt_s,
         substeps=substeps or scene.substeps,
         history=history,
+        storeys=storeys,
     )
     if m != scene.method or dt_s or substeps:
         scene = replace(

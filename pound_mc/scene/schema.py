@@ -453,6 +453,9 @@ INTEGRATOR = Table(
               exclusive_minimum=True, varied=True),
         Field("substeps", "integer", "Sub-steps per contact-duration estimate while in contact "
               "(adaptive).", default=16, minimum=4),
+        Field("tail_s", "number", "Free vibration after the record (zero ground acceleration) "
+              "of runs with yielding buildings, for their residual drift.", unit="s",
+              default=5.0, minimum=0.0),
     ),
 )  # fmt: skip
 
