@@ -170,6 +170,34 @@ def reference_solution(
         xi = float(scene.xi) if scene.xi is not None else 0.0
     zhd = np.zeros(nc)
 
+    # storeys: drift u_s = x[top] - x[bottom] (bottom -1: the ground); a bilinear storey resists
+    # alpha k u + (1 - alpha) k z, i.e. k u less (1 - alpha) k u_p with u_p = u - z its plastic
+    # drift; mode 0 elastic (u_p fixed), +1 / -1 yielding (z = +-u_y, u_p follows u)
+    s_top, s_bot, s_k, s_uy, s_alpha, s_side = [], [], [], [], [], []
+    for b, (bld, off) in enumerate(((left, 0), (right, nl))):
+        for st in range(bld.n_floors):
+            s_top.append(off + st)
+            s_bot.append(off + st - 1 if st > 0 else -1)
+            s_k.append(bld.storey_stiffness_N_per_m[st])
+            s_uy.append(bld.yield_disp_m[st] if bld.inelastic else np.inf)
+            s_alpha.append(bld.post_yield_ratio)
+            s_side.append(b)
+    s_top, s_bot = np.array(s_top), np.array(s_bot)
+    s_k, s_uy, s_alpha = np.array(s_k, float), np.array(s_uy, float), np.array(s_alpha, float)
+    ns = s_top.size
+    yielding = np.isfinite(s_uy)
+    s_mode = np.zeros(ns, dtype=int)
+    s_up = np.zeros(ns)
+    e_hyst = 0.0
+
+    def drifts(x):
+        xb = np.where(s_bot[:, None] >= 0, x[np.maximum(s_bot, 0)], 0.0) if x.ndim > 1 else (
+            np.where(s_bot >= 0, x[np.maximum(s_bot, 0)], 0.0))
+        return x[s_top] - xb
+
+    def plastic_drift(u):
+        return np.where(s_mode == 0, s_up, u - s_mode * s_uy)
+
     y = np.zeros(2 * n)
     if x0 is not None:
         y[:n] = np.asarray(x0, dtype=float)
@@ -213,7 +241,34 @@ def reference_solution(
             f = forces(yy[:n], yy[n:])
             np.subtract.at(dy, n + il, f / masses[il])
             np.add.at(dy, n + ir, f / masses[ir])
+        if yielding.any():
+            # the plastic drifts' forces (1 - alpha) k u_p pull the floor above a storey back
+            # and push the floor below
+            fp = (1.0 - s_alpha) * s_k * plastic_drift(drifts(yy[:n]))
+            np.add.at(dy, n + s_top, fp / masses[s_top])
+            below = s_bot >= 0
+            np.subtract.at(dy, n + s_bot[below], fp[below] / masses[s_bot[below]])
         return dy
+
+    def make_storey_event(st, which, direction):
+        bot = s_bot[st]
+
+        def drift_of(yy, off=0):
+            return yy[off + s_top[st]] - (yy[off + bot] if bot >= 0 else 0.0)
+
+        if which == "yield":
+
+            def ev(_t, yy):
+                return drift_of(yy) - s_up[st] - direction * s_uy[st]
+
+        else:
+
+            def ev(_t, yy):
+                return drift_of(yy, n)
+
+        ev.terminal = True
+        ev.direction = direction
+        return ev
 
     def make_event(j, which, direction):
         if which == "d":
@@ -236,6 +291,7 @@ def reference_solution(
     ev_dd_up = [make_event(j, "dd", 1.0) for j in range(nc)]
 
     peak_x = np.zeros(n)
+    peak_u = np.zeros(ns)
     peak_f = np.zeros(nc)
     peak_f_time = 0.0
     impacts = np.zeros(nc, dtype=int)
@@ -266,6 +322,15 @@ def reference_solution(
                 hi = grid[min(kk + 1, grid.size - 1)]
                 val = _refine_max(lambda t, f_idx=f_idx: abs(dense(t)[f_idx]), lo, hi, val)
                 peak_x[f_idx] = max(peak_x[f_idx], val)
+        au = np.abs(drifts(yy[:n]))
+        for st in range(ns):
+            kk = int(np.argmax(au[st]))
+            val = au[st, kk]
+            if val > peak_u[st] * (1.0 - 1e-3):
+                lo = grid[max(kk - 1, 0)]
+                hi = grid[min(kk + 1, grid.size - 1)]
+                val = _refine_max(lambda t, st=st: abs(drifts(dense(t))[st]), lo, hi, val)
+                peak_u[st] = max(peak_u[st], val)
         for j in range(nc):
             if phase[j] == _OPEN:
                 continue
@@ -322,6 +387,14 @@ def reference_solution(
                     kinds.append((j, "separation"))
                     events.append(ev_dd_up[j])
                     kinds.append((j, "reapproach"))
+            for st in np.flatnonzero(yielding):
+                if s_mode[st] == 0:
+                    for sign in (1.0, -1.0):
+                        events.append(make_storey_event(st, "yield", sign))
+                        kinds.append((st, "yield"))
+                else:
+                    events.append(make_storey_event(st, "unload", -float(s_mode[st])))
+                    kinds.append((st, "unload"))
             kw = {}
             if h_last is not None:
                 kw["first_step"] = min(h_last, t_b - t)
@@ -349,7 +422,15 @@ def reference_solution(
                 fired = [(float(te[0]), idx) for idx, te in enumerate(sol.t_events) if te.size > 0]
                 _, idx = min(fired)
                 j, kind = kinds[idx]
-                if kind == "onset":
+                if kind == "yield":
+                    u = drifts(y[:n])[j]
+                    s_mode[j] = 1 if u - s_up[j] > 0.0 else -1
+                elif kind == "unload":
+                    up_new = drifts(y[:n])[j] - s_mode[j] * s_uy[j]
+                    e_hyst += (1.0 - s_alpha[j]) * s_k[j] * s_uy[j] * abs(up_new - s_up[j])
+                    s_up[j] = up_new
+                    s_mode[j] = 0
+                elif kind == "onset":
                     phase[j] = _APPROACH
                     pending[j] = True  # an impact once the penetration is deep enough
                     impact_times.append(t)
@@ -371,6 +452,19 @@ def reference_solution(
 
     x_left = peak_x[:nl]
     x_right = peak_x[nl:]
+    u_end = drifts(y[:n])
+    up_end = plastic_drift(u_end)
+    e_hyst += float(np.sum(((1.0 - s_alpha) * s_k * s_uy * np.abs(up_end - s_up))[s_mode != 0]))
+    side_of = np.array(s_side)
+    storey_out = {}
+    for b, name in enumerate(("left", "right")):
+        mine = side_of == b
+        bld = left if b == 0 else right
+        duct = peak_u[mine] / s_uy[mine]
+        storey_out[f"peak_ductility_{name}"] = float(duct.max()) if bld.inelastic else np.nan
+        hs = bld.storey_height_m
+        storey_out[f"peak_drift_{name}"] = float(np.max(peak_u[mine] / hs))
+        storey_out[f"residual_drift_{name}"] = float(np.max(np.abs(u_end[mine]) / hs))
     total_impacts = int(impacts.sum())
     return {
         "peak_force": float(peak_f.max()) if nc else 0.0,
@@ -386,4 +480,8 @@ def reference_solution(
         "v_end": y[n:].copy(),
         "segments": segments,
         "wall_s": time.perf_counter() - t_wall,
+        **storey_out,
+        "peak_storey_drift": peak_u.copy(),
+        "plastic_drift_end": up_end,
+        "hysteretic_energy": e_hyst,
     }
