@@ -186,6 +186,7 @@ def reference_solution(
     s_k, s_uy, s_alpha = np.array(s_k, float), np.array(s_uy, float), np.array(s_alpha, float)
     ns = s_top.size
     yielding = np.isfinite(s_uy)
+    uy_finite = np.where(yielding, s_uy, 0.0)
     s_mode = np.zeros(ns, dtype=int)
     s_up = np.zeros(ns)
     e_hyst = 0.0
@@ -196,7 +197,7 @@ def reference_solution(
         return x[s_top] - xb
 
     def plastic_drift(u):
-        return np.where(s_mode == 0, s_up, u - s_mode * s_uy)
+        return np.where(s_mode == 0, s_up, u - s_mode * uy_finite)
 
     y = np.zeros(2 * n)
     if x0 is not None:
@@ -454,7 +455,7 @@ def reference_solution(
     x_right = peak_x[nl:]
     u_end = drifts(y[:n])
     up_end = plastic_drift(u_end)
-    e_hyst += float(np.sum(((1.0 - s_alpha) * s_k * s_uy * np.abs(up_end - s_up))[s_mode != 0]))
+    e_hyst += float(np.sum((1.0 - s_alpha) * s_k * uy_finite * np.abs(up_end - s_up)))
     side_of = np.array(s_side)
     storey_out = {}
     for b, name in enumerate(("left", "right")):

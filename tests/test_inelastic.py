@@ -1,0 +1,147 @@
+"""Inelastic (bilinear) buildings: validation, closed forms, elastic limit, reference.
+
+References:
+
+* an undamped elastic-perfectly-plastic SDOF under a short half-sine pulse: elastic during the
+  pulse (Chopra, Dynamics of Structures, section 4.8: ``u = (p0/k) (sin W t - r sin w t) /
+  (1 - r^2)``, ``r = W / w``), then, moving on to its peak, the energy left at the pulse's end
+  ``E`` is stored up to the yield drift and dissipated beyond it:
+  ``u_max = u_y / 2 + E / (k u_y)``, plastic drift ``u_max - u_y`` (it never yields again);
+* the elastic kernels themselves (the elastic limit: yield drifts never reached);
+* :func:`pound_mc.integrators.reference.reference_solution` with located yield and unload events.
+"""
+
+import math
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from pound_mc.errors import InputError
+from pound_mc.integrators import run_kernel
+from pound_mc.integrators.reference import reference_solution
+from pound_mc.physics.structures import sdof, shear_building
+from pound_mc.scene import load_scene, scene_from_dict, simulate
+
+ROOT = Path(__file__).resolve().parents[1]
+B1_FILE = ROOT / "studies" / "scenes" / "b1.toml"
+
+
+def rel(a, b):
+    return abs(a - b) / abs(b)
+
+
+def _b1_window(n=1000, before=300):
+    """B1 and ``n`` intervals of its record around the peak ground acceleration (22.46 s)."""
+    scene = load_scene(B1_FILE)
+    dt, acc = scene.record_arrays()
+    i0 = int(np.argmax(np.abs(acc)))
+    return scene, (dt, acc[i0 - before : i0 - before + n + 1])
+
+
+def _bilinear_b1(scene, gap_m=None):
+    """B1 with bilinear buildings (yield 0.02 m left, 0.04 m right, 5 % hardening)."""
+    left = sdof(0.5, 1e6, 0.05, hysteresis="bilinear", yield_disp_m=0.02, post_yield_ratio=0.05)
+    right = sdof(1.0, 1e6, 0.05, hysteresis="bilinear", yield_disp_m=0.04, post_yield_ratio=0.05)
+    out = replace(scene, left=left, right=right, tail_s=0.0)
+    if gap_m is not None:
+        out.gap_m = np.array([gap_m])
+    return out
+
+
+# --------------------------------------------------------------------------- validation
+
+
+def _scene(left, right=None):
+    return {
+        "record": {"source": "builtin:knet-akt013", "duration_s": 5.0},
+        "left": left,
+        "right": right or {"period_s": 1.0, "mass_kg": 1e6},
+        "contact": {"xi": 0.35, "gap_m": 0.01},
+        "integrator": {"method": "newmark"},
+    }
+
+
+@pytest.mark.parametrize(
+    ("left", "key", "words"),
+    [
+        ({"period_s": 0.5, "mass_kg": 1e6, "hysteresis": "bilinear"}, "left.yield_disp_m",
+         "required"),
+        ({"period_s": 0.5, "mass_kg": 1e6, "yield_disp_m": 0.02}, "left.yield_disp_m",
+         "only to hysteresis = 'bilinear'"),
+        ({"period_s": 0.5, "mass_kg": 1e6, "hysteresis": "bouncy"}, "left.hysteresis", "bouncy"),
+        ({"period_s": 0.5, "mass_kg": 1e6, "hysteresis": "bilinear", "yield_disp_m": 0.02,
+          "post_yield_ratio": 1.5}, "left.post_yield_ratio", "1"),
+        ({"model": "shear", "storey_mass_kg": [1e6] * 3, "storey_stiffness_N_per_m": [1e9] * 3,
+          "storey_height_m": [3.0] * 3, "hysteresis": "bilinear",
+          "storey_yield_disp_m": [0.01, 0.01]}, "left.storey_yield_disp_m", "2 yield drifts"),
+    ],
+)  # fmt: skip
+def test_bad_hysteresis_keys_are_named(left, key, words):
+    with pytest.raises(InputError) as err:
+        scene_from_dict(_scene(left))
+    assert key in str(err.value) and words in str(err.value)
+
+
+def test_adaptive_refuses_yielding_buildings_naming_the_method():
+    scene, rec = _b1_window(n=10)
+    with pytest.raises(InputError, match="integrator.method.*newmark"):
+        simulate(_bilinear_b1(scene), record=rec)
+
+
+# --------------------------------------------------------------------------- closed form
+
+
+def test_elastoplastic_sdof_half_sine_pulse_matches_the_closed_form():
+    t_n, m, u_y, td = 1.0, 1.0e6, 0.02, 0.1
+    w = 2.0 * math.pi / t_n
+    k = m * w * w
+    big_w = math.pi / td
+    r = big_w / w
+    a0 = 3.0  # pulse of ground acceleration -a0 sin(W t), force p0 = m a0 [m/s^2]
+    p0 = m * a0
+    u1 = p0 / k * (math.sin(big_w * td) - r * math.sin(w * td)) / (1.0 - r * r)
+    v1 = p0 / k * (big_w * math.cos(big_w * td) - big_w * math.cos(w * td)) / (1.0 - r * r)
+    energy = 0.5 * m * v1 * v1 + 0.5 * k * u1 * u1
+    assert abs(u1) < u_y and energy > 0.5 * k * u_y**2  # elastic pulse, yields after it
+    u_max = u_y / 2.0 + energy / (k * u_y)
+    dt = 1e-4
+    t = np.arange(0.0, 1.0 + dt / 2, dt)
+    acc = np.where(t <= td, -a0 * np.sin(big_w * np.minimum(t, td)), 0.0)
+    data = _scene({"period_s": t_n, "mass_kg": m, "damping_ratio": 0.0,
+                   "hysteresis": "bilinear", "yield_disp_m": u_y})  # fmt: skip
+    data["contact"]["gap_m"] = 10.0  # no contact
+    data["integrator"].update(dt_s=dt, tail_s=0.0)
+    scene = scene_from_dict(data)
+    ref = reference_solution(scene, record=(dt, acc))
+    # the sampled pulse is interpolated linearly: (pi dt / td)^2 / 8 ~ 1e-6
+    assert rel(ref["peak_ductility_left"], u_max / u_y) < 1e-5
+    assert rel(ref["plastic_drift_end"][0], u_max - u_y) < 1e-4
+    assert rel(ref["hysteretic_energy"], k * u_y * (u_max - u_y)) < 1e-4
+    out = simulate(scene, record=(dt, acc)).outputs
+    assert out["status"] == 0
+    assert rel(out["peak_ductility_left"], u_max / u_y) < 1e-4
+    assert rel(out["hysteretic_energy"], k * u_y * (u_max - u_y)) < 1e-4
+    assert abs(out["energy_residual"]) < 1e-6
+
+
+# --------------------------------------------------------------------------- elastic limit
+
+
+def test_yield_never_reached_gives_the_elastic_results():
+    scene, rec = _b1_window(n=500)
+    limit = replace(scene, left=sdof(0.5, 1e6, 0.05, hysteresis="bilinear", yield_disp_m=1e9),
+                    tail_s=0.0)  # fmt: skip
+    got = simulate(limit, record=rec, method="newmark", dt_s=1e-3).outputs
+    assert got["impacts"] > 0 and got["peak_ductility_left"] < 1e-9
+    assert got["hysteretic_energy"] == 0.0
+    # the general elastic kernel (histories route an SDOF pair to it): bitwise
+    arrays = scene.kernel_arrays()
+    general = run_kernel(*rec[::-1], **arrays, method="newmark", dt_s=1e-3, history=True).outputs
+    # the scalar SDOF-pair kernel: the same scheme with G summed in another order
+    pair = simulate(scene, record=rec, method="newmark", dt_s=1e-3).outputs
+    for name in ("peak_force", "impacts", "max_penetration", "peak_disp_left", "peak_disp_right",
+                 "impulse", "dissipated_energy", "input_energy", "steps", "peak_force_time"):
+        assert got[name] == general[name], name
+        assert abs(got[name] - pair[name]) <= 1e-11 * abs(pair[name]), name  # fmt: skip
