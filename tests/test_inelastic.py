@@ -12,17 +12,23 @@ References:
 """
 
 import math
+import tomllib
 from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 import pytest
+import xarray as xr
 
 from pound_mc.errors import InputError
 from pound_mc.integrators import run_kernel
 from pound_mc.integrators.reference import reference_solution
-from pound_mc.physics.structures import sdof, shear_building
+from pound_mc.physics.structures import sdof
 from pound_mc.scene import load_scene, scene_from_dict, simulate
+from pound_mc.scene.model import with_tail
+from pound_mc.study.definition import load_study
+from pound_mc.study.engine import StudyEngine
+from pound_mc.study.runner import run_study
 
 ROOT = Path(__file__).resolve().parents[1]
 B1_FILE = ROOT / "studies" / "scenes" / "b1.toml"
@@ -143,8 +149,18 @@ def test_yield_never_reached_gives_the_elastic_results():
     general = run_kernel(*rec[::-1], **arrays, method="newmark", dt_s=1e-3, history=True).outputs
     # the scalar SDOF-pair kernel: the same scheme with G summed in another order
     pair = simulate(scene, record=rec, method="newmark", dt_s=1e-3).outputs
-    for name in ("peak_force", "impacts", "max_penetration", "peak_disp_left", "peak_disp_right",
-                 "impulse", "dissipated_energy", "input_energy", "steps", "peak_force_time"):
+    for name in (
+        "peak_force",
+        "impacts",
+        "max_penetration",
+        "peak_disp_left",
+        "peak_disp_right",
+        "impulse",
+        "dissipated_energy",
+        "input_energy",
+        "steps",
+        "peak_force_time",
+    ):
         assert got[name] == general[name], name
         assert abs(got[name] - pair[name]) <= 1e-11 * abs(pair[name]), name  # fmt: skip
 
@@ -163,6 +179,70 @@ def test_bilinear_b1_newmark_converges_to_the_reference(gap_m):
     out = simulate(scene, record=rec, method="newmark", dt_s=1e-4).outputs
     assert out["impacts"] == ref["impacts"]
     # Newmark's error at 1e-4 s (maxima at its step points): about 1e-4 on the peak force
-    for name in ("peak_force", "peak_disp_left", "peak_disp_right", "peak_ductility_left",
-                 "peak_ductility_right", "hysteretic_energy"):
+    for name in (
+        "peak_force",
+        "peak_disp_left",
+        "peak_disp_right",
+        "peak_ductility_left",
+        "peak_ductility_right",
+        "hysteretic_energy",
+    ):
         assert rel(out[name], ref[name]) < 3e-4, name
+
+
+@pytest.mark.slow
+def test_bilinear_shear_3_5_newmark_matches_the_reference():
+    """The 3 + 5 storey pair, every storey bilinear (ductility 3.5 and 5), 6 s and a 1 s tail."""
+    data = tomllib.loads((ROOT / "studies" / "scenes" / "shear_3_5.toml").read_text())
+    data["left"].update(hysteresis="bilinear", storey_yield_disp_m=0.01, post_yield_ratio=0.05)
+    data["right"].update(hysteresis="bilinear", post_yield_ratio=0.05,
+                         storey_yield_disp_m=[0.015, 0.015, 0.012, 0.012, 0.01])  # fmt: skip
+    data["record"]["duration_s"] = 6.0
+    data["integrator"] = {"method": "newmark", "dt_s": 1e-4, "tail_s": 1.0}
+    scene = scene_from_dict(data, file=ROOT / "studies" / "scenes" / "shear_3_5.toml")
+    dt, acc = scene.record_arrays()
+    ref = reference_solution(scene, record=(dt, with_tail(acc, dt, 1.0)))
+    out = simulate(scene).outputs
+    assert out["impacts"] == ref["impacts"] > 0
+    assert ref["peak_ductility_left"] > 3.0 and ref["peak_ductility_right"] > 5.0
+    for name in (
+        "peak_force",
+        "peak_disp_left",
+        "peak_disp_right",
+        "peak_ductility_left",
+        "peak_ductility_right",
+        "peak_drift_left",
+        "peak_drift_right",
+        "residual_drift_left",
+        "residual_drift_right",
+        "hysteretic_energy",
+    ):
+        assert rel(out[name], ref[name]) < 1e-3, name
+
+
+# --------------------------------------------------------------------------- studies
+
+
+def test_bilinear_study_dataset_and_chunks(make_study, tmp_path):
+    """A small bilinear SDOF study: storey outputs in the dataset, equal across chunk sizes."""
+    path = make_study(
+        left={"hysteresis": "bilinear", "yield_disp_m": 0.003, "post_yield_ratio": 0.05,
+              "height_m": 3.0},
+        integrator={"method": "newmark", "dt_s": 0.002, "tail_s": 1.0},
+        grid={"contact.gap_m": None, "left.period_s": [0.3, 0.5]},
+        sampling={"n": 2},
+    )  # fmt: skip
+    one = run_study(load_study(path), tmp_path / "a", threads=1, chunk_size=4, progress=False)
+    two = run_study(load_study(path), tmp_path / "b", threads=2, chunk_size=3, progress=False)
+    with xr.open_dataset(one.path) as a, xr.open_dataset(two.path) as b:
+        assert np.all(a["status"].values == 0)
+        assert np.all(a["peak_ductility_left"].values > 1.0)  # 0.3 g against a 3 mm yield drift
+        assert np.all(np.isnan(a["peak_ductility_right"].values))  # elastic right building
+        assert np.all(a["hysteretic_energy"].values > 0.0)
+        assert a["peak_drift_left"].attrs["units"] == "1"
+        for name in ("peak_force", "peak_ductility_left", "residual_drift_left"):
+            assert np.array_equal(a[name].values, b[name].values), name
+        # simulation 0 is its scene run alone
+        engine = StudyEngine(load_study(path))
+        alone = simulate(engine.scene_of(0), record=engine.record_of(0)).outputs
+        assert alone["peak_ductility_left"] == a["peak_ductility_left"].values.ravel()[0]

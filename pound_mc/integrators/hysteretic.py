@@ -51,7 +51,14 @@ from pound_mc.integrators.outputs import (
     finish,
     reset_contacts,
 )
-from pound_mc.integrators.toolkit import accel, mechanical_energy, powers, rowdot, run_sizes, trapezoid
+from pound_mc.integrators.toolkit import (
+    accel,
+    mechanical_energy,
+    powers,
+    rowdot,
+    run_sizes,
+    trapezoid,
+)
 
 #: Columns of the storey table a run takes (one row per storey of both buildings).
 S_K, S_YIELD, S_ALPHA, S_HEIGHT, S_SIDE = range(5)

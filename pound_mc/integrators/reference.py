@@ -192,8 +192,11 @@ def reference_solution(
     e_hyst = 0.0
 
     def drifts(x):
-        xb = np.where(s_bot[:, None] >= 0, x[np.maximum(s_bot, 0)], 0.0) if x.ndim > 1 else (
-            np.where(s_bot >= 0, x[np.maximum(s_bot, 0)], 0.0))
+        xb = (
+            np.where(s_bot[:, None] >= 0, x[np.maximum(s_bot, 0)], 0.0)
+            if x.ndim > 1
+            else (np.where(s_bot >= 0, x[np.maximum(s_bot, 0)], 0.0))
+        )
         return x[s_top] - xb
 
     def plastic_drift(u):

@@ -32,6 +32,7 @@ __all__ = [
     "RESULT_VARIABLES",
     "CONTACT_VARIABLES",
     "CONTACT_COORDINATES",
+    "INELASTIC_VARIABLES",
     "RECORD_VARIABLES",
     "STATUS_FLAGS",
     "QUANTILES",
@@ -59,6 +60,23 @@ CONTACT_VARIABLES = {
     "contact_max_penetration": ("m", "maximum penetration delta at the contact", "f8"),
     "contact_impulse": ("N s", "impulse of the impact force at the contact", "f8"),
 }
+#: Per-simulation outputs of studies with yielding buildings (DESIGN.md section 9): name ->
+#: (units, long_name, dtype).  Drift ratios are NaN for an SDOF without ``height_m``, the
+#: ductility of a building that cannot yield is NaN.
+INELASTIC_VARIABLES = {
+    "peak_ductility_left": ("1", "peak storey drift over yield drift, left building", "f8"),
+    "peak_ductility_right": ("1", "peak storey drift over yield drift, right building", "f8"),
+    "peak_drift_left": ("1", "peak inter-storey drift ratio of the left building", "f8"),
+    "peak_drift_right": ("1", "peak inter-storey drift ratio of the right building", "f8"),
+    "residual_drift_left": ("1", "largest inter-storey drift ratio of the left building after "
+                            "the free-vibration tail", "f8"),
+    "residual_drift_right": ("1", "largest inter-storey drift ratio of the right building "
+                             "after the free-vibration tail", "f8"),
+    "hysteretic_energy": ("J", "energy dissipated by yielding storeys", "f8"),
+    "peak_floor_accel_left": ("m s-2", "peak absolute floor acceleration, left building", "f8"),
+    "peak_floor_accel_right": ("m s-2", "peak absolute floor acceleration, right building",
+                               "f8"),
+}  # fmt: skip
 #: Coordinates of the ``contact`` dimension: name -> (units, long_name).
 CONTACT_COORDINATES = {
     "contact": ("1", "contact index (pair of floors at equal height), 1-based"),
@@ -152,6 +170,10 @@ def build_dataset(
                 "units": "1",
             }
         data_vars[name] = (dims, np.asarray(results[name]).astype(dtype, copy=False), attrs)
+    for name in (n for n in INELASTIC_VARIABLES if n in results):
+        units, long_name, dtype = INELASTIC_VARIABLES[name]
+        values = np.asarray(results[name]).astype(dtype, copy=False)
+        data_vars[name] = (dims, values, {"units": units, "long_name": long_name})
     per_contact = [name for name in CONTACT_VARIABLES if name in results]
     for name in per_contact:
         units, long_name, dtype = CONTACT_VARIABLES[name]

@@ -30,8 +30,8 @@ from pound_mc.motions import G, load_record, record_arrays
 from pound_mc.motions.intensity import sa_g
 from pound_mc.physics.contact import default_relation, reported_xi
 from pound_mc.physics.relations import restitution_of_xi
-from pound_mc.scene import Scene, scene_from_dict
-from pound_mc.study.dataset import CONTACT_VARIABLES, RESULT_VARIABLES
+from pound_mc.scene import Scene, scene_from_dict, simulate
+from pound_mc.study.dataset import CONTACT_VARIABLES, INELASTIC_VARIABLES, RESULT_VARIABLES
 from pound_mc.study.definition import INTENSITY_KEYS, MATERIAL_KEY, grid_dim_name, scene_model
 
 __all__ = ["StudyEngine", "load_records", "load_traces"]
@@ -146,6 +146,9 @@ class StudyEngine:
         #: the per-contact arrays of :data:`~pound_mc.study.dataset.CONTACT_VARIABLES`.
         self.mdof = any(scene_model(study.scene, side) == "shear" for side in ("left", "right"))
         self.arrays = self.scene.modal_arrays() if self.mdof else None
+        #: Whether a building can yield: each simulation then runs its own scene (inelastic
+        #: ``newmark``), and the dataset holds the storeys' outputs.
+        self.inelastic = self.scene.inelastic
 
     def _intensities(self) -> None:
         """Each record's own PGA and Sa, and the factors that scale it to the intensity axis."""
@@ -330,6 +333,19 @@ class StudyEngine:
         if self.mdof:
             nc = self.n_contacts
             out.update({name: ((nc,), dtype) for name, (_, _, dtype) in CONTACT_VARIABLES.items()})
+        if self.inelastic:
+            out.update({name: ((), dtype) for name, (_, _, dtype) in INELASTIC_VARIABLES.items()})
+        return out
+
+    def _run_inelastic(self, indices: np.ndarray, out: dict) -> dict:
+        """Run simulations ``indices`` with yielding buildings, each its own :meth:`scene_of`."""
+        for k, index in enumerate(indices):
+            res = simulate(self.scene_of(int(index)), record=self.record_of(int(index)))
+            for name in (*RESULT_VARIABLES, *INELASTIC_VARIABLES):
+                out[name][k] = res.outputs[name]
+            if self.mdof:
+                for name in CONTACT_VARIABLES:
+                    out[name][k] = res.contacts[name.removeprefix("contact_")]
         return out
 
     def run_indices(self, indices: np.ndarray) -> dict[str, np.ndarray]:
@@ -340,6 +356,8 @@ class StudyEngine:
             name: np.empty((n, *tail), dtype=dtype)
             for name, (tail, dtype) in self.result_layout().items()
         }
+        if self.inelastic:
+            return self._run_inelastic(indices, out)
         settings = {
             "method": self._base["integrator.method"],
             "contact_model": self._base["contact.model"],
