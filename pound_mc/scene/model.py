@@ -17,6 +17,7 @@ import numpy as np
 
 from pound_mc.errors import InputError
 from pound_mc.integrators import run_kernel
+from pound_mc.integrators.outputs import INELASTIC_OUTPUTS
 from pound_mc.motions import load_record, record_arrays
 from pound_mc.physics.contact import CONTACT_MODELS, reported_xi
 from pound_mc.physics.structures import Building, Contact, contacts_between, sdof, shear_building
@@ -211,6 +212,10 @@ class SimulationResult:
             return x if math.isfinite(x) else None
 
         o = self.outputs
+        inelastic = {}
+        if self.scene.inelastic:
+            # the storeys' responses (DESIGN.md section 9), only for yielding buildings
+            inelastic = {name: num(o[name]) for name in INELASTIC_OUTPUTS}
         return {
             "peak_force_N": num(o["peak_force"]),
             "impacts": int(o["impacts"]),
@@ -238,6 +243,7 @@ class SimulationResult:
                 }
                 for k, c in enumerate(self.scene.contacts)
             ],
+            **inelastic,
         }
 
 
