@@ -405,12 +405,19 @@ def _nearest_index(ds, dim, value) -> int:
         return int(np.argmin(np.abs(coord.astype(float) - float(value))))
     hits = np.flatnonzero(coord == value)
     if not hits.size:
-        raise ValueError(f"{dim} has no value {value!r}; it has {list(coord)}")
+        names = [str(c) for c in coord]
+        more = f", ... ({len(names)} in all)" if len(names) > 6 else ""
+        raise ValueError(f"{dim} has no value {value!r}; it has {', '.join(names[:6])}{more}")
     return int(hits[0])
 
 
 def _record_index(ds, record) -> int:
-    return record if isinstance(record, int | np.integer) else _nearest_index(ds, "record", record)
+    if isinstance(record, int | np.integer):
+        n = ds.sizes["record"]
+        if not -n <= record < n:
+            raise ValueError(f"record index {record} out of range: the dataset has {n} records")
+        return int(record) % n
+    return _nearest_index(ds, "record", record)
 
 
 def _value_text(ds, dim, i) -> str:
