@@ -15,6 +15,7 @@ from matplotlib.figure import Figure
 
 from pound_mc.analysis.gaps import study_gaps
 from pound_mc.analysis.style import (
+    PALETTE,
     axis_label,
     fit_tick_labels,
     legend_outside,
@@ -41,10 +42,10 @@ __all__ = [
 ]
 
 _MATERIAL_COLOURS = {
-    "steel": "tab:blue",
-    "concrete": "tab:grey",
-    "timber": "tab:brown",
-    "ceramics": "tab:red",
+    "steel": PALETTE[0],
+    "concrete": PALETTE[6],
+    "timber": PALETTE[1],
+    "ceramics": PALETTE[3],
 }
 
 
@@ -103,7 +104,9 @@ def restitution_curves(targets=None) -> dict[str, tuple[np.ndarray, np.ndarray]]
     return curves
 
 
-def restitution_chart(path: str | Path | None = None, *, targets=None, samples=None) -> Figure:
+def restitution_chart(
+    path: str | Path | None = None, *, targets=None, samples=None, ax=None
+) -> Figure:
     """Chart of the restitution really produced against the target, for every relation.
 
     Parameters
@@ -115,16 +118,20 @@ def restitution_chart(path: str | Path | None = None, *, targets=None, samples=N
     samples : tuple, optional
         ``(e, e_effective, label)``: a study's sampled target restitution and the restitution
         its contact law really produces [-], drawn as points over the curves.
+    ax : matplotlib.axes.Axes, optional
+        Where to draw (default a new figure).
     """
-    fig = Figure(figsize=(6.4, 5.2), layout="constrained")
-    ax = fig.add_subplot()
-    ax.plot([0, 1], [0, 1], color="black", lw=0.8, ls=":", label="achieved = target")
-    styles = ["-", "--", "-", "o", "s", "^"]
-    for (label, (t, a)), style in zip(restitution_curves(targets).items(), styles, strict=True):
+    fig, (ax,) = new_axes(ax, (8.6, 5.0))
+    ax.plot([0, 1], [0, 1], color="0.5", lw=0.8, ls=":", label="achieved = target")
+    styles = ["-", "--", "-.", "o", "s", "^"]
+    for k, ((label, (t, a)), style) in enumerate(
+        zip(restitution_curves(targets).items(), styles, strict=True)
+    ):
+        colour = line_style(k)["color"]
         if style in ("o", "s", "^"):
-            ax.plot(t, a, style, ms=4, mfc="none", label=label)
+            ax.plot(t, a, style, color=colour, ms=4, mfc="none", label=label)
         else:
-            ax.plot(t, a, ls=style, lw=1.6, label=label)
+            ax.plot(t, a, ls=style, color=colour, lw=1.6, label=label)
     if samples is not None:
         e, e_eff, label = samples
         ax.scatter(
@@ -137,8 +144,9 @@ def restitution_chart(path: str | Path | None = None, *, targets=None, samples=N
         ylim=(0, 1.02),
         title="Damping-restitution relations: one free impact",
     )
+    ax.title.set_fontsize(9)
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=8, loc="upper left")
+    legend_outside(ax)
     return save(fig, path)
 
 
@@ -169,10 +177,10 @@ def droptest_chart(result: DropTestResult, path: str | Path | None = None) -> Fi
     fig = Figure(figsize=(9.6, 4.0), layout="constrained")
     ax1, ax2 = fig.subplots(1, 2)
     t_ms = result.time_s * 1e3
-    ax1.plot(t_ms, result.force_N / 1e3, color="tab:red")
+    ax1.plot(t_ms, result.force_N / 1e3, color=PALETTE[3])
     ax1.set(xlabel="time [ms]", ylabel="impact force [kN]", title="Impact force")
-    ax2.plot(result.penetration_m * 1e6, result.force_N / 1e3, color="tab:blue")
-    ax2.set(xlabel="penetration delta [um]", ylabel="impact force [kN]", title="Force-penetration")
+    ax2.plot(result.penetration_m * 1e3, result.force_N / 1e3, color=PALETTE[0])
+    ax2.set(xlabel="penetration delta [mm]", ylabel="impact force [kN]", title="Force-penetration")
     for ax in (ax1, ax2):
         ax.grid(alpha=0.3)
     fig.suptitle(

@@ -120,11 +120,12 @@ def draw(path: str | Path, kind: str, *, out=None, sel=None, record=None, sample
         if kind == "distribution":
             return plot.distribution_chart(ds, out, record=record, sel=sel, by=kwargs.get("by"))
         if kind == "restitution":
-            return ds.pound.plot.restitution(out)
+            return ds.pound.plot.restitution(out).figure
         if kind == "history":
-            return ds.pound.plot.history(
+            axes = ds.pound.plot.history(
                 out, record=0 if record is None else record, sample=sample, **sel
             )
+            return np.ravel(axes)[0].figure
         if kind == "fragility":
             return risk_chart.fragility_panels(
                 ds, out, im=kwargs.get("im"), event=kwargs.get("event") or "pounding", sel=sel
