@@ -8,12 +8,14 @@ required gap without a gap axis, contacts of SDOF buildings, a bench CSV's chart
 must say so in one line: an input error, never a traceback.
 """
 
+import os
 import tomllib
 from pathlib import Path
 
 import numpy as np
 import pytest
 import xarray as xr
+from test_analysis import CHROMIUM, _chromium, _console_messages
 
 import pound_mc  # noqa: F401  (registers ds.pound)
 from pound_mc.analysis import profiles, risk
@@ -242,3 +244,108 @@ def test_small_studies_keep_each_study_s_shape():
         assert list(small.get("grid", {})) == list(full.get("grid", {})), path.name
         assert small["sampling"]["n"] == 4
         assert ("records" in small) == ("records" in full)
+
+
+# -- the report of every study, in Debian's chromium --------------------------------------------
+@pytest.mark.slow
+@pytest.mark.skipif(
+    not os.access(CHROMIUM, os.X_OK),
+    reason="Debian's chromium is not installed (/usr/bin/chromium); .ci/run installs it",
+)
+@pytest.mark.parametrize("study", STUDIES, ids=[p.stem for p in STUDIES])
+def test_report_of_every_study_renders_in_chromium(study, datasets, tmp_path):
+    from PIL import Image
+
+    path = datasets(study)
+    out = tmp_path / "report.html"
+    assert main(["report", str(path), "--out", str(out)]) == 0
+    page = out.read_text()
+    with xr.open_dataset(path) as ds:
+        ds.load()
+    # every chart that applies is on the page
+    expected = {"spectrum", "probability", "distribution", "history"}
+    if _applies(ds, "fragility"):
+        expected.add("fragility")
+    if _applies(ds, "required-gap"):
+        expected.add("required-gap")
+    if _applies(ds, "contacts"):
+        expected.add("contacts")
+    if not int(((ds["impacts"] > 0) & (ds["status"] == 0)).sum()):
+        expected -= {"distribution", "history"}
+    for key in expected:
+        assert f'id="chart-{key}"' in page, key
+    shot = tmp_path / "shot.png"
+    run = _chromium(
+        tmp_path, "--enable-logging=stderr", "--v=0", f"--screenshot={shot}", out.as_uri()
+    )
+    assert run.returncode == 0, run.stderr[-2000:]
+    assert _console_messages(run.stderr) == []
+    screen = np.asarray(Image.open(shot).convert("RGB")).astype(int)
+    assert (screen != 255).any(axis=2).mean() > 0.05  # not blank
+
+
+def test_report_shows_drift_and_ductility_when_present(datasets):
+    from pound_mc.analysis.report import report_html
+
+    ds = _inelastic(datasets)
+    page = report_html(ds, history=False)
+    assert 'id="chart-drift"' in page and 'id="chart-ductility"' in page
+
+
+def _inelastic(datasets):
+    """The shear study's small dataset with inelastic outputs added by hand (DESIGN.md 9)."""
+    shear = next(p for p in STUDIES if p.stem == "shear_spectrum")
+    with xr.open_dataset(datasets(shear)) as ds:
+        ds = ds.load()
+    dims = ds["peak_force"].dims
+    shape = tuple(ds.sizes[d] for d in dims)
+    rng = np.random.default_rng(1)
+    for side, n in (("left", 3), ("right", 5)):  # one storey dim: the lower building NaN-padded
+        drift = np.full((*shape, 5), np.nan)
+        drift[..., :n] = rng.uniform(0.001, 0.02, (*shape, n))
+        long = f"peak storey drift of the {side} building"
+        ds[f"peak_drift_{side}"] = ((*dims, "storey"), drift, {"units": "m", "long_name": long})
+        long = f"peak ductility of the {side} building"
+        ductility = drift / 0.01
+        ds[f"peak_ductility_{side}"] = (
+            (*dims, "storey"),
+            ductility,
+            {"units": "1", "long_name": long},
+        )
+    return ds.assign_coords(storey=np.arange(1, 6))
+
+
+@pytest.mark.filterwarnings("ignore:All-NaN slice:RuntimeWarning")
+def test_drift_and_ductility_profiles_draw_the_dataset_values(datasets):
+    ds = _inelastic(datasets)
+    gap = ds["peak_force"].dims[1]
+    for quantity, scale in (("drift", 1e3), ("ductility", 1.0)):
+        axes = getattr(ds.pound.plot, quantity)()
+        assert len(axes) == 2
+        for ax, side in zip(axes, ("left", "right"), strict=True):
+            values = ds[f"peak_{quantity}_{side}"].where(ds["status"] == 0)
+            median = values.quantile(0.5, dim=("record", "sample")).transpose(gap, "storey")
+            assert len(ax.lines) == ds.sizes[gap]
+            for k, line in enumerate(ax.lines):
+                np.testing.assert_allclose(line.get_xdata(), median.isel({gap: k}).values * scale)
+                np.testing.assert_allclose(line.get_ydata(), ds["storey"].values)
+        unit = "mm" if quantity == "drift" else "-"
+        assert axes[0].get_xlabel().endswith(f"[{unit}]")
+
+
+def test_worst_and_to_dataframe(datasets):
+    shear = next(p for p in STUDIES if p.stem == "shear_spectrum")
+    with xr.open_dataset(datasets(shear)) as ds:
+        ds.load()
+    table = ds.pound.to_dataframe()
+    assert len(table) == ds["peak_force"].size
+    assert list(table.columns[:3]) == list(ds["peak_force"].dims)
+    np.testing.assert_array_equal(table["peak_force"], ds["peak_force"].values.ravel())
+    worst = ds.pound.worst("peak_force")
+    assert float(worst["peak_force"]) == float(ds["peak_force"].where(ds.pound.ok).max())
+    # a per-contact variable: its largest value over the contacts
+    worst = ds.pound.worst("contact_peak_force")
+    assert float(worst["contact_peak_force"].max()) == float(ds["contact_peak_force"].max())
+    counts = ds.pound.status_counts()
+    assert counts.index.tolist() == ["ok", "unstable", "not_converged"]
+    assert int(counts.sum()) == ds["status"].size
