@@ -19,6 +19,7 @@ from test_analysis import CHROMIUM, _chromium, _console_messages
 
 import pound_mc  # noqa: F401  (registers ds.pound)
 from pound_mc.analysis import profiles, risk
+from pound_mc.analysis.risk_chart import fragility_panels
 from pound_mc.cli import main
 from pound_mc.cli.analysis import draw
 from pound_mc.cli.commands import KINDS
@@ -232,8 +233,6 @@ def test_every_chart_kind_on_every_shipped_study(study, kind, datasets, tmp_path
 
 
 def risk_fragility(ds, **kwargs):
-    from pound_mc.analysis.risk_chart import fragility_panels
-
     return fragility_panels(ds, **kwargs)
 
 

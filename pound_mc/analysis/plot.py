@@ -157,9 +157,15 @@ def spectrum_chart(
     else:
         lines = [(i, {line: i}, value_text(ds, line, i)) for i in range(ds.sizes[line])]
     band = len(lines) <= 7
+    crowd = len(lines) > 12  # too many to tell apart: thin grey lines and their median
     for k, (_, where, label) in enumerate(lines):
         style = line_style(k)
         sq = q.isel(where)
+        if crowd:
+            first = f"each record ({len(lines)})" if k == 0 else None
+            median = sq.sel(quantile=0.5).values / 1e6
+            ax.plot(xs, median, color="0.6", lw=0.7, alpha=0.7, label=first)
+            continue
         ax.plot(xs, sq.sel(quantile=0.5).values / 1e6, lw=1.6, ms=4, label=label, **style)
         if band:
             ax.fill_between(
@@ -170,8 +176,12 @@ def spectrum_chart(
                 alpha=0.15,
                 lw=0,
             )
+    if crowd:
+        over = q.sel(quantile=0.5).median("record").values / 1e6
+        ax.plot(xs, over, color="black", lw=2.0, marker="o", ms=4, label="median over records")
     if ds[x].dtype.kind not in "fiu" or x == MATERIAL_DIM:
         ax.set_xticks(xs, [value_text(ds, x, i) for i in range(ds.sizes[x])])
+        fit_tick_labels(ax, ds.sizes[x])
     if each:
         rec_text = f"one line per record ({ds.sizes['record']})"
     elif isinstance(record, str) and record == "median":
