@@ -21,6 +21,10 @@ so ``left_period_s=0.3`` works although the stored value is ``0.3000000000000000
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
 import numpy as np
 import pandas as pd
 import xarray as xr
@@ -40,6 +44,7 @@ from pound_mc.analysis.risk import required_gap as _required_gap
 from pound_mc.analysis.risk_chart import fragility_panels, required_gap_chart
 from pound_mc.analysis.style import value_text
 from pound_mc.errors import InputError
+from pound_mc.scene import Scene, SimulationResult
 from pound_mc.scene import simulate as simulate_scene
 from pound_mc.study.definition import grid_dim_name, study_from_text
 from pound_mc.study.engine import StudyEngine
@@ -72,7 +77,14 @@ def _position(ds: xr.Dataset, dim: str, value) -> int:
     return i
 
 
-def scene_at(ds: xr.Dataset, *, record=0, sample=0, study_path=None, **coords):
+def scene_at(
+    ds: xr.Dataset,
+    *,
+    record: int | str = 0,
+    sample: int = 0,
+    study_path: str | Path | None = None,
+    **coords: Any,
+) -> tuple[Scene, tuple[float, np.ndarray], dict[str, int]]:
     """Rebuild the scene of one simulation of a study dataset.
 
     The study is rebuilt from the dataset's ``study_text`` (its records read again) and the
@@ -146,7 +158,9 @@ class PoundPlot:
     def __init__(self, ds: xr.Dataset):
         self._ds = ds
 
-    def spectrum(self, path=None, *, ax=None, **kwargs) -> Axes:
+    def spectrum(
+        self, path: str | Path | None = None, *, ax: Axes | None = None, **kwargs: Any
+    ) -> Axes:
         """Impact force spectrum (:func:`pound_mc.analysis.plot.spectrum_chart`).
 
         ``record="median"`` (default, the median over records), ``"each"`` (a line per record)
@@ -154,40 +168,54 @@ class PoundPlot:
         """
         return _axes_of(spectrum_chart(self._ds, path, ax=ax, **kwargs), ax)
 
-    def probability(self, path=None, *, ax=None, **kwargs) -> Axes:
+    def probability(
+        self, path: str | Path | None = None, *, ax: Axes | None = None, **kwargs: Any
+    ) -> Axes:
         """Pounding probability against gap (:func:`pound_mc.analysis.plot.probability_chart`)."""
         return _axes_of(probability_chart(self._ds, path, ax=ax, **kwargs), ax)
 
-    def fragility(self, path=None, **kwargs) -> np.ndarray:
+    def fragility(self, path: str | Path | None = None, **kwargs: Any) -> np.ndarray:
         """Fragility panels (:func:`pound_mc.analysis.risk_chart.fragility_panels`)."""
         return _axes_of(fragility_panels(self._ds, path, **kwargs), None)
 
-    def required_gap(self, path=None, *, ax=None, **kwargs) -> Axes:
+    def required_gap(
+        self, path: str | Path | None = None, *, ax: Axes | None = None, **kwargs: Any
+    ) -> Axes:
         """Probability against gap with the required gap marked (``required_gap_chart``)."""
         return _axes_of(required_gap_chart(self._ds, path, ax=ax, **kwargs), ax)
 
-    def distribution(self, path=None, *, ax=None, **kwargs) -> np.ndarray:
+    def distribution(
+        self, path: str | Path | None = None, *, ax: Axes | None = None, **kwargs: Any
+    ) -> np.ndarray:
         """Peak force distribution (:func:`pound_mc.analysis.plot.distribution_chart`).
 
         Two panels: ``ax`` is a sequence of two Axes (box plot, histograms).
         """
         return _axes_of(distribution_chart(self._ds, path, ax=ax, **kwargs), ax)
 
-    def contacts(self, path=None, *, ax=None, **kwargs) -> Axes:
+    def contacts(
+        self, path: str | Path | None = None, *, ax: Axes | None = None, **kwargs: Any
+    ) -> Axes:
         """Peak force at each contact (:func:`pound_mc.analysis.profiles.contacts_chart`)."""
         return _axes_of(contacts_chart(self._ds, path, ax=ax, **kwargs), ax)
 
-    def drift(self, path=None, *, ax=None, **kwargs) -> np.ndarray:
+    def drift(
+        self, path: str | Path | None = None, *, ax: Axes | None = None, **kwargs: Any
+    ) -> np.ndarray:
         """Peak storey drift profiles (:func:`pound_mc.analysis.profiles.profile_chart`)."""
         fig = profile_chart(self._ds, path, quantity="drift", ax=ax, **kwargs)
         return _axes_of(fig, ax)
 
-    def ductility(self, path=None, *, ax=None, **kwargs) -> np.ndarray:
+    def ductility(
+        self, path: str | Path | None = None, *, ax: Axes | None = None, **kwargs: Any
+    ) -> np.ndarray:
         """Peak ductility profiles (:func:`pound_mc.analysis.profiles.profile_chart`)."""
         fig = profile_chart(self._ds, path, quantity="ductility", ax=ax, **kwargs)
         return _axes_of(fig, ax)
 
-    def restitution(self, path=None, *, ax=None, **kwargs) -> Axes:
+    def restitution(
+        self, path: str | Path | None = None, *, ax: Axes | None = None, **kwargs: Any
+    ) -> Axes:
         """Restitution relations with the study's sampled ``e`` and ``e_effective`` marked."""
         ds = self._ds
         samples = None
@@ -199,7 +227,14 @@ class PoundPlot:
         return _axes_of(restitution_chart(path, samples=samples, ax=ax, **kwargs), ax)
 
     def history(
-        self, path=None, *, ax=None, record=0, sample=0, study_path=None, **coords
+        self,
+        path: str | Path | None = None,
+        *,
+        ax: Sequence[Axes] | None = None,
+        record: int | str = 0,
+        sample: int = 0,
+        study_path: str | Path | None = None,
+        **coords: Any,
     ) -> np.ndarray:
         """Time history of one simulation of the study, rebuilt and run again.
 
@@ -241,7 +276,13 @@ class PoundAccessor:
         """Grid dimensions of the study (``peak_force``'s dims less record and sample)."""
         return [d for d in self._ds["peak_force"].dims if d not in ("record", "sample")]
 
-    def spectrum(self, quantiles=(0.05, 0.5, 0.95), *, variable="peak_force", **sel):
+    def spectrum(
+        self,
+        quantiles: float | Sequence[float] = (0.05, 0.5, 0.95),
+        *,
+        variable: str = "peak_force",
+        **sel: Any,
+    ) -> xr.DataArray:
         """Quantiles of a result over the samples (status ok): the impact force spectrum.
 
         Parameters
@@ -269,7 +310,7 @@ class PoundAccessor:
         }
         return q.rename(f"{variable}_quantile")
 
-    def probability(self, threshold: float | None = None, **sel):
+    def probability(self, threshold: float | None = None, **sel: Any) -> xr.DataArray:
         """Fraction of the samples (status ok) that pounded.
 
         Parameters
@@ -293,7 +334,9 @@ class PoundAccessor:
         p.attrs = {"units": "1", "long_name": f"fraction of samples with an impact{more}"}
         return p.rename("pounding_probability")
 
-    def fragility(self, im=None, event="pounding", **kwargs) -> xr.Dataset:
+    def fragility(
+        self, im: str | None = None, event: str = "pounding", **kwargs: Any
+    ) -> xr.Dataset:
         """Lognormal fragility per combination of the other grid axes.
 
         See :func:`pound_mc.analysis.risk.fragility`: ``theta``, ``beta``, ``theta_ci``,
@@ -384,7 +427,13 @@ class PoundAccessor:
         dims = self._ds["peak_force"].dims
         return {d: int(i) for d, i in zip(dims, np.unravel_index(flat, data.shape), strict=True)}
 
-    def worst(self, variable: str = "peak_force", *, rerun: bool = False, study_path=None):
+    def worst(
+        self,
+        variable: str = "peak_force",
+        *,
+        rerun: bool = False,
+        study_path: str | Path | None = None,
+    ) -> xr.Dataset | tuple[xr.Dataset, SimulationResult]:
         """The simulation (status ok) with the largest ``variable``; optionally run again.
 
         Parameters
@@ -416,11 +465,26 @@ class PoundAccessor:
         )
         return selection, result
 
-    def scene(self, *, record=0, sample=0, study_path=None, **coords):
+    def scene(
+        self,
+        *,
+        record: int | str = 0,
+        sample: int = 0,
+        study_path: str | Path | None = None,
+        **coords: Any,
+    ) -> Scene:
         """The scene of one simulation (see :func:`scene_at`)."""
         return scene_at(self._ds, record=record, sample=sample, study_path=study_path, **coords)[0]
 
-    def simulate(self, *, record=0, sample=0, history=True, study_path=None, **coords):
+    def simulate(
+        self,
+        *,
+        record: int | str = 0,
+        sample: int = 0,
+        history: bool = True,
+        study_path: str | Path | None = None,
+        **coords: Any,
+    ) -> tuple[SimulationResult, dict[str, int]]:
         """Run one simulation of the study again, with its histories.
 
         Returns

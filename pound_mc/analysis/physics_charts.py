@@ -9,7 +9,9 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+from matplotlib.axes import Axes
 from matplotlib.figure import Figure
+from numpy.typing import ArrayLike
 
 from pound_mc.analysis.style import PALETTE, legend_outside, line_style, new_axes, save
 from pound_mc.physics import materials, relations
@@ -30,7 +32,9 @@ _MATERIAL_COLOURS = {
 }
 
 
-def restitution_curves(targets=None) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+def restitution_curves(
+    targets: ArrayLike | None = None,
+) -> dict[str, tuple[np.ndarray, np.ndarray]]:
     """Restitution each xi-e relation really produces against its target.
 
     Jankowski-law relations read the ``exact`` table; the Kelvin and Hertz-damp relations run
@@ -61,7 +65,11 @@ def restitution_curves(targets=None) -> dict[str, tuple[np.ndarray, np.ndarray]]
 
 
 def restitution_chart(
-    path: str | Path | None = None, *, targets=None, samples=None, ax=None
+    path: str | Path | None = None,
+    *,
+    targets: ArrayLike | None = None,
+    samples: tuple | None = None,
+    ax: Axes | None = None,
 ) -> Figure:
     """Chart of the restitution really produced against the target, for every relation.
 

@@ -9,10 +9,12 @@ the drop test) are in :mod:`pound_mc.analysis.physics_charts`.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
 import xarray as xr
+from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from pound_mc.analysis.gaps import study_gaps
@@ -85,7 +87,7 @@ def _spectrum_selection(ds, x=None, line=None):
     return x, line, [d for d in rest if d != line]
 
 
-def spectrum_quantiles(ds, record="median") -> xr.DataArray:
+def spectrum_quantiles(ds: xr.Dataset, record: int | str = "median") -> xr.DataArray:
     """Quantiles of peak force over the samples [N] that a spectrum chart draws.
 
     Parameters
@@ -105,14 +107,14 @@ def spectrum_quantiles(ds, record="median") -> xr.DataArray:
 
 
 def spectrum_chart(
-    ds,
+    ds: xr.Dataset,
     path: str | Path | None = None,
     *,
-    x=None,
-    line=None,
-    record="median",
-    sel=None,
-    ax=None,
+    x: str | None = None,
+    line: str | None = None,
+    record: int | str = "median",
+    sel: dict | None = None,
+    ax: Axes | None = None,
 ) -> Figure:
     """Impact force spectrum: median peak force against a grid axis with a 5-95 % band.
 
@@ -220,7 +222,9 @@ MATERIAL_DIM = "contact_material"
 CONTACT_DIM = "contact"
 
 
-def rule_gaps(ds, rules="auto", *, base_dir=None) -> dict:
+def rule_gaps(
+    ds: xr.Dataset, rules: dict | str | None = "auto", *, base_dir: str | Path | None = None
+) -> dict:
     """Gaps [m] the separation rules ask for, by rule label.
 
     Parameters
@@ -327,17 +331,17 @@ def _grid_dims(ds) -> list[str]:
 
 
 def probability_chart(
-    ds,
+    ds: xr.Dataset,
     path: str | Path | None = None,
     *,
-    line=None,
-    record=None,
-    sel=None,
-    rules="auto",
+    line: str | None = None,
+    record: int | str | None = None,
+    sel: dict | None = None,
+    rules: dict | str | None = "auto",
     max_lines: int = 7,
-    base_dir=None,
-    x=None,
-    ax=None,
+    base_dir: str | Path | None = None,
+    x: str | None = None,
+    ax: Axes | None = None,
 ) -> Figure:
     """Pounding probability against the initial gap, with the separation rules marked.
 
@@ -477,14 +481,14 @@ def _distribution_groups(ds, by, record, sel):
 
 
 def distribution_chart(
-    ds,
+    ds: xr.Dataset,
     path: str | Path | None = None,
     *,
-    by=None,
-    record=None,
-    sel=None,
+    by: str | None = None,
+    record: int | str | None = None,
+    sel: dict | None = None,
     bins: int = 30,
-    ax=None,
+    ax: Sequence[Axes] | None = None,
 ) -> Figure:
     """Distribution of the peak impact force: box plot and histogram per value of a dimension.
 

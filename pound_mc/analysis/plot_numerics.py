@@ -2,12 +2,18 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from pathlib import Path
+
 import numpy as np
+import pandas as pd
+from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from matplotlib.ticker import NullFormatter
 
 from pound_mc.analysis.plot import finish_axes
 from pound_mc.analysis.style import MARKERS, PALETTE, legend_outside, line_style, new_axes, save
+from pound_mc.scene import SimulationResult
 
 __all__ = ["work_precision_chart", "stability_map_chart", "time_history_chart"]
 
@@ -19,7 +25,9 @@ _METHOD_STYLE = {
 }
 
 
-def work_precision_chart(table, path=None, *, quantity: str = "err_peak_force") -> Figure:
+def work_precision_chart(
+    table: pd.DataFrame, path: str | Path | None = None, *, quantity: str = "err_peak_force"
+) -> Figure:
     """Error against time per simulation (log-log), one curve per method, one panel per scene.
 
     Parameters
@@ -52,7 +60,7 @@ def work_precision_chart(table, path=None, *, quantity: str = "err_peak_force") 
     return save(fig, path)
 
 
-def stability_map_chart(table, path=None) -> Figure:
+def stability_map_chart(table: pd.DataFrame, path: str | Path | None = None) -> Figure:
     """Largest stable ``dt omega_c`` against contact stiffness, predicted and observed.
 
     Parameters
@@ -97,7 +105,12 @@ def _contact_floors(result) -> list[tuple[int, int]]:
     return [(int(c.left_floor) + 1, int(c.right_floor) + 1) for c in contacts]
 
 
-def time_history_chart(result, path=None, *, ax=None) -> Figure:
+def time_history_chart(
+    result: SimulationResult,
+    path: str | Path | None = None,
+    *,
+    ax: Sequence[Axes] | None = None,
+) -> Figure:
     """Displacements, penetration and contact force of one simulation against time.
 
     The top panel draws the displacements of the two floors that meet at each contact (the

@@ -11,10 +11,12 @@ range as a band; heights are in m, drifts in mm, forces in MN.
 from __future__ import annotations
 
 import warnings
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
 import xarray as xr
+from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from pound_mc.analysis.style import (
@@ -62,7 +64,7 @@ def contacts_chart(
     *,
     variable: str = "contact_peak_force",
     line: str | None = None,
-    ax=None,
+    ax: Axes | Sequence[Axes] | None = None,
 ) -> Figure:
     """Peak impact force (or another per-contact result) at each contact against its elevation.
 
@@ -134,7 +136,7 @@ def profile_chart(
     *,
     quantity: str = "drift",
     line: str | None = None,
-    ax=None,
+    ax: Axes | Sequence[Axes] | None = None,
 ) -> Figure:
     """Peak storey drift or ductility of both buildings, over the height (one panel each).
 

@@ -15,6 +15,8 @@ import os
 from pathlib import Path
 
 import numpy as np
+import xarray as xr
+from matplotlib.figure import Figure
 
 from pound_mc.analysis import (
     accessor,  # noqa: F401  (registers ds.pound)
@@ -44,7 +46,7 @@ pre { background: #f7f7f7; border: 1px solid #ddd; padding: 8px; font-size: 0.85
 """.strip()
 
 
-def chart_png(fig, dpi: int = 100) -> tuple[bytes, int, int]:
+def chart_png(fig: Figure, dpi: int = 100) -> tuple[bytes, int, int]:
     """PNG bytes of ``fig`` and its width and height [px]."""
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=dpi)
@@ -116,7 +118,7 @@ def _provenance_html(ds) -> str:
     return f'<h2>Provenance</h2><table id="provenance">{"".join(rows)}</table>'
 
 
-def report_html(ds, *, base_dir=None, history: bool = True) -> str:
+def report_html(ds: xr.Dataset, *, base_dir: str | Path | None = None, history: bool = True) -> str:
     """The results page of a study dataset as one HTML string.
 
     Parameters
@@ -262,7 +264,13 @@ def report_html(ds, *, base_dir=None, history: bool = True) -> str:
     )
 
 
-def write_report(ds, path: str | Path, *, base_dir=None, history: bool = True) -> Path:
+def write_report(
+    ds: xr.Dataset,
+    path: str | Path,
+    *,
+    base_dir: str | Path | None = None,
+    history: bool = True,
+) -> Path:
     """Write the results page (:func:`report_html`) to ``path`` atomically."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)

@@ -17,6 +17,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
+import xarray as xr
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
@@ -76,19 +77,19 @@ def _name_and_units(attrs: dict, fallback: str) -> tuple[str, str]:
     return name, units
 
 
-def axis_label(ds, name: str) -> str:
+def axis_label(ds: xr.Dataset, name: str) -> str:
     """``"long name [chart units]"`` of variable or coordinate ``name`` of ``ds``."""
     long_name, units = _name_and_units(ds[name].attrs, name)
     shown, _ = chart_units(units)
     return f"{long_name} [{shown}]"
 
 
-def scale_of(ds, name: str) -> float:
+def scale_of(ds: xr.Dataset, name: str) -> float:
     """Factor from ``ds[name]``'s stored units to its chart units."""
     return chart_units(_name_and_units(ds[name].attrs, name)[1])[1]
 
 
-def value_text(ds, dim: str, i: int) -> str:
+def value_text(ds: xr.Dataset, dim: str, i: int) -> str:
     """The ``i``-th value of coordinate ``dim`` as text, in chart units (``"10 mm"``).
 
     A material axis (``contact_material`` with a ``material`` variable of names) gives the name.
@@ -130,7 +131,11 @@ def fit_tick_labels(ax: Axes, n: int, *, axis: str = "x", most: int = 6) -> None
 
 
 def new_axes(
-    ax: Axes | Sequence[Axes] | None, figsize, *, nrows: int = 1, ncols: int = 1
+    ax: Axes | Sequence[Axes] | None,
+    figsize: tuple[float, float],
+    *,
+    nrows: int = 1,
+    ncols: int = 1,
 ) -> tuple[Figure, np.ndarray]:
     """The figure and axes a chart draws on: ``ax`` given, or a new figure's.
 
