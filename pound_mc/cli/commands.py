@@ -130,7 +130,7 @@ def _physics(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(handler="calibrate")
 
     p = sub.add_parser("droptest", help="virtual drop test of the seed's experiment")
-    p.add_argument("--material", default="concrete", choices=MATERIALS)
+    p.add_argument("--material", default="concrete", choices=MATERIALS, help="ball material")
     p.add_argument("--mass", type=float, help="ball mass [kg] (default: middle ball of Table 1)")
     p.add_argument("--velocity", type=float, default=1.0, help="impact velocity [m/s]")
     p.add_argument("--beta", type=float, help="impact stiffness (default: Table 3 mean)")
@@ -193,7 +193,13 @@ def _scene(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--out", default="outputs", metavar="DIR", help="folder for CSV and PNG")
     p.add_argument("--repeats", type=int, default=7, help="timed runs per point (median)")
     p.add_argument("--methods", nargs="+", metavar="METHOD", help="methods to run (all)")
-    p.add_argument("--scenes", nargs="+", metavar="SCENE", default=["B1", "shear-3-5"])
+    p.add_argument(
+        "--scenes",
+        nargs="+",
+        metavar="SCENE",
+        default=["B1", "shear-3-5"],
+        help="benchmark scenes (default: B1 shear-3-5)",
+    )
     p.add_argument(
         "--head-to-head-only",
         action="store_true",
@@ -295,7 +301,7 @@ def _analysis(sub: argparse._SubParsersAction) -> None:
         metavar="N|NAME",
         help="record index or name; spectrum: also 'each' (default: all records pooled)",
     )
-    p.add_argument("--sample", type=int, default=0, metavar="N", help="sample (history; 0)")
+    p.add_argument("--sample", type=int, default=0, metavar="N", help="sample index (history)")
     p.add_argument("--line", metavar="DIM", help="dimension drawn as one line per value")
     p.add_argument("--by", metavar="DIM", help="dimension of the distribution chart's groups")
     p.add_argument(
@@ -303,7 +309,7 @@ def _analysis(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--event", default="pounding", help="fragility event (default pounding)")
     p.add_argument(
-        "--probability", type=float, default=0.1, help="target probability (required-gap; 0.1)"
+        "--probability", type=float, default=0.1, help="target probability (required-gap)"
     )
     p.set_defaults(handler="plot")
 
