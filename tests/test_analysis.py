@@ -310,6 +310,21 @@ def _console_messages(stderr: str) -> list[str]:
     return [line for line in stderr.splitlines() if ":CONSOLE" in line]
 
 
+def screenshot(tmp_path, page: Path) -> np.ndarray:
+    """The page as chromium shows it (RGB), after checking it logged no console message."""
+    from PIL import Image
+
+    shot = tmp_path / "shot.png"
+    run = _chromium(
+        tmp_path, "--enable-logging=stderr", "--v=0", f"--screenshot={shot}", page.as_uri()
+    )
+    assert run.returncode == 0, run.stderr[-2000:]
+    assert _console_messages(run.stderr) == []
+    screen = np.asarray(Image.open(shot).convert("RGB")).astype(int)
+    assert (screen != 255).any(axis=2).mean() > 0.05  # not blank
+    return screen
+
+
 @pytest.mark.skipif(
     not os.access(CHROMIUM, os.X_OK),
     reason="Debian's chromium is not installed (/usr/bin/chromium); .ci/run installs it",
@@ -326,15 +341,8 @@ def test_report_renders_in_headless_chromium(tiny, tmp_path):
     assert any("undefinedFunction" in m for m in _console_messages(run.stderr))
 
     # the report itself: no console messages at all (it has no scripts, loads nothing)
-    shot = tmp_path / "shot.png"
-    run = _chromium(
-        tmp_path, "--enable-logging=stderr", "--v=0", f"--screenshot={shot}", report.as_uri()
-    )
-    assert run.returncode == 0, run.stderr[-2000:]
-    assert _console_messages(run.stderr) == []
-    screen = np.asarray(Image.open(shot).convert("RGB")).astype(int)
+    screen = screenshot(tmp_path, report)
     assert screen.shape == (3000, 1200, 3)
-    assert (screen != 255).any(axis=2).mean() > 0.05  # not blank
 
     # where the spectrum's <img> is laid out: the same page plus a script that writes the box
     probe = tmp_path / "probe.html"

@@ -58,6 +58,14 @@ def _line_dim(ds, line):
     return line if line is not None else (grid[0] if grid else None)
 
 
+def _profile_line(ax, q, heights, scale: float, k: int, label: str) -> None:
+    """The ``k``-th line of a profile: median of ``q`` against ``heights``, 5-95 % band."""
+    style = line_style(k)
+    ax.plot(q.sel(quantile=0.5).values * scale, heights, ms=5, label=label, **style)
+    low, high = (q.sel(quantile=level).values * scale for level in (0.05, 0.95))
+    ax.fill_betweenx(heights, low, high, color=style["color"], alpha=0.12, lw=0)
+
+
 def contacts_chart(
     ds: xr.Dataset,
     path: str | Path | None = None,
@@ -104,17 +112,8 @@ def contacts_chart(
     values = [None] if line is None else range(ds.sizes[line])
     for k, i in enumerate(values):
         sq = q if i is None else q.isel({line: i})
-        style = line_style(k)
         label = "median" if i is None else value_text(ds, line, i)
-        ax.plot(sq.sel(quantile=0.5).values * scale, height, ms=5, label=label, **style)
-        ax.fill_betweenx(
-            height,
-            sq.sel(quantile=0.05).values * scale,
-            sq.sel(quantile=0.95).values * scale,
-            color=style["color"],
-            alpha=0.12,
-            lw=0,
-        )
+        _profile_line(ax, sq, height, scale, k, label)
     ax.set_yticks(height, [f"{h:g}" for h in height])
     ax.set(
         xlabel=axis_label(ds, variable),
@@ -180,25 +179,16 @@ def profile_chart(
         values = [None] if line is None or not along else range(ds.sizes[line])
         for k, i in enumerate(values):
             sq = q if i is None else q.isel({line: i})
-            style = line_style(k)
             med = sq.sel(quantile=0.5).values * scale
             if along:
                 storeys = ds[STOREY_DIM].values
                 label = "median" if i is None else value_text(ds, line, i)
-                ax_b.plot(med, storeys, ms=5, label=label, **style)
-                ax_b.fill_betweenx(
-                    storeys,
-                    sq.sel(quantile=0.05).values * scale,
-                    sq.sel(quantile=0.95).values * scale,
-                    color=style["color"],
-                    alpha=0.12,
-                    lw=0,
-                )
+                _profile_line(ax_b, sq, storeys, scale, k, label)
                 ax_b.set_yticks(storeys, [str(s) for s in storeys])
                 ax_b.set(xlabel=axis_label(ds, name), ylabel="storey [-]")
             else:
                 xs = ds[line].values * scale_of(ds, line) if line else np.zeros(1)
-                ax_b.plot(xs, np.atleast_1d(med), ms=5, label="median", **style)
+                ax_b.plot(xs, np.atleast_1d(med), ms=5, label="median", **line_style(k))
                 ax_b.set(xlabel=axis_label(ds, line) if line else "", ylabel=axis_label(ds, name))
         ax_b.set_title(ds[name].attrs.get("long_name", name), fontsize=9)
         ax_b.grid(alpha=0.3)
