@@ -80,6 +80,8 @@ def _name_and_units(attrs: dict, fallback: str) -> tuple[str, str]:
 def axis_label(ds: xr.Dataset, name: str) -> str:
     """``"long name [chart units]"`` of variable or coordinate ``name`` of ``ds``."""
     long_name, units = _name_and_units(ds[name].attrs, name)
+    if name == "contact_material":  # names, not numbers: no units
+        return long_name
     shown, _ = chart_units(units)
     return f"{long_name} [{shown}]"
 
