@@ -83,17 +83,18 @@ def test_spectrum_chart_plots_the_dataset_quantiles(ds, tiny, tmp_path):
     assert acc.attrs["units"] == "N"
     one = ds.pound.spectrum(quantiles=0.5, left_period_s=0.6000001, contact_gap_m=0.002)
     assert one.item() == pytest.approx(q.sel(quantile=0.5).values[1, 1], rel=1e-12)
-    # the accessor's chart is the same chart
-    assert np.array_equal(
-        ds.pound.plot.spectrum().axes[0].lines[1].get_ydata(), ax.lines[1].get_ydata()
-    )
+    # the accessor's chart is the same chart, drawn on the Axes given and returned
+    from matplotlib.figure import Figure
+
+    mine = Figure().add_subplot()
+    assert ds.pound.plot.spectrum(ax=mine) is mine
+    assert np.array_equal(mine.lines[1].get_ydata(), ax.lines[1].get_ydata())
 
 
 # -- probability -------------------------------------------------------------------------------
 def test_probability_chart_plots_the_pounding_probability_and_rules(ds, tiny):
     rules = {"ABS": 0.004, "SRSS": np.array([0.001, 0.002, 0.003])}
-    fig = ds.pound.plot.probability(rules=rules)
-    ax = fig.axes[0]
+    ax = ds.pound.plot.probability(rules=rules)
     prob = ds["pounding_probability"].isel(record=0)
     data = [ln for ln in ax.lines if len(ln.get_xdata()) == ds.sizes["contact_gap_m"]]
     assert len(data) == ds.sizes["left_period_s"]
@@ -108,7 +109,7 @@ def test_probability_chart_plots_the_pounding_probability_and_rules(ds, tiny):
     srss = [ln for ln in vertical if ln.get_linestyle() == "-."]
     assert [ln.get_xdata()[0] for ln in srss] == pytest.approx([1.0, 2.0, 3.0])
     assert [ln.get_color() for ln in srss] == [ln.get_color() for ln in data]
-    assert ax.get_xlabel() == "initial gap [mm]"
+    assert ax.get_xlabel() == "initial separation gap [mm]"
     assert ax.get_ylabel() == "pounding probability [-]"
     np.testing.assert_allclose(ds.pound.probability().values, ds["pounding_probability"].values)
 
@@ -116,7 +117,7 @@ def test_probability_chart_plots_the_pounding_probability_and_rules(ds, tiny):
 def test_probability_rules_from_attributes_and_from_separation(ds, tiny):
     marked = ds.copy()
     marked.attrs["gap_rule_ddc_m"] = 0.0075
-    ax = marked.pound.plot.probability().axes[0]
+    ax = marked.pound.plot.probability()
     ddc = [ln for ln in ax.lines if ln.get_linestyle() == ":"]
     assert [ln.get_xdata()[0] for ln in ddc] == [pytest.approx(7.5)]
     # by default: ABS, SRSS, DDC of every simulation (pound_mc.analysis.gaps),
@@ -205,8 +206,7 @@ def test_history_from_the_dataset_reproduces_the_stored_simulation(ds, tiny, tmp
     # the rerun is the dataset's simulation: same kernel, same parameters, same record
     for name in ("peak_force", "impacts", "peak_disp_left", "dissipated_energy"):
         assert result.outputs[name] == pytest.approx(float(ds[name][index]), rel=1e-12), name
-    fig = ds.pound.plot.history(sample=2, left_period_s=0.6, contact_gap_m=0.002)
-    disp, pen, force = fig.axes
+    disp, pen, force = ds.pound.plot.history(sample=2, left_period_s=0.6, contact_gap_m=0.002)
     np.testing.assert_allclose(disp.lines[0].get_xdata(), result.time_s)
     np.testing.assert_allclose(disp.lines[0].get_ydata(), result.disp_left_m[:, -1] * 1e3)
     np.testing.assert_allclose(force.lines[0].get_ydata(), result.force_N[:, 0] / 1e6)
@@ -310,6 +310,21 @@ def _console_messages(stderr: str) -> list[str]:
     return [line for line in stderr.splitlines() if ":CONSOLE" in line]
 
 
+def screenshot(tmp_path, page: Path) -> np.ndarray:
+    """The page as chromium shows it (RGB), after checking it logged no console message."""
+    from PIL import Image
+
+    shot = tmp_path / "shot.png"
+    run = _chromium(
+        tmp_path, "--enable-logging=stderr", "--v=0", f"--screenshot={shot}", page.as_uri()
+    )
+    assert run.returncode == 0, run.stderr[-2000:]
+    assert _console_messages(run.stderr) == []
+    screen = np.asarray(Image.open(shot).convert("RGB")).astype(int)
+    assert (screen != 255).any(axis=2).mean() > 0.05  # not blank
+    return screen
+
+
 @pytest.mark.skipif(
     not os.access(CHROMIUM, os.X_OK),
     reason="Debian's chromium is not installed (/usr/bin/chromium); .ci/run installs it",
@@ -326,15 +341,8 @@ def test_report_renders_in_headless_chromium(tiny, tmp_path):
     assert any("undefinedFunction" in m for m in _console_messages(run.stderr))
 
     # the report itself: no console messages at all (it has no scripts, loads nothing)
-    shot = tmp_path / "shot.png"
-    run = _chromium(
-        tmp_path, "--enable-logging=stderr", "--v=0", f"--screenshot={shot}", report.as_uri()
-    )
-    assert run.returncode == 0, run.stderr[-2000:]
-    assert _console_messages(run.stderr) == []
-    screen = np.asarray(Image.open(shot).convert("RGB")).astype(int)
+    screen = screenshot(tmp_path, report)
     assert screen.shape == (3000, 1200, 3)
-    assert (screen != 255).any(axis=2).mean() > 0.05  # not blank
 
     # where the spectrum's <img> is laid out: the same page plus a script that writes the box
     probe = tmp_path / "probe.html"
@@ -354,8 +362,8 @@ def test_report_renders_in_headless_chromium(tiny, tmp_path):
     region = screen[top : top + height, left : left + width]
     # the screenshot shows the chart there: nearly every pixel as in the PNG ...
     assert (np.abs(region - chart).max(axis=2) <= 8).mean() > 0.98
-    # ... including the median lines in their colours (C0: #1f77b4, C1: #ff7f0e)
-    for rgb in ((0x1F, 0x77, 0xB4), (0xFF, 0x7F, 0x0E)):
+    # ... including the median lines in their colours (Okabe-Ito #0072b2, #e69f00)
+    for rgb in ((0x00, 0x72, 0xB2), (0xE6, 0x9F, 0x00)):
         near = (np.abs(region - np.array(rgb)).max(axis=2) <= 12).sum()
         assert near > 200, rgb
 

@@ -220,7 +220,10 @@ def test_required_gap_chart_draws_the_dataset(glob_dataset):
     ds, _ = glob_dataset
     fig = required_gap_chart(ds, probability=0.1, rules=None)
     ax = fig.axes[0]
-    lines = [ln for ln in ax.lines if ln.get_marker() == "o"]
+    # one probability line per intensity, labelled with its value in g
+    labels = [f"{v:g} g" for v in ds.sa_g.values]
+    lines = [ln for ln in ax.lines if ln.get_label() in labels]
+    assert [ln.get_label() for ln in lines] == labels
     p = ((ds.impacts > 0).where(ds.status == 0)).mean(("record", "sample"))
     for j, ln in enumerate(lines):
         np.testing.assert_allclose(ln.get_xdata(), ds.contact_gap_m.values * 1e3)
@@ -240,7 +243,8 @@ def test_quickstart_chart_draws_its_dataset(tmp_path):
     assert ds.sizes["record"] == 44  # FEMA P695 far field, 22 x 2 components
     fig = required_gap_chart(ds, probability=0.1, base_dir=study.parent)
     ax = fig.axes[0]
-    lines = [ln for ln in ax.lines if ln.get_marker() == "o"]
+    labels = [f"{v:g} g" for v in ds.pga_g.values]  # one probability line per intensity
+    lines = [ln for ln in ax.lines if ln.get_label() in labels]
     assert len(lines) == ds.sizes["pga_g"]
     ok = ds.status == 0
     p = (ds.impacts > 0).where(ok).mean(("record", "sample"))

@@ -10,7 +10,9 @@ Registered on ``import pound_mc``::
     ds.pound.probability()                     # fraction of samples with an impact [-]
     ds.pound.fragility(im="sa_g")              # lognormal fragility per other grid axis
     ds.pound.required_gap(probability=0.1)     # gap for a target probability, and the rules
-    ds.pound.plot.spectrum()                   # matplotlib Figures
+    ds.pound.plot.spectrum(ax=ax)              # draws on ax, returns the Axes
+    ds.pound.worst("peak_force")               # the simulation with the largest peak force
+    ds.pound.to_dataframe()                    # one row per simulation
     ds.pound.plot.history(left_period_s=0.5, contact_gap_m=0.01, sample=3)
 
 Selections (``**sel``) take a dimension and a value; numeric coordinates pick the nearest value,
@@ -19,8 +21,14 @@ so ``left_period_s=0.3`` works although the stored value is ``0.3000000000000000
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
 import numpy as np
+import pandas as pd
 import xarray as xr
+from matplotlib.axes import Axes
 
 from pound_mc.analysis.plot import (
     distribution_chart,
@@ -30,10 +38,13 @@ from pound_mc.analysis.plot import (
     spectrum_chart,
 )
 from pound_mc.analysis.plot_numerics import time_history_chart
+from pound_mc.analysis.profiles import contacts_chart, profile_chart
 from pound_mc.analysis.risk import fragility as _fragility
 from pound_mc.analysis.risk import required_gap as _required_gap
 from pound_mc.analysis.risk_chart import fragility_panels, required_gap_chart
+from pound_mc.analysis.style import value_text
 from pound_mc.errors import InputError
+from pound_mc.scene import Scene, SimulationResult
 from pound_mc.scene import simulate as simulate_scene
 from pound_mc.study.definition import grid_dim_name, study_from_text
 from pound_mc.study.engine import StudyEngine
@@ -66,7 +77,14 @@ def _position(ds: xr.Dataset, dim: str, value) -> int:
     return i
 
 
-def scene_at(ds: xr.Dataset, *, record=0, sample=0, study_path=None, **coords):
+def scene_at(
+    ds: xr.Dataset,
+    *,
+    record: int | str = 0,
+    sample: int = 0,
+    study_path: str | Path | None = None,
+    **coords: Any,
+) -> tuple[Scene, tuple[float, np.ndarray], dict[str, int]]:
     """Rebuild the scene of one simulation of a study dataset.
 
     The study is rebuilt from the dataset's ``study_text`` (its records read again) and the
@@ -119,33 +137,85 @@ def scene_at(ds: xr.Dataset, *, record=0, sample=0, study_path=None, **coords):
     return engine.scene_of(flat), engine.record_of(flat), index
 
 
+def _axes_of(fig, ax):
+    """What a plot method returns: the Axes it drew on (one), or an array of them (panels)."""
+    if ax is not None:
+        axes = np.asarray([ax] if isinstance(ax, Axes) else list(ax), dtype=object).ravel()
+    else:
+        axes = np.asarray([a for a in fig.axes if a.get_label() != "<colorbar>"], dtype=object)
+    return axes[0] if axes.size == 1 else axes
+
+
 class PoundPlot:
-    """Charts of a study dataset (``ds.pound.plot``); each returns a matplotlib Figure."""
+    """Charts of a study dataset (``ds.pound.plot``), in the manner of xarray's ``ds.plot``.
+
+    Each method draws on ``ax`` (a new figure's when not given; a sequence of Axes for the
+    charts with several panels), writes a PNG when given ``path``, and returns the Axes it drew
+    on: one :class:`matplotlib.axes.Axes`, or a numpy array of them for several panels.  The
+    figure is ``ax.figure``.
+    """
 
     def __init__(self, ds: xr.Dataset):
         self._ds = ds
 
-    def spectrum(self, path=None, **kwargs):
-        """Impact force spectrum (:func:`pound_mc.analysis.plot.spectrum_chart`)."""
-        return spectrum_chart(self._ds, path, **kwargs)
+    def spectrum(
+        self, path: str | Path | None = None, *, ax: Axes | None = None, **kwargs: Any
+    ) -> Axes:
+        """Impact force spectrum (:func:`pound_mc.analysis.plot.spectrum_chart`).
 
-    def probability(self, path=None, **kwargs):
+        ``record="median"`` (default, the median over records), ``"each"`` (a line per record)
+        or one record's index or name.
+        """
+        return _axes_of(spectrum_chart(self._ds, path, ax=ax, **kwargs), ax)
+
+    def probability(
+        self, path: str | Path | None = None, *, ax: Axes | None = None, **kwargs: Any
+    ) -> Axes:
         """Pounding probability against gap (:func:`pound_mc.analysis.plot.probability_chart`)."""
-        return probability_chart(self._ds, path, **kwargs)
+        return _axes_of(probability_chart(self._ds, path, ax=ax, **kwargs), ax)
 
-    def fragility(self, path=None, **kwargs):
+    def fragility(self, path: str | Path | None = None, **kwargs: Any) -> np.ndarray:
         """Fragility panels (:func:`pound_mc.analysis.risk_chart.fragility_panels`)."""
-        return fragility_panels(self._ds, path, **kwargs)
+        return _axes_of(fragility_panels(self._ds, path, **kwargs), None)
 
-    def required_gap(self, path=None, **kwargs):
+    def required_gap(
+        self, path: str | Path | None = None, *, ax: Axes | None = None, **kwargs: Any
+    ) -> Axes:
         """Probability against gap with the required gap marked (``required_gap_chart``)."""
-        return required_gap_chart(self._ds, path, **kwargs)
+        return _axes_of(required_gap_chart(self._ds, path, ax=ax, **kwargs), ax)
 
-    def distribution(self, path=None, **kwargs):
-        """Peak force distribution (:func:`pound_mc.analysis.plot.distribution_chart`)."""
-        return distribution_chart(self._ds, path, **kwargs)
+    def distribution(
+        self, path: str | Path | None = None, *, ax: Axes | None = None, **kwargs: Any
+    ) -> np.ndarray:
+        """Peak force distribution (:func:`pound_mc.analysis.plot.distribution_chart`).
 
-    def restitution(self, path=None, **kwargs):
+        Two panels: ``ax`` is a sequence of two Axes (box plot, histograms).
+        """
+        return _axes_of(distribution_chart(self._ds, path, ax=ax, **kwargs), ax)
+
+    def contacts(
+        self, path: str | Path | None = None, *, ax: Axes | None = None, **kwargs: Any
+    ) -> Axes:
+        """Peak force at each contact (:func:`pound_mc.analysis.profiles.contacts_chart`)."""
+        return _axes_of(contacts_chart(self._ds, path, ax=ax, **kwargs), ax)
+
+    def drift(
+        self, path: str | Path | None = None, *, ax: Axes | None = None, **kwargs: Any
+    ) -> np.ndarray:
+        """Peak storey drift profiles (:func:`pound_mc.analysis.profiles.profile_chart`)."""
+        fig = profile_chart(self._ds, path, quantity="drift", ax=ax, **kwargs)
+        return _axes_of(fig, ax)
+
+    def ductility(
+        self, path: str | Path | None = None, *, ax: Axes | None = None, **kwargs: Any
+    ) -> np.ndarray:
+        """Peak ductility profiles (:func:`pound_mc.analysis.profiles.profile_chart`)."""
+        fig = profile_chart(self._ds, path, quantity="ductility", ax=ax, **kwargs)
+        return _axes_of(fig, ax)
+
+    def restitution(
+        self, path: str | Path | None = None, *, ax: Axes | None = None, **kwargs: Any
+    ) -> Axes:
         """Restitution relations with the study's sampled ``e`` and ``e_effective`` marked."""
         ds = self._ds
         samples = None
@@ -154,23 +224,34 @@ class PoundPlot:
             law = ds.attrs.get("contact_model", "contact")
             relation = ds.attrs.get("xi_relation", "")
             samples = (e.values, e_eff.values, f"study: {law} law, {relation} ({e.size} values)")
-        return restitution_chart(path, samples=samples, **kwargs)
+        return _axes_of(restitution_chart(path, samples=samples, ax=ax, **kwargs), ax)
 
-    def history(self, path=None, *, record=0, sample=0, study_path=None, **coords):
+    def history(
+        self,
+        path: str | Path | None = None,
+        *,
+        ax: Sequence[Axes] | None = None,
+        record: int | str = 0,
+        sample: int = 0,
+        study_path: str | Path | None = None,
+        **coords: Any,
+    ) -> np.ndarray:
         """Time history of one simulation of the study, rebuilt and run again.
 
-        See :func:`scene_at` for the arguments; the figure's title names the simulation.
+        See :func:`scene_at` for the arguments; three panels (displacements, penetration,
+        force); the figure's title names the simulation.
         """
         result, index = self._ds.pound.simulate(
             record=record, sample=sample, study_path=study_path, **coords
         )
-        fig = time_history_chart(result)
+        fig = time_history_chart(result, ax=ax)
         where = ", ".join(
-            f"{d} = {self._ds[d].values[i]:g}" if d not in ("record", "sample") else f"{d} {i}"
+            f"{d} = {value_text(self._ds, d, i)}" if d not in ("record", "sample") else f"{d} {i}"
             for d, i in index.items()
         )
         fig.suptitle(f"{self._ds.attrs.get('study_name', '')}: {where}", fontsize=9)
-        return save(fig, path)
+        save(fig, path)
+        return _axes_of(fig, ax)
 
 
 @xr.register_dataset_accessor("pound")
@@ -195,7 +276,13 @@ class PoundAccessor:
         """Grid dimensions of the study (``peak_force``'s dims less record and sample)."""
         return [d for d in self._ds["peak_force"].dims if d not in ("record", "sample")]
 
-    def spectrum(self, quantiles=(0.05, 0.5, 0.95), *, variable="peak_force", **sel):
+    def spectrum(
+        self,
+        quantiles: float | Sequence[float] = (0.05, 0.5, 0.95),
+        *,
+        variable: str = "peak_force",
+        **sel: Any,
+    ) -> xr.DataArray:
         """Quantiles of a result over the samples (status ok): the impact force spectrum.
 
         Parameters
@@ -223,7 +310,7 @@ class PoundAccessor:
         }
         return q.rename(f"{variable}_quantile")
 
-    def probability(self, threshold: float | None = None, **sel):
+    def probability(self, threshold: float | None = None, **sel: Any) -> xr.DataArray:
         """Fraction of the samples (status ok) that pounded.
 
         Parameters
@@ -247,7 +334,9 @@ class PoundAccessor:
         p.attrs = {"units": "1", "long_name": f"fraction of samples with an impact{more}"}
         return p.rename("pounding_probability")
 
-    def fragility(self, im=None, event="pounding", **kwargs) -> xr.Dataset:
+    def fragility(
+        self, im: str | None = None, event: str = "pounding", **kwargs: Any
+    ) -> xr.Dataset:
         """Lognormal fragility per combination of the other grid axes.
 
         See :func:`pound_mc.analysis.risk.fragility`: ``theta``, ``beta``, ``theta_ci``,
@@ -263,40 +352,139 @@ class PoundAccessor:
         """
         return _required_gap(self._ds, probability, **kwargs)
 
-    def status_counts(self) -> dict[str, int]:
-        """Number of simulations per status (``ok``, ``unstable``, ``not_converged``)."""
+    def status_counts(self) -> pd.Series:
+        """Number of simulations per status (index ``ok``, ``unstable``, ``not_converged``)."""
         status = self._ds["status"]
         values = np.asarray(status.attrs.get("flag_values", [0, 1, 2])).tolist()
         names = str(status.attrs.get("flag_meanings", "ok unstable not_converged")).split()
         data = status.values
-        return {
-            name: int(np.count_nonzero(data == v)) for v, name in zip(values, names, strict=True)
-        }
+        counts = [int(np.count_nonzero(data == v)) for v in values]
+        return pd.Series(counts, index=pd.Index(names, name="status"), name="simulations")
 
-    def energy_summary(self) -> dict[str, float]:
+    def energy_summary(self) -> pd.Series:
         """Magnitude of the energy balance residual [-] over the simulations with status ok.
 
         Returns
         -------
-        dict
+        pandas.Series
             ``median``, ``p95``, ``max`` of ``|energy_residual|`` and ``n`` (simulations).
         """
         r = np.abs(self._ds["energy_residual"].where(self.ok).values)
         r = r[np.isfinite(r)]
         if not r.size:
-            return {"median": np.nan, "p95": np.nan, "max": np.nan, "n": 0}
-        return {
-            "median": float(np.median(r)),
-            "p95": float(np.quantile(r, 0.95)),
-            "max": float(r.max()),
-            "n": int(r.size),
-        }
+            values = [np.nan, np.nan, np.nan, 0]
+        else:
+            values = [float(np.median(r)), float(np.quantile(r, 0.95)), float(r.max()), r.size]
+        index = ["median", "p95", "max", "n"]
+        return pd.Series(values, index=index, dtype=object, name="energy_residual")
 
-    def scene(self, *, record=0, sample=0, study_path=None, **coords):
+    def per_simulation(self) -> list[str]:
+        """Variables with one value per simulation, per sample or per record (not summaries)."""
+        dims = set(self._ds["peak_force"].dims)
+        return [
+            name
+            for name, var in self._ds.data_vars.items()
+            if var.dims
+            and set(var.dims) <= dims
+            and ("sample" in var.dims or var.dims == ("record",))
+            and var.dtype.kind in "fiub"
+        ]
+
+    def to_dataframe(self) -> pd.DataFrame:
+        """One row per simulation: its coordinates and every per-simulation result.
+
+        Returns
+        -------
+        pandas.DataFrame
+            Columns ``record``, the grid dims, ``sample`` (``material`` names on a material
+            axis), then :meth:`per_simulation`'s variables in the dataset's units.
+        """
+        ds = self._ds
+        dims = list(ds["peak_force"].dims)
+        names = self.per_simulation()
+        table = ds[names].to_dataframe(dim_order=dims)
+        keep = [n for n in names if n in table]
+        table = table[keep].reset_index()
+        if "material" in ds and ds["material"].dims == ("contact_material",):
+            names_of = dict(zip(ds["contact_material"].values, ds["material"].values, strict=True))
+            table.insert(
+                dims.index("contact_material") + 1,
+                "material",
+                table["contact_material"].map(names_of),
+            )
+        return table
+
+    def worst_index(self, variable: str = "peak_force") -> dict[str, int]:
+        """Position of the simulation (status ok) with the largest ``variable``, by dim."""
+        values = self._ds[variable].where(self.ok)
+        extra = [d for d in values.dims if d not in self._ds["peak_force"].dims]
+        if extra:  # per-contact or per-storey results: the largest over those
+            values = values.max(extra)
+        data = values.transpose(*self._ds["peak_force"].dims).values
+        if not np.isfinite(data).any():
+            raise ValueError(f"no simulation with status ok has a finite {variable}")
+        flat = int(np.nanargmax(data))
+        dims = self._ds["peak_force"].dims
+        return {d: int(i) for d, i in zip(dims, np.unravel_index(flat, data.shape), strict=True)}
+
+    def worst(
+        self,
+        variable: str = "peak_force",
+        *,
+        rerun: bool = False,
+        study_path: str | Path | None = None,
+    ) -> xr.Dataset | tuple[xr.Dataset, SimulationResult]:
+        """The simulation (status ok) with the largest ``variable``; optionally run again.
+
+        Parameters
+        ----------
+        variable : str
+            A per-simulation result (default ``peak_force``); per-contact or per-storey results
+            take their largest value.
+        rerun : bool
+            Also run the simulation again with its time histories (:meth:`simulate`).
+        study_path : str or Path, optional
+            Where the study file was, for records given by a relative path.
+
+        Returns
+        -------
+        xarray.Dataset or tuple
+            The dataset at that simulation (``ds.isel``: every variable there, coordinates as
+            scalars); with ``rerun``, ``(selection, result)`` with the
+            :class:`~pound_mc.scene.SimulationResult`.
+        """
+        index = self.worst_index(variable)
+        selection = self._ds.isel(index)
+        if not rerun:
+            return selection
+        coords = {
+            d: self._ds[d].values[i] for d, i in index.items() if d not in ("record", "sample")
+        }
+        result, _ = self.simulate(
+            record=index["record"], sample=index["sample"], study_path=study_path, **coords
+        )
+        return selection, result
+
+    def scene(
+        self,
+        *,
+        record: int | str = 0,
+        sample: int = 0,
+        study_path: str | Path | None = None,
+        **coords: Any,
+    ) -> Scene:
         """The scene of one simulation (see :func:`scene_at`)."""
         return scene_at(self._ds, record=record, sample=sample, study_path=study_path, **coords)[0]
 
-    def simulate(self, *, record=0, sample=0, history=True, study_path=None, **coords):
+    def simulate(
+        self,
+        *,
+        record: int | str = 0,
+        sample: int = 0,
+        history: bool = True,
+        study_path: str | Path | None = None,
+        **coords: Any,
+    ) -> tuple[SimulationResult, dict[str, int]]:
         """Run one simulation of the study again, with its histories.
 
         Returns

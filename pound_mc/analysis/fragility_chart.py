@@ -12,6 +12,7 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from pound_mc.analysis.fragility import FragilityFit
+from pound_mc.analysis.style import PALETTE, legend_outside
 
 __all__ = ["fragility_chart"]
 
@@ -25,6 +26,7 @@ def fragility_chart(
     band: bool = True,
     counts: bool = True,
     num: int = 200,
+    legend: bool = True,
 ) -> Axes:
     """Plot a fitted fragility: points per stripe, the fitted curve and the bootstrap band.
 
@@ -45,6 +47,8 @@ def fragility_chart(
         Write ``events/simulations`` beside each stripe's point.
     num : int, default 200
         Points along the curve.
+    legend : bool, default True
+        Draw the legend (right of the axes, outside the data).
 
     Returns
     -------
@@ -64,12 +68,12 @@ def fragility_chart(
     if band and fit.theta_boot.size:
         lower, upper = fit.band(x)
         ax.fill_between(
-            x, lower, upper, color="tab:blue", alpha=0.2, lw=0, label=f"{percent} % bootstrap band"
+            x, lower, upper, color=PALETTE[0], alpha=0.2, lw=0, label=f"{percent} % bootstrap band"
         )
     ax.plot(
         x,
         fit.probability(x),
-        color="tab:blue",
+        color=PALETTE[0],
         label=f"lognormal fit: theta = {fit.theta:.3g}, beta = {fit.beta:.3g}",
     )
     ax.plot(im, fraction, "o", color="black", ms=5, label="stripes (fraction of simulations)")
@@ -83,11 +87,12 @@ def fragility_chart(
                     xytext=(4, -11 if fi > 0.9 else 5),
                     fontsize=7,
                 )
-    ax.axvline(fit.theta, color="tab:blue", lw=0.8, ls=":")
+    ax.axvline(fit.theta, color=PALETTE[0], lw=0.8, ls=":")
     ax.set_xlim(0.0, x[-1])
     ax.set_ylim(-0.02, 1.02)
     ax.set_xlabel(im_label)
     ax.set_ylabel(f"P({event_label} | IM)")
     ax.grid(alpha=0.3)
-    ax.legend(loc="lower right", fontsize=8)
+    if legend:
+        legend_outside(ax)
     return ax

@@ -1,21 +1,39 @@
-"""Charts.
+"""Charts of a study dataset: impact force spectrum, pounding probability, distribution.
 
-Each function draws on a new :class:`matplotlib.figure.Figure` (no pyplot state)
-and, given ``path``, writes it as PNG; it returns the figure so notebooks can show it and tests
-can read the plotted data back from its artists.
+Each function draws on the Axes given (``ax=``) or on a new :class:`matplotlib.figure.Figure`
+(no pyplot state) and, given ``path``, writes it as PNG; it returns the figure so notebooks can
+show it and tests can read the plotted data back from its artists.  Colours, units and labels
+come from :mod:`pound_mc.analysis.style`; the charts of the physics (restitution relations,
+the drop test) are in :mod:`pound_mc.analysis.physics_charts`.
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
 import xarray as xr
+from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from pound_mc.analysis.gaps import study_gaps
-from pound_mc.physics import materials, relations
-from pound_mc.physics.droptest import DropTestResult, drop_test
+from pound_mc.analysis.physics_charts import (  # noqa: F401  (charts of this module before)
+    droptest_chart,
+    restitution_chart,
+    restitution_curves,
+    restitution_ranges_chart,
+)
+from pound_mc.analysis.style import (
+    axis_label,
+    fit_tick_labels,
+    legend_outside,
+    line_style,
+    new_axes,
+    save,
+    scale_of,
+    value_text,
+)
 
 __all__ = [
     "restitution_chart",
@@ -24,32 +42,15 @@ __all__ = [
     "spectrum_chart",
     "probability_chart",
     "distribution_chart",
+    "spectrum_quantiles",
     "rule_gaps",
     "RULE_ATTRS",
     "save",
 ]
 
-_MATERIAL_COLOURS = {
-    "steel": "tab:blue",
-    "concrete": "tab:grey",
-    "timber": "tab:brown",
-    "ceramics": "tab:red",
-}
-
-
-def save(fig: Figure, path: str | Path | None) -> Figure:
-    """Write ``fig`` as PNG to ``path`` (parent folders created) and return it."""
-    if path is not None:
-        path = Path(path)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        tmp = path.with_name(path.name + ".part")
-        fig.savefig(tmp, dpi=130, format="png")
-        tmp.replace(path)
-    return fig
-
 
 def finish_axes(ax, *, title: str, title_size=9, legend_size=8, grid="major", **props) -> None:
-    """Title, labels, grid and legend of one chart's axes, alike on every chart.
+    """Title, labels, grid and legend (outside the data) of one chart's axes, alike everywhere.
 
     Parameters
     ----------
@@ -70,133 +71,51 @@ def finish_axes(ax, *, title: str, title_size=9, legend_size=8, grid="major", **
     if title_size is not None:
         ax.title.set_fontsize(title_size)
     ax.grid(True, which=grid, alpha=0.3)
-    ax.legend(fontsize=legend_size)
-
-
-def restitution_curves(targets=None) -> dict[str, tuple[np.ndarray, np.ndarray]]:
-    """Restitution each xi-e relation really produces against its target.
-
-    Jankowski-law relations read the ``exact`` table; the Kelvin and Hertz-damp relations run
-    the virtual drop test with their own force law (1.35 kg concrete ball at 1 m/s).
-
-    Returns
-    -------
-    dict
-        ``{label: (target e, achieved e)}``.
-    """
-    targets = np.linspace(0.1, 0.99, 37) if targets is None else np.asarray(targets, float)
-    curves = {}
-    for name in ("jankowski2008", "jankowski2006", "exact"):
-        curves[f"Jankowski law, {name}"] = (targets, relations.effective_restitution(targets, name))
-    coarse = targets[::3]
-    for model, stiffness, rel in (
-        ("kelvin", 1.0e7, "kelvin"),
-        ("hertzdamp", 7.9e9, "ye2009"),
-        ("hertzdamp", 7.9e9, "muthukumar2006"),
-    ):
-        achieved = [
-            drop_test(1.35, 1.0, stiffness, e=e, model=model, relation=rel, n_history=4).restitution
-            for e in coarse
-        ]
-        law = "Kelvin law" if model == "kelvin" else "Hertz-damp law"
-        curves[f"{law}, {rel}"] = (coarse, np.asarray(achieved))
-    return curves
-
-
-def restitution_chart(path: str | Path | None = None, *, targets=None, samples=None) -> Figure:
-    """Chart of the restitution really produced against the target, for every relation.
-
-    Parameters
-    ----------
-    path : str or Path, optional
-        Where to write the PNG.
-    targets : array_like, optional
-        Target coefficients of restitution of the curves (default 37 values in 0.1-0.99).
-    samples : tuple, optional
-        ``(e, e_effective, label)``: a study's sampled target restitution and the restitution
-        its contact law really produces [-], drawn as points over the curves.
-    """
-    fig = Figure(figsize=(6.4, 5.2), layout="constrained")
-    ax = fig.add_subplot()
-    ax.plot([0, 1], [0, 1], color="black", lw=0.8, ls=":", label="achieved = target")
-    styles = ["-", "--", "-", "o", "s", "^"]
-    for (label, (t, a)), style in zip(restitution_curves(targets).items(), styles, strict=True):
-        if style in ("o", "s", "^"):
-            ax.plot(t, a, style, ms=4, mfc="none", label=label)
-        else:
-            ax.plot(t, a, ls=style, lw=1.6, label=label)
-    if samples is not None:
-        e, e_eff, label = samples
-        ax.scatter(
-            np.ravel(e), np.ravel(e_eff), s=10, color="black", zorder=3, label=label, marker="x"
-        )
-    ax.set(
-        xlabel="target coefficient of restitution e [-]",
-        ylabel="restitution really produced [-]",
-        xlim=(0, 1),
-        ylim=(0, 1.02),
-        title="Damping-restitution relations: one free impact",
-    )
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=8, loc="upper left")
-    return save(fig, path)
-
-
-def restitution_ranges_chart(path: str | Path | None = None) -> Figure:
-    """Jankowski (2008) Table 2: measured restitution range against impact velocity."""
-    fig = Figure(figsize=(6.4, 4.6), layout="constrained")
-    ax = fig.add_subplot()
-    t2 = materials.table(2)
-    for material in materials.MATERIALS:
-        rows = t2[t2["material"] == material].sort_values("velocity_m_s")
-        v = rows["velocity_m_s"].to_numpy()
-        lo, hi = rows["e_min"].to_numpy(), rows["e_max"].to_numpy()
-        colour = _MATERIAL_COLOURS[material]
-        ax.fill_between(v, lo, hi, color=colour, alpha=0.25, lw=0, label=f"{material} (range)")
-        ax.plot(v, 0.5 * (lo + hi), "o-", color=colour, ms=3, lw=1.2)
-    ax.set(
-        xlabel="prior-impact velocity [m/s]",
-        ylabel="coefficient of restitution e [-]",
-        title="Measured restitution (Jankowski 2008, Table 2)",
-    )
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=8)
-    return save(fig, path)
-
-
-def droptest_chart(result: DropTestResult, path: str | Path | None = None) -> Figure:
-    """Force against time and against penetration for one virtual drop test."""
-    fig = Figure(figsize=(9.6, 4.0), layout="constrained")
-    ax1, ax2 = fig.subplots(1, 2)
-    t_ms = result.time_s * 1e3
-    ax1.plot(t_ms, result.force_N / 1e3, color="tab:red")
-    ax1.set(xlabel="time [ms]", ylabel="impact force [kN]", title="Impact force")
-    ax2.plot(result.penetration_m * 1e6, result.force_N / 1e3, color="tab:blue")
-    ax2.set(xlabel="penetration delta [um]", ylabel="impact force [kN]", title="Force-penetration")
-    for ax in (ax1, ax2):
-        ax.grid(alpha=0.3)
-    fig.suptitle(
-        f"Virtual drop test ({result.model}): m = {result.mass_kg:g} kg, "
-        f"v0 = {result.velocity_m_s:g} m/s, beta = {result.beta:.3g}, xi = {result.xi:.4f} -> "
-        f"e = {result.restitution:.4f}, peak {result.peak_force_N / 1e3:.2f} kN, "
-        f"t_c = {result.contact_duration_s * 1e3:.3f} ms",
-        fontsize=9,
-    )
-    return save(fig, path)
+    legend_outside(ax, size=legend_size)
 
 
 def _spectrum_selection(ds, x=None, line=None):
     """Pick the x axis and the line axis of an impact force spectrum chart."""
-    grid_dims = [d for d in ds["peak_force"].dims if d not in ("record", "sample")]
+    grid_dims = _grid_dims(ds)
     if not grid_dims:
-        raise ValueError("the dataset has no grid axis to draw a spectrum against")
+        raise ValueError("does not apply: the dataset has no grid axis to draw a spectrum against")
     x = x or grid_dims[0]
+    if x not in grid_dims:
+        raise ValueError(f"no grid dimension {x!r}; the dataset has {grid_dims}")
     rest = [d for d in grid_dims if d != x]
     line = line if line is not None else (rest[0] if rest else None)
     return x, line, [d for d in rest if d != line]
 
 
-def spectrum_chart(ds, path: str | Path | None = None, *, x=None, line=None, record=0) -> Figure:
+def spectrum_quantiles(ds: xr.Dataset, record: int | str = "median") -> xr.DataArray:
+    """Quantiles of peak force over the samples [N] that a spectrum chart draws.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A study dataset (its ``peak_force_quantile``).
+    record : "median", "each", int or str
+        ``"median"``: the median over the records of each record's quantiles; ``"each"``: every
+        record (a ``record`` dim kept); an index or a name: that record.
+    """
+    q = ds["peak_force_quantile"]
+    if isinstance(record, str) and record == "median":
+        return q.median("record")
+    if isinstance(record, str) and record == "each":
+        return q
+    return q.isel(record=_record_index(ds, record))
+
+
+def spectrum_chart(
+    ds: xr.Dataset,
+    path: str | Path | None = None,
+    *,
+    x: str | None = None,
+    line: str | None = None,
+    record: int | str = "median",
+    sel: dict | None = None,
+    ax: Axes | None = None,
+) -> Figure:
     """Impact force spectrum: median peak force against a grid axis with a 5-95 % band.
 
     Parameters
@@ -208,47 +127,84 @@ def spectrum_chart(ds, path: str | Path | None = None, *, x=None, line=None, rec
     x : str, optional
         Grid dimension on the horizontal axis (default: the first).
     line : str, optional
-        Grid dimension drawn as one line per value (default: the second, if any); other grid
-        dimensions are held at their first value.
-    record : int
-        Which record (index).
+        Grid dimension drawn as one line per value (default: the second, if any).
+    record : "median", "each", int or str
+        ``"median"`` (default): median over the records of each record's quantiles;
+        ``"each"``: one line per record (the median over samples; the line axis held);
+        an index or a name: that record alone.
+    sel : dict, optional
+        ``{dim: value}`` holding other grid dimensions at one value (nearest; default their
+        first value).
+    ax : matplotlib.axes.Axes, optional
+        Where to draw (default a new figure).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        ``axes[0].lines``: one line per value drawn, the medians over samples [MN].
     """
     x, line, others = _spectrum_selection(ds, x, line)
-    q = ds["peak_force_quantile"].isel(record=record, **{d: 0 for d in others})
-    fig = Figure(figsize=(7.2, 4.6), layout="constrained")
-    ax = fig.add_subplot()
-    line_values = [None] if line is None else list(ds[line].values)
-    colours = [f"C{i % 10}" for i in range(len(line_values))]
-    for value, colour in zip(line_values, colours, strict=True):
-        sel = q if value is None else q.sel({line: value})
-        xs = ds[x].values
-        if value is None:
-            label = "median"
-        else:
-            lattrs = ds[line].attrs
-            units = lattrs.get("units", "")
-            label = f"{lattrs.get('long_name', line)} = {value:g}" + (
-                f" {units}" if units not in ("", "1") else ""
+    each = isinstance(record, str) and record == "each"
+    sel = dict(sel or {})
+    if each and line is not None:
+        others, line = [line, *others], None
+    hold = _hold(ds, others, sel)
+    q = spectrum_quantiles(ds, record).isel(hold)
+    fig, (ax,) = new_axes(ax, (8.4, 4.6))
+    xs = ds[x].values * scale_of(ds, x) if ds[x].dtype.kind in "fiu" else np.arange(ds.sizes[x])
+    if each:
+        lines = [(i, {"record": i}, str(ds["record"].values[i])) for i in range(ds.sizes["record"])]
+    elif line is None:
+        lines = [(0, {}, "median over samples")]
+    else:
+        lines = [(i, {line: i}, value_text(ds, line, i)) for i in range(ds.sizes[line])]
+    band = len(lines) <= 7
+    crowd = len(lines) > 12  # too many to tell apart: thin grey lines and their median
+    for k, (_, where, label) in enumerate(lines):
+        style = line_style(k)
+        sq = q.isel(where)
+        if crowd:
+            first = f"each record ({len(lines)})" if k == 0 else None
+            median = sq.sel(quantile=0.5).values / 1e6
+            ax.plot(xs, median, color="0.6", lw=0.7, alpha=0.7, label=first)
+            continue
+        ax.plot(xs, sq.sel(quantile=0.5).values / 1e6, lw=1.6, ms=4, label=label, **style)
+        if band:
+            ax.fill_between(
+                xs,
+                sq.sel(quantile=0.05).values / 1e6,
+                sq.sel(quantile=0.95).values / 1e6,
+                color=style["color"],
+                alpha=0.15,
+                lw=0,
             )
-        ax.plot(xs, sel.sel(quantile=0.5).values / 1e6, color=colour, lw=1.6, label=label)
-        ax.fill_between(
-            xs,
-            sel.sel(quantile=0.05).values / 1e6,
-            sel.sel(quantile=0.95).values / 1e6,
-            color=colour,
-            alpha=0.18,
-            lw=0,
-        )
-    xattrs = ds[x].attrs
+    if crowd:
+        over = q.sel(quantile=0.5).median("record").values / 1e6
+        ax.plot(xs, over, color="black", lw=2.0, marker="o", ms=4, label="median over records")
+    if ds[x].dtype.kind not in "fiu" or x == MATERIAL_DIM:
+        ax.set_xticks(xs, [value_text(ds, x, i) for i in range(ds.sizes[x])])
+        fit_tick_labels(ax, ds.sizes[x])
+    if each:
+        rec_text = f"one line per record ({ds.sizes['record']})"
+    elif isinstance(record, str) and record == "median":
+        n = ds.sizes["record"]
+        rec_text = f"median over {n} records" if n > 1 else f"record {ds['record'].values[0]}"
+    else:
+        rec_text = f"record {ds['record'].values[_record_index(ds, record)]}"
+    held = ", ".join(f"{d} = {value_text(ds, d, i)}" for d, i in hold.items())
     finish_axes(
         ax,
-        xlabel=f"{xattrs.get('long_name', x)} [{xattrs.get('units', '')}]",
+        xlabel=axis_label(ds, x),
         ylabel="peak impact force [MN]",
         title=(
-            f"Impact force spectrum ({ds.attrs.get('study_name', '')}, record "
-            f"{ds['record'].values[record]}): median and 5-95 % over {ds.sizes['sample']} samples"
+            f"Impact force spectrum ({ds.attrs.get('study_name', '')}, {rec_text}"
+            + (f", {held}" if held else "")
+            + f")\nmedian over {ds.sizes['sample']} samples"
+            + (" and 5-95 % band" if band else "")
         ),
     )
+    if line is not None:
+        ax.get_legend().set_title(axis_label(ds, line), prop={"size": 8})
     return save(fig, path)
 
 
@@ -262,9 +218,13 @@ _RULE_STYLES = {"ABS": "--", "SRSS": "-.", "DDC": ":"}
 GAP_DIM = "contact_gap_m"
 #: Dimension of the material grid axis (values: indices; variable ``material``: the names).
 MATERIAL_DIM = "contact_material"
+#: Dimension of the contacts of a shear-building pair (one per pair of floors that can meet).
+CONTACT_DIM = "contact"
 
 
-def rule_gaps(ds, rules="auto", *, base_dir=None) -> dict:
+def rule_gaps(
+    ds: xr.Dataset, rules: dict | str | None = "auto", *, base_dir: str | Path | None = None
+) -> dict:
     """Gaps [m] the separation rules ask for, by rule label.
 
     Parameters
@@ -292,8 +252,8 @@ def rule_gaps(ds, rules="auto", *, base_dir=None) -> dict:
     if rules != "auto":
         raise ValueError(f'rules must be a dict, "auto" or None, got {rules!r}')
     found = {label: ds.attrs[attr] for label, attr in RULE_ATTRS.items() if attr in ds.attrs}
-    if found or "study_text" not in ds.attrs:
-        return found
+    if found or "study_text" not in ds.attrs or CONTACT_DIM in ds.dims:
+        return found  # the rules' linear SDOF responses do not describe shear buildings
     gaps = study_gaps(ds, base_dir=base_dir)
     return {"ABS": gaps["gap_abs"], "SRSS": gaps["gap_srss"], "DDC": gaps["gap_ddc"]}
 
@@ -318,12 +278,11 @@ def _reduce_rule(value, ds, line, record, hold):
 
 
 def _line_label(ds, dim, i) -> str:
-    return f"{ds[dim].attrs.get('long_name', dim)} = {_value_text(ds, dim, i)}"
+    return f"{ds[dim].attrs.get('long_name', dim)} = {value_text(ds, dim, i)}"
 
 
 def _axis_label(ds, dim) -> str:
-    attrs = ds[dim].attrs
-    return f"{attrs.get('long_name', dim)} [{attrs.get('units', '-')}]".replace("[1]", "[-]")
+    return axis_label(ds, dim)
 
 
 def _hold(ds, dims, sel):
@@ -347,23 +306,24 @@ def _nearest_index(ds, dim, value) -> int:
         return int(np.argmin(np.abs(coord.astype(float) - float(value))))
     hits = np.flatnonzero(coord == value)
     if not hits.size:
-        raise ValueError(f"{dim} has no value {value!r}; it has {list(coord)}")
+        names = [str(c) for c in coord]
+        more = f", ... ({len(names)} in all)" if len(names) > 6 else ""
+        raise ValueError(f"{dim} has no value {value!r}; it has {', '.join(names[:6])}{more}")
     return int(hits[0])
 
 
 def _record_index(ds, record) -> int:
-    return record if isinstance(record, int | np.integer) else _nearest_index(ds, "record", record)
+    if isinstance(record, int | np.integer):
+        n = ds.sizes["record"]
+        if not -n <= record < n:
+            raise ValueError(f"record index {record} out of range: the dataset has {n} records")
+        return int(record) % n
+    return _nearest_index(ds, "record", record)
 
 
 def _value_text(ds, dim, i) -> str:
-    """The ``i``-th value of ``dim`` as text: a material's name, else the number and units."""
-    if dim == MATERIAL_DIM and "material" in ds and ds["material"].dims == (dim,):
-        return str(ds["material"].values[i])
-    value = ds[dim].values[i]
-    if not isinstance(value, float | np.floating | int | np.integer):
-        return str(value)
-    units = ds[dim].attrs.get("units", "")
-    return f"{value:g}" + (f" {units}" if units not in ("", "1") else "")
+    """The ``i``-th value of ``dim`` as text (:func:`pound_mc.analysis.style.value_text`)."""
+    return value_text(ds, dim, i)
 
 
 def _grid_dims(ds) -> list[str]:
@@ -371,25 +331,28 @@ def _grid_dims(ds) -> list[str]:
 
 
 def probability_chart(
-    ds,
+    ds: xr.Dataset,
     path: str | Path | None = None,
     *,
-    line=None,
-    record=None,
-    sel=None,
-    rules="auto",
-    max_lines: int = 6,
-    base_dir=None,
+    line: str | None = None,
+    record: int | str | None = None,
+    sel: dict | None = None,
+    rules: dict | str | None = "auto",
+    max_lines: int = 7,
+    base_dir: str | Path | None = None,
+    x: str | None = None,
+    ax: Axes | None = None,
 ) -> Figure:
     """Pounding probability against the initial gap, with the separation rules marked.
 
     The probability is the fraction of the samples (status ok) with at least one impact:
-    ``pounding_probability`` of the dataset.
+    ``pounding_probability`` of the dataset.  A study without the gap on its grid draws the
+    probability against its first grid axis instead (no rules then).
 
     Parameters
     ----------
     ds : xarray.Dataset
-        A study dataset with the gap ``contact.gap_m`` as a grid axis.
+        A study dataset.
     path : str or Path, optional
         Where to write the PNG.
     line : str, optional
@@ -402,19 +365,29 @@ def probability_chart(
         list of values of the ``line`` dimension to draw.
     rules : dict, "auto" or None
         Separation rule gaps (see :func:`rule_gaps`), drawn as vertical lines: the median over
-        the samples, per line where they differ from line to line.
+        the samples, per line where they differ from line to line.  Shear buildings: none.
     max_lines : int
         Most lines drawn.
     base_dir : str or Path, optional
         Folder of relative record paths when the rules are computed.
+    x : str, optional
+        Grid dimension on the horizontal axis (default the gap, else the first grid axis).
+    ax : matplotlib.axes.Axes, optional
+        Where to draw (default a new figure).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        ``axes[0].lines``: the probability lines first (x in chart units), then the rules.
     """
-    if GAP_DIM not in ds.dims:
-        raise ValueError(
-            "the dataset has no gap axis: pounding probability against gap needs a study with "
-            '"contact.gap_m" on its [grid]'
-        )
+    grid = _grid_dims(ds)
+    if not grid:
+        raise ValueError("does not apply: the dataset has no grid axis to draw against")
+    x = x or (GAP_DIM if GAP_DIM in grid else grid[0])
+    if x not in grid:
+        raise ValueError(f"no grid dimension {x!r}; the dataset has {grid}")
     sel = dict(sel or {})
-    rest = [d for d in _grid_dims(ds) if d != GAP_DIM]
+    rest = [d for d in grid if d != x]
     line = line if line is not None else (rest[0] if rest else None)
     wanted = sel.pop(line, None) if line is not None else None
     hold = _hold(ds, [d for d in rest if d != line], sel)
@@ -435,23 +408,26 @@ def probability_chart(
         line_idx = list(
             dict.fromkeys(np.round(np.linspace(0, n - 1, min(n, max_lines))).astype(int))
         )
-    gap_mm = ds[GAP_DIM].values * 1e3
-    fig = Figure(figsize=(7.2, 4.6), layout="constrained")
-    ax = fig.add_subplot()
+    numeric = ds[x].dtype.kind in "fiu" and x != MATERIAL_DIM
+    xs = ds[x].values * scale_of(ds, x) if numeric else np.arange(ds.sizes[x])
+    fig, (ax,) = new_axes(ax, (8.4, 4.6))
     colours = {}
     for k, i in enumerate(line_idx):
-        colour = f"C{k % 10}"
-        colours[i] = colour
-        y = prob.values if i is None else prob.isel({line: i}).values
-        label = "pounding probability" if i is None else _line_label(ds, line, i)
-        ax.plot(gap_mm, y, "o-", color=colour, ms=3.5, lw=1.6, label=label)
-    for label, value in rule_gaps(ds, rules, base_dir=base_dir).items():
+        style = line_style(k)
+        colours[i] = style["color"]
+        y = prob.transpose(x, ...).values if i is None else prob.isel({line: i}).values
+        label = "pounding probability" if i is None else value_text(ds, line, i)
+        ax.plot(xs, y, ms=4, lw=1.6, label=label, **style)
+    if not numeric:
+        ax.set_xticks(xs, [value_text(ds, x, i) for i in range(ds.sizes[x])])
+        fit_tick_labels(ax, ds.sizes[x])
+    for label, value in (rule_gaps(ds, rules, base_dir=base_dir) if x == GAP_DIM else {}).items():
         style = _RULE_STYLES.get(label, (0, (1, 3)))
         arr = _reduce_rule(value, ds, line, record, hold)
         if arr.size == 1:
             if np.isfinite(arr[0]):
                 rule_label = f"{label} rule: {arr[0] * 1e3:.3g} mm"
-                ax.axvline(arr[0] * 1e3, color="black", ls=style, lw=1.1, label=rule_label)
+                ax.axvline(arr[0] * 1e3, color="0.3", ls=style, lw=1.1, label=rule_label)
             continue
         if line is None or arr.size != ds.sizes[line]:
             raise ValueError(
@@ -463,17 +439,26 @@ def probability_chart(
                 rule_label = f"{label} rule (in each line's colour)" if first else None
                 ax.axvline(arr[i] * 1e3, color=colours[i], ls=style, lw=1.1, label=rule_label)
                 first = False
+    held = ", ".join(f"{d} = {value_text(ds, d, i)}" for d, i in hold.items())
+    if x != GAP_DIM:
+        note = "no gap axis: against the first grid axis"
+    elif CONTACT_DIM in ds.dims:
+        note = "shear buildings: no separation rules (they assume SDOF buildings)"
+    else:
+        note = "vertical lines: gaps the separation rules ask for (median over samples)"
     finish_axes(
         ax,
-        xlabel="initial gap [mm]",
+        xlabel=axis_label(ds, x),
         ylabel="pounding probability [-]",
         ylim=(-0.03, 1.03),
         title=(
-            f"Pounding probability ({ds.attrs.get('study_name', '')}, {rec_text}): fraction of "
-            f"the samples with an impact\nvertical lines: gaps the separation rules ask for "
-            f"(median over samples)"
+            f"Pounding probability ({ds.attrs.get('study_name', '')}, {rec_text}"
+            + (f", {held}" if held else "")
+            + f"): fraction of the samples with an impact\n{note}"
         ),
     )
+    if line is not None:
+        ax.get_legend().set_title(axis_label(ds, line), prop={"size": 8})
     return save(fig, path)
 
 
@@ -481,21 +466,29 @@ def _distribution_groups(ds, by, record, sel):
     """Peak forces [N] of the pounding simulations (status ok), per value of ``by``."""
     grid = _grid_dims(ds)
     held = _hold(ds, [d for d in (sel or {}) if d != by], sel)
-    force = ds["peak_force"].isel(record=_record_index(ds, record), **held)
+    rec = {} if record is None else {"record": _record_index(ds, record)}
+    force = ds["peak_force"].isel(**rec, **held)
     ok = (ds["status"] == 0) & (ds["impacts"] > 0)
-    ok = ok.isel(record=_record_index(ds, record), **held)
+    ok = ok.isel(**rec, **held)
     groups, labels = [], []
     for i in range(ds.sizes[by]):
         f = force.isel({by: i}).values
         m = ok.isel({by: i}).values
         groups.append(f[m].ravel())
-        labels.append(_value_text(ds, by, i))
+        labels.append(value_text(ds, by, i))
     pooled = [d for d in grid if d != by and d not in held]
     return groups, labels, pooled
 
 
 def distribution_chart(
-    ds, path: str | Path | None = None, *, by=None, record=0, sel=None, bins: int = 30
+    ds: xr.Dataset,
+    path: str | Path | None = None,
+    *,
+    by: str | None = None,
+    record: int | str | None = None,
+    sel: dict | None = None,
+    bins: int = 30,
+    ax: Sequence[Axes] | None = None,
 ) -> Figure:
     """Distribution of the peak impact force: box plot and histogram per value of a dimension.
 
@@ -512,12 +505,19 @@ def distribution_chart(
         Dimension with one box and one histogram per value (default the material axis
         ``contact_material`` when the dataset has it, else the gap, else the last grid
         dimension).
-    record : int or str
-        Which record (index or name).
+    record : int or str, optional
+        Which record (index or name); default all records pooled.
     sel : dict, optional
         ``{dim: value}`` of grid dimensions to hold at one value (nearest) instead of pooling.
     bins : int
         Number of histogram bins (common to every value).
+    ax : sequence of two matplotlib.axes.Axes, optional
+        Where to draw the box plot and the histograms (default a new figure).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Box plot on the first Axes, one histogram (``patches``, [MN]) per value on the second.
     """
     grid = _grid_dims(ds)
     if by is None:
@@ -526,8 +526,7 @@ def distribution_chart(
     if by is None or by not in ds.dims:
         raise ValueError(f"cannot draw the distribution per {by!r}: no such grid dimension")
     groups, labels, pooled = _distribution_groups(ds, by, record, sel)
-    fig = Figure(figsize=(10.0, 4.4), layout="constrained")
-    ax1, ax2 = fig.subplots(1, 2)
+    fig, (ax1, ax2) = new_axes(ax, (11.0, 4.6), ncols=2)
     drawn = [k for k, g in enumerate(groups) if g.size]
     if drawn:
         ax1.boxplot(
@@ -538,21 +537,37 @@ def distribution_chart(
             whis=(5, 95),
             flierprops={"markersize": 2},
         )
+        fit_tick_labels(ax1, len(drawn))
         edges = np.histogram_bin_edges(np.concatenate([groups[k] for k in drawn]), bins=bins)
         for j, k in enumerate(drawn):
             counts, _ = np.histogram(groups[k], bins=edges)
-            hist_label = f"{labels[k]} ({groups[k].size} simulations)"
-            ax2.stairs(counts, edges / 1e6, color=f"C{j % 10}", lw=1.4, label=hist_label)
-        ax2.legend(fontsize=8, title=_axis_label(ds, by), title_fontsize=8)
-    ax1.set(xlabel=_axis_label(ds, by), ylabel="peak impact force [MN]")
+            style = line_style(j)
+            hist_label = f"{labels[k]} ({groups[k].size})"
+            ax2.stairs(
+                counts,
+                edges / 1e6,
+                color=style["color"],
+                linestyle=style["linestyle"],
+                lw=1.4,
+                label=hist_label,
+            )
+        legend_outside(ax2, title=f"{axis_label(ds, by)}\n(simulations)")
+    else:
+        ax1.text(0.5, 0.5, "no simulation pounded", transform=ax1.transAxes, ha="center")
+    ax1.set(xlabel=axis_label(ds, by), ylabel="peak impact force [MN]")
     ax1.set_title("box 25-75 %, whiskers 5-95 %, triangle mean", fontsize=9)
     ax2.set(xlabel="peak impact force [MN]", ylabel="number of simulations [-]")
-    for ax in (ax1, ax2):
-        ax.grid(alpha=0.3)
+    for axis in (ax1, ax2):
+        axis.grid(alpha=0.3)
     over = f"; pooled over {', '.join(pooled)}" if pooled else ""
+    if record is None:
+        n = ds.sizes["record"]
+        rec_text = f"all {n} records" if n > 1 else f"record {ds['record'].values[0]}"
+    else:
+        rec_text = f"record {ds['record'].values[_record_index(ds, record)]}"
     fig.suptitle(
         f"Peak impact force of the simulations that pounded ({ds.attrs.get('study_name', '')}, "
-        f"record {ds['record'].values[_record_index(ds, record)]}{over})",
+        f"{rec_text}{over})",
         fontsize=9,
     )
     return save(fig, path)

@@ -2,23 +2,32 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from pathlib import Path
+
 import numpy as np
+import pandas as pd
+from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from matplotlib.ticker import NullFormatter
 
-from pound_mc.analysis.plot import finish_axes, save
+from pound_mc.analysis.plot import finish_axes
+from pound_mc.analysis.style import MARKERS, PALETTE, legend_outside, line_style, new_axes, save
+from pound_mc.scene import SimulationResult
 
 __all__ = ["work_precision_chart", "stability_map_chart", "time_history_chart"]
 
 _METHOD_STYLE = {
-    "adaptive": ("C0", "o"),
-    "newmark": ("C1", "s"),
-    "newmark-explicit": ("C2", "^"),
-    "central-difference": ("C3", "v"),
+    "adaptive": (PALETTE[0], MARKERS[0]),
+    "newmark": (PALETTE[1], MARKERS[1]),
+    "newmark-explicit": (PALETTE[2], MARKERS[2]),
+    "central-difference": (PALETTE[3], MARKERS[4]),
 }
 
 
-def work_precision_chart(table, path=None, *, quantity: str = "err_peak_force") -> Figure:
+def work_precision_chart(
+    table: pd.DataFrame, path: str | Path | None = None, *, quantity: str = "err_peak_force"
+) -> Figure:
     """Error against time per simulation (log-log), one curve per method, one panel per scene.
 
     Parameters
@@ -51,7 +60,7 @@ def work_precision_chart(table, path=None, *, quantity: str = "err_peak_force") 
     return save(fig, path)
 
 
-def stability_map_chart(table, path=None) -> Figure:
+def stability_map_chart(table: pd.DataFrame, path: str | Path | None = None) -> Figure:
     """Largest stable ``dt omega_c`` against contact stiffness, predicted and observed.
 
     Parameters
@@ -87,24 +96,58 @@ def stability_map_chart(table, path=None) -> Figure:
     return save(fig, path)
 
 
-def time_history_chart(result, path=None) -> Figure:
+def _contact_floors(result) -> list[tuple[int, int]]:
+    """(left floor, right floor) of each contact, 1-based (the top floors for SDOF pairs)."""
+    contacts = getattr(getattr(result, "scene", None), "contacts", None)
+    n = result.penetration_m.shape[1]
+    if contacts is None or len(contacts) != n:
+        return [(result.disp_left_m.shape[1], result.disp_right_m.shape[1])] * n
+    return [(int(c.left_floor) + 1, int(c.right_floor) + 1) for c in contacts]
+
+
+def time_history_chart(
+    result: SimulationResult,
+    path: str | Path | None = None,
+    *,
+    ax: Sequence[Axes] | None = None,
+) -> Figure:
     """Displacements, penetration and contact force of one simulation against time.
+
+    The top panel draws the displacements of the two floors that meet at each contact (the
+    same height), in the contact's colour: left building solid, right building dashed.
 
     Parameters
     ----------
     result : pound_mc.scene.SimulationResult
         A result run with ``history=True``.
+    path : str or Path, optional
+        Where to write the PNG.
+    ax : sequence of three matplotlib.axes.Axes, optional
+        Where to draw the displacements, the penetrations and the forces.
     """
     t = result.time_s
-    fig = Figure(figsize=(8.0, 7.0), layout="constrained")
-    ax1, ax2, ax3 = fig.subplots(3, 1, sharex=True)
-    ax1.plot(t, result.disp_left_m[:, -1] * 1e3, lw=0.8, label="left (top floor)")
-    ax1.plot(t, result.disp_right_m[:, -1] * 1e3, lw=0.8, label="right (top floor)")
+    fig, (ax1, ax2, ax3) = new_axes(ax, (9.0, 7.0), nrows=3)
+    if ax is None:
+        ax2.sharex(ax1)
+        ax3.sharex(ax1)
+    floors = _contact_floors(result)
+    for c, (fl, fr) in enumerate(floors):
+        style = line_style(c)
+        colour = style["color"]
+        many = len(floors) > 1
+        where = f"contact {c + 1}: " if many else ""
+        ax1.plot(t, result.disp_left_m[:, fl - 1] * 1e3, lw=0.8, color=colour,
+                 label=f"{where}left, floor {fl}")  # fmt: skip
+        ax1.plot(t, result.disp_right_m[:, fr - 1] * 1e3, lw=0.8, color=colour, ls="--",
+                 label=f"{where}right, floor {fr}")  # fmt: skip
+        ax2.plot(t, result.penetration_m[:, c] * 1e3, lw=0.8, color=colour,
+                 label=f"contact {c + 1}")  # fmt: skip
+        ax3.plot(t, result.force_N[:, c] / 1e6, lw=0.8, color=colour, label=f"contact {c + 1}")
     ax1.set_ylabel("displacement [mm]")
-    ax1.legend(fontsize=8)
-    for c in range(result.penetration_m.shape[1]):
-        ax2.plot(t, result.penetration_m[:, c] * 1e3, lw=0.8, label=f"contact {c + 1}")
-        ax3.plot(t, result.force_N[:, c] / 1e6, lw=0.8, label=f"contact {c + 1}")
+    legend_outside(ax1, size=7)
+    if len(floors) > 1:
+        legend_outside(ax2, size=7)
+        legend_outside(ax3, size=7)
     ax2.axhline(0.0, color="0.5", lw=0.6)
     ax2.set_ylabel("penetration delta [mm]")
     ax3.set_ylabel("contact force [MN]")
@@ -112,6 +155,7 @@ def time_history_chart(result, path=None) -> Figure:
     o = result.outputs
     ax1.set_title(
         f"peak force {o['peak_force'] / 1e6:.4g} MN (continuous maximum), "
-        f"{int(o['impacts'])} impacts, status {result.status}"
+        f"{int(o['impacts'])} impacts, status {result.status}",
+        fontsize=9,
     )
     return save(fig, path)

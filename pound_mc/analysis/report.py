@@ -15,10 +15,13 @@ import os
 from pathlib import Path
 
 import numpy as np
+import xarray as xr
+from matplotlib.figure import Figure
 
 from pound_mc.analysis import (
     accessor,  # noqa: F401  (registers ds.pound)
     plot,
+    profiles,
     risk,
     risk_chart,
 )
@@ -43,7 +46,7 @@ pre { background: #f7f7f7; border: 1px solid #ddd; padding: 8px; font-size: 0.85
 """.strip()
 
 
-def chart_png(fig, dpi: int = 100) -> tuple[bytes, int, int]:
+def chart_png(fig: Figure, dpi: int = 100) -> tuple[bytes, int, int]:
     """PNG bytes of ``fig`` and its width and height [px]."""
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=dpi)
@@ -78,13 +81,13 @@ def _summary_html(ds) -> str:
     total = int(ds["status"].size)
     rows = [_row("status", "simulations", "share", header=True)]
     for name, n in counts.items():
-        rows.append(_row(name, n, f"{100.0 * n / total:.2f} %"))
+        rows.append(_row(name, int(n), f"{100.0 * n / total:.2f} %"))
     energy = ds.pound.energy_summary()
     ok = ds.pound.ok
     pounded = int(((ds["impacts"] > 0) & ok).sum())
     erows = [
         _row("quantity", "value", header=True),
-        _row("simulations with status ok", energy["n"]),
+        _row("simulations with status ok", int(energy["n"])),
         _row("median |energy residual| [-]", energy["median"]),
         _row("95th percentile |energy residual| [-]", energy["p95"]),
         _row("largest |energy residual| [-]", energy["max"]),
@@ -115,7 +118,7 @@ def _provenance_html(ds) -> str:
     return f'<h2>Provenance</h2><table id="provenance">{"".join(rows)}</table>'
 
 
-def report_html(ds, *, base_dir=None, history: bool = True) -> str:
+def report_html(ds: xr.Dataset, *, base_dir: str | Path | None = None, history: bool = True) -> str:
     """The results page of a study dataset as one HTML string.
 
     Parameters
@@ -131,69 +134,101 @@ def report_html(ds, *, base_dir=None, history: bool = True) -> str:
     name = ds.attrs.get("study_name", "study")
     description = ""
     figures = []
-    fig = plot.spectrum_chart(ds)
     figures.append(
         _figure_html(
             "spectrum",
-            fig,
+            plot.spectrum_chart(ds),
             "Impact force spectrum: median peak impact force over the samples (line) and the "
-            "5-95 % range (band) against the first grid axis, one line per value of the second.",
+            "5-95 % range (band) against the first grid axis, one line per value of the second; "
+            "the median over the records of each record's values.",
         )
     )
     if plot.GAP_DIM in ds.dims:
-        fig = plot.probability_chart(ds, base_dir=base_dir)
-        figures.append(
-            _figure_html(
-                "probability",
-                fig,
-                "Pounding probability: the fraction of samples with at least one impact against "
-                "the initial gap; vertical lines mark the gaps the ABS, SRSS and DDC separation "
-                "rules ask for.",
+        caption = (
+            "Pounding probability: the fraction of samples with at least one impact against "
+            "the initial gap"
+            + (
+                "."
+                if plot.CONTACT_DIM in ds.dims
+                else "; vertical lines mark the gaps the ABS, SRSS and DDC separation rules "
+                "ask for."
             )
         )
+    else:
+        caption = (
+            "Pounding probability: the fraction of samples with at least one impact against "
+            "the first grid axis (the study has no gap axis)."
+        )
+    if plot._grid_dims(ds):
+        figures.append(
+            _figure_html("probability", plot.probability_chart(ds, base_dir=base_dir), caption)
+        )
     intensity = [d for d in risk.INTENSITY_DIMS if d in ds.dims]
-    if intensity and plot.GAP_DIM in ds.dims and ds.sizes[plot.GAP_DIM] > 1:
-        fig = risk_chart.required_gap_chart(ds, base_dir=base_dir)
+    if plot.GAP_DIM in ds.dims and ds.sizes[plot.GAP_DIM] > 1:
         figures.append(
             _figure_html(
                 "required-gap",
-                fig,
+                risk_chart.required_gap_chart(ds, base_dir=base_dir),
                 "Required gap: pounding probability over records and samples against the gap, "
-                "one line per intensity, the ABS, SRSS and DDC rules, and the smallest gap with "
-                "probability at or below 0.1 (diamonds, Wilson 95 % interval).",
+                "one line per value of the other grid axis, the separation rules where they "
+                "apply, and the smallest gap with probability at or below 0.1 (diamonds, "
+                "Wilson 95 % interval).",
             )
         )
     if intensity:
-        fig = risk_chart.fragility_panels(ds)
         figures.append(
             _figure_html(
                 "fragility",
-                fig,
+                risk_chart.fragility_panels(ds),
                 "Fragility: fraction of the simulations that pounded at each intensity (points), "
                 "the lognormal fit by maximum likelihood and its 95 % bootstrap band.",
             )
         )
     if int(((ds["impacts"] > 0) & ds.pound.ok).sum()):
-        fig = plot.distribution_chart(ds)
         figures.append(
             _figure_html(
                 "distribution",
-                fig,
+                plot.distribution_chart(ds),
                 "Distribution of the peak impact force of the simulations that pounded.",
             )
         )
+    if plot.CONTACT_DIM in ds.dims and "contact_peak_force" in ds:
+        figures.append(
+            _figure_html(
+                "contacts",
+                profiles.contacts_chart(ds),
+                "Peak impact force at each contact against the contact's elevation: median "
+                "over records and samples and the 5-95 % band, one line per value of the first "
+                "grid axis.",
+            )
+        )
+    for quantity, names in profiles.PROFILE_VARIABLES.items():
+        if any(name in ds for name in names):
+            figures.append(
+                _figure_html(
+                    quantity,
+                    profiles.profile_chart(ds, quantity=quantity),
+                    f"Peak {quantity} of each building (per storey for shear buildings): "
+                    "median over records and samples and the 5-95 % band.",
+                )
+            )
     if history:
-        force = ds["peak_force"].where(ds.pound.ok).fillna(-1.0)
-        flat = int(np.argmax(force.values))
-        if force.values.flat[flat] > 0:
-            idx = dict(zip(force.dims, np.unravel_index(flat, force.shape), strict=True))
-            coords = {d: ds[d].values[i] for d, i in idx.items() if d not in ("record", "sample")}
+        try:
+            index = ds.pound.worst_index("peak_force")
+        except ValueError:
+            index = None
+        if index is not None and float(ds["peak_force"].isel(index)) > 0:
+            coords = {d: ds[d].values[i] for d, i in index.items() if d not in ("record", "sample")}
             try:
-                fig = ds.pound.plot.history(
-                    record=int(idx["record"]),
-                    sample=int(idx["sample"]),
-                    study_path=None if base_dir is None else Path(base_dir) / "study.toml",
-                    **coords,
+                fig = (
+                    ds.pound.plot.history(
+                        record=index["record"],
+                        sample=index["sample"],
+                        study_path=None if base_dir is None else Path(base_dir) / "study.toml",
+                        **coords,
+                    )
+                    .ravel()[0]
+                    .figure
                 )
             except InputError as exc:  # records not readable here: say so on the page
                 figures.append(f"<p>(No time history: {html.escape(str(exc))})</p>")
@@ -203,8 +238,8 @@ def report_html(ds, *, base_dir=None, history: bool = True) -> str:
                         "history",
                         fig,
                         "Time history of the simulation with the largest peak impact force, "
-                        "run again from the study text: top-floor displacements, penetration "
-                        "and contact force.",
+                        "run again from the study text: displacements of the floors that meet, "
+                        "penetration and contact force.",
                     )
                 )
     for line in str(ds.attrs.get("study_text", "")).splitlines():
@@ -229,7 +264,13 @@ def report_html(ds, *, base_dir=None, history: bool = True) -> str:
     )
 
 
-def write_report(ds, path: str | Path, *, base_dir=None, history: bool = True) -> Path:
+def write_report(
+    ds: xr.Dataset,
+    path: str | Path,
+    *,
+    base_dir: str | Path | None = None,
+    history: bool = True,
+) -> Path:
     """Write the results page (:func:`report_html`) to ``path`` atomically."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)

@@ -11,6 +11,7 @@ and its confidence interval.
 from __future__ import annotations
 
 import itertools
+import textwrap
 from pathlib import Path
 
 import numpy as np
@@ -21,6 +22,7 @@ from pound_mc.analysis.fragility import fit_fragility
 from pound_mc.analysis.fragility_chart import fragility_chart
 from pound_mc.analysis.plot import _hold, _line_label, probability_chart, save
 from pound_mc.analysis.risk import GAP_DIM, _counts, _intensity_dim, required_gap
+from pound_mc.analysis.style import axis_label, legend_outside, value_text
 from pound_mc.errors import InputError
 
 __all__ = ["fragility_panels", "required_gap_chart"]
@@ -68,7 +70,7 @@ def fragility_panels(
     fig = Figure(figsize=(4.6 * ncols, 3.6 * nrows), layout="constrained")
     axes = fig.subplots(nrows, ncols, squeeze=False).ravel()
     x = np.asarray(ds[dim].values, dtype=float)
-    im_label = f"{ds[dim].attrs.get('long_name', dim)} [g]"
+    im_label = axis_label(ds, dim)
     for ax, combo in zip(axes, combos, strict=False):
         where = {**held, **dict(zip(free, combo, strict=True))}
         z = n_event.isel(where).transpose(dim).values
@@ -78,13 +80,18 @@ def fragility_panels(
             fit = fit_fragility(x, z, n, n_boot=n_boot, seed=seed)
         except InputError as exc:
             ax.plot(x, np.divide(z, n, out=np.full(x.shape, np.nan), where=n > 0), "o", c="k")
-            ax.set_title(f"{title}\nno fit: {exc.message[:70]}...", fontsize=7)
+            why = textwrap.shorten(exc.message, 150, placeholder=" ...")
+            ax.set_title(f"{title}\n" + textwrap.fill(f"no fit: {why}", 60), fontsize=7)
             ax.set_xlabel(im_label)
             ax.set_ylabel(f"P({event} | IM)")
             ax.set_ylim(-0.02, 1.02)
             continue
-        fragility_chart(fit, ax=ax, im_label=im_label, event_label=event)
-        ax.set_title(title, fontsize=8)
+        fragility_chart(fit, ax=ax, im_label=im_label, event_label=event, legend=False)
+        ax.set_title(f"{title}\ntheta = {fit.theta:.3g}, beta = {fit.beta:.3g}", fontsize=8)
+        if not fig.legends:
+            handles, labels = ax.get_legend_handles_labels()
+            generic = [label.split(":")[0] for label in labels]  # the fit's numbers: per panel
+            fig.legend(handles, generic, loc="outside lower center", ncols=3, fontsize=8)
     for ax in axes[len(combos) :]:
         ax.set_visible(False)
     fig.suptitle(
@@ -126,7 +133,7 @@ def required_gap_chart(
         rules, then the target line and one errorbar marker per line with a required gap.
     """
     if GAP_DIM not in ds.dims:
-        raise InputError("the required gap needs a study with the gap on its grid")
+        raise InputError("does not apply: the required gap needs a study with the gap on its grid")
     fig = probability_chart(ds, None, line=line, sel=sel, rules=rules, base_dir=base_dir)
     ax = fig.axes[0]
     found = required_gap(ds, probability, rules=False)
@@ -138,8 +145,8 @@ def required_gap_chart(
     hold = _hold(ds, [d for d in rest if d != line], sel)
     labels = {"pounding probability": hold}
     if line is not None:
-        labels = {_line_label(ds, line, i): {**hold, line: i} for i in range(ds.sizes[line])}
-    drawn = [ln for ln in ax.lines if ln.get_marker() == "o"]
+        labels = {value_text(ds, line, i): {**hold, line: i} for i in range(ds.sizes[line])}
+    drawn = [ln for ln in ax.lines if ln.get_label() in labels]
     first = True
     for ln in drawn:
         where = labels.get(ln.get_label())
@@ -163,7 +170,7 @@ def required_gap_chart(
             else None,
         )
         first = False
-    ax.legend(fontsize=7, loc="upper right")
+    legend_outside(ax, title=axis_label(ds, line) if line is not None else None)
     ax.set_title(
         ax.get_title() + f"\ndiamonds: smallest gap with P <= {probability:g} (bars: Wilson "
         "interval)",

@@ -14,7 +14,7 @@ import os
 import sys
 
 from pound_mc._version import __version__
-from pound_mc.cli.commands import COMMANDS, add_commands
+from pound_mc.cli.commands import COMMANDS, HelpFormatter, add_commands
 from pound_mc.errors import InputError
 
 
@@ -23,8 +23,10 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="pound-mc",
         description=(
-            "Monte Carlo studies of earthquake-induced pounding between adjacent buildings."
+            "Monte Carlo studies of earthquake-induced pounding between adjacent buildings. "
+            "Start with: pound-mc init quickstart && pound-mc run quickstart.toml"
         ),
+        formatter_class=HelpFormatter,
     )
     parser.add_argument("--version", action="version", version=f"pound-mc {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")

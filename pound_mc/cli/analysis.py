@@ -14,7 +14,7 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
-from pound_mc.analysis import plot, plot_numerics, risk_chart
+from pound_mc.analysis import plot, plot_numerics, profiles, risk_chart
 from pound_mc.analysis.report import write_report
 from pound_mc.analysis.risk import fragility
 from pound_mc.errors import InputError
@@ -41,18 +41,34 @@ def _record(value):
 
 
 def _open_dataset(path: Path):
+    """The study dataset at ``path``, or an :class:`InputError` saying what is wrong with it."""
     if not path.is_file():
         raise InputError("no such file", file=str(path))
     try:
-        return xr.open_dataset(path)
-    except (OSError, ValueError) as exc:
-        raise InputError(f"not a readable netCDF dataset: {exc}", file=str(path)) from None
+        ds = xr.open_dataset(path)
+    except (OSError, ValueError, TypeError):
+        raise InputError(
+            "is not a netCDF dataset (pound-mc run writes one as OUT/NAME.nc)", file=str(path)
+        ) from None
+    missing = [v for v in ("peak_force", "impacts", "status") if v not in ds]
+    if missing:
+        ds.close()
+        raise InputError(
+            f"is not a pound-mc study dataset: no variable {missing[0]!r}", file=str(path)
+        )
+    return ds
 
 
 def _read_csv(path: Path, columns):
+    """The CSV table at ``path`` with ``columns``, or an :class:`InputError`."""
     if not path.is_file():
         raise InputError("no such file", file=str(path))
-    table = pd.read_csv(path)
+    try:
+        table = pd.read_csv(path)
+    except (UnicodeDecodeError, pd.errors.ParserError, pd.errors.EmptyDataError, OSError):
+        raise InputError(
+            f"is not a CSV table (expected the columns {', '.join(columns)})", file=str(path)
+        ) from None
     missing = [c for c in columns if c not in table]
     if missing:
         raise InputError(f"is not the right CSV: no column {missing[0]!r}", file=str(path))
@@ -86,25 +102,30 @@ def draw(path: str | Path, kind: str, *, out=None, sel=None, record=None, sample
     with ds:
         ds.load()
         if kind == "spectrum":
-            if sel:  # held dims: the spectrum chart draws their first (here: only) value
-                ds = _hold_first(ds, sel)
             return plot.spectrum_chart(
-                ds, out, line=kwargs.get("line"), record=0 if record is None else record
+                ds,
+                out,
+                line=kwargs.get("line"),
+                record="median" if record is None else record,
+                sel=sel,
             )
+        if kind == "contacts":
+            return profiles.contacts_chart(ds, out, line=kwargs.get("line"))
+        if kind in ("drift", "ductility"):
+            return profiles.profile_chart(ds, out, quantity=kind, line=kwargs.get("line"))
         if kind == "probability":
             return plot.probability_chart(
                 ds, out, record=record, sel=sel, line=kwargs.get("line"), base_dir=path.parent
             )
         if kind == "distribution":
-            return plot.distribution_chart(
-                ds, out, record=0 if record is None else record, sel=sel, by=kwargs.get("by")
-            )
+            return plot.distribution_chart(ds, out, record=record, sel=sel, by=kwargs.get("by"))
         if kind == "restitution":
-            return ds.pound.plot.restitution(out)
+            return ds.pound.plot.restitution(out).figure
         if kind == "history":
-            return ds.pound.plot.history(
+            axes = ds.pound.plot.history(
                 out, record=0 if record is None else record, sample=sample, **sel
             )
+            return np.ravel(axes)[0].figure
         if kind == "fragility":
             return risk_chart.fragility_panels(
                 ds, out, im=kwargs.get("im"), event=kwargs.get("event") or "pounding", sel=sel
@@ -119,11 +140,6 @@ def draw(path: str | Path, kind: str, *, out=None, sel=None, record=None, sample
                 base_dir=path.parent,
             )
     raise ValueError(f"unknown kind {kind!r}")  # pragma: no cover - argparse checks it
-
-
-def _hold_first(ds, sel):
-    """``ds`` with the dims in ``sel`` reduced to the value nearest ``sel[dim]`` (kept as dims)."""
-    return ds.isel({dim: [plot._nearest_index(ds, dim, v)] for dim, v in sel.items()})
 
 
 def plot_command(args) -> int:
@@ -151,7 +167,8 @@ def plot_command(args) -> int:
     except InputError as exc:
         raise InputError(exc.message, file=args.file, key=exc.key) from None
     except (ValueError, KeyError, IndexError) as exc:
-        raise InputError(str(exc).strip("'\""), file=args.file) from None
+        text = str(exc).strip("'\"").splitlines()
+        raise InputError(text[0] if text else type(exc).__name__, file=args.file) from None
     print(f"wrote {out}")
     return 0
 
@@ -163,7 +180,12 @@ def report_command(args) -> int:
     ds = _open_dataset(path)
     with ds:
         ds.load()
-        write_report(ds, out, base_dir=path.parent)
+        try:
+            write_report(ds, out, base_dir=path.parent)
+        except InputError as exc:
+            raise InputError(exc.message, file=str(path), key=exc.key) from None
+        except OSError as exc:
+            raise InputError(f"cannot be written: {exc.strerror}", file=str(out)) from None
     print(f"wrote {out}")
     return 0
 
@@ -185,8 +207,6 @@ def fragility_command(args) -> int:
     ds = _open_dataset(path)
     with ds:
         ds.load()
-        if "peak_force" not in ds:
-            raise InputError("is not a pound-mc study dataset (no peak_force)", file=str(path))
         try:
             fit = fragility(ds, args.im, args.event, n_boot=args.n_boot)
         except InputError as exc:

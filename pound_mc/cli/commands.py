@@ -12,7 +12,7 @@ import argparse
 from pound_mc.physics.materials import MATERIALS
 from pound_mc.physics.relations import RELATIONS
 
-__all__ = ["COMMANDS", "KINDS", "add_commands"]
+__all__ = ["COMMANDS", "KINDS", "HelpFormatter", "add_commands"]
 
 #: Sub-command -> (module, function) that runs it, called with the parsed arguments.
 COMMANDS: dict[str, tuple[str, str]] = {
@@ -30,6 +30,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "plot": ("pound_mc.cli.analysis", "plot_command"),
     "report": ("pound_mc.cli.analysis", "report_command"),
     "fragility": ("pound_mc.cli.analysis", "fragility_command"),
+    "init": ("pound_mc.cli.study", "init_command"),
 }
 
 #: Chart kinds of ``pound-mc plot``.
@@ -43,26 +44,49 @@ KINDS = (
     "history",
     "fragility",
     "required-gap",
+    "contacts",
+    "drift",
+    "ductility",
 )
 
 PLOT_DESCRIPTION = """\
-``pound-mc plot FILE --kind KIND`` draws one chart.  What ``FILE`` is depends on the kind:
+Draw one chart. What FILE is depends on the kind:
 
-==================  ======================================================================
-kind                file
-==================  ======================================================================
-``spectrum``        a study dataset (``pound-mc run``'s ``.nc``)
-``probability``     a study dataset with the gap on its grid
-``distribution``    a study dataset
-``restitution``     a study dataset (its sampled ``e`` marked) or nothing: ``-``
-``work-precision``  ``pound-mc bench``'s CSV (``outputs/bench.csv``)
-``stability``       ``pound-mc stability``'s CSV (``outputs/stability.csv``)
-``history``         a scene file (``.toml``), or a study dataset with ``--sel``/``--sample``:
-                    that simulation is rebuilt from the dataset's study text and run again
-``fragility``       a study dataset with an intensity axis (or ``--im DIM``); ``--event``
-``required-gap``    a study dataset with the gap on its grid; ``--probability``
-==================  ======================================================================
+  spectrum        a study dataset (the .nc of pound-mc run): median peak force against a
+                  grid axis, the median over records (--record N for one, --record each for
+                  one line per record)
+  probability     a study dataset: pounding probability against the gap (or the first
+                  grid axis)
+  distribution    a study dataset: peak force box plots and histograms per value of --by
+  restitution     a study dataset (its sampled e marked) or nothing: -
+  work-precision  the CSV of pound-mc bench (outputs/bench.csv)
+  stability       the CSV of pound-mc stability (outputs/stability.csv)
+  history         a scene file (.toml), or a study dataset with --sel/--sample: that
+                  simulation is rebuilt from the dataset's study text and run again
+  fragility       a study dataset with an intensity axis (or --im DIM); --event
+  required-gap    a study dataset with the gap on its grid; --probability
+  contacts        a shear-building study dataset: peak force at each contact over height
+  drift           a study dataset with inelastic buildings: peak storey drift profiles
+  ductility       a study dataset with inelastic buildings: peak ductility profiles
+
+A kind that does not apply to the file says so in one line (exit status 2).
 """
+
+
+class HelpFormatter(argparse.RawDescriptionHelpFormatter):
+    """Descriptions kept as written; every option's default shown unless its help says it."""
+
+    def _get_help_string(self, action: argparse.Action) -> str:
+        text = action.help or ""
+        default = action.default
+        if (
+            "default" in text
+            or "%(default)" in text
+            or default in (None, False, [], argparse.SUPPRESS)
+            or not action.option_strings
+        ):
+            return text
+        return text + " (default: %(default)s)"
 
 
 def _json_and_plot(parser: argparse.ArgumentParser, plot_help: str) -> None:
@@ -73,8 +97,18 @@ def _json_and_plot(parser: argparse.ArgumentParser, plot_help: str) -> None:
 
 def add_commands(sub: argparse._SubParsersAction) -> None:
     """Add every sub-command to the ``pound-mc`` parser, in the order of ``--help``."""
-    for group in (_physics, _records, _scene, _study, _analysis):
+    for group in (_study, _analysis, _physics, _records, _scene):
         group(sub)
+    _use_formatter(sub)
+
+
+def _use_formatter(sub: argparse._SubParsersAction) -> None:
+    """Give every sub-command's parser (nested ones too) :class:`HelpFormatter`."""
+    for parser in sub.choices.values():
+        parser.formatter_class = HelpFormatter
+        for action in parser._actions:
+            if isinstance(action, argparse._SubParsersAction):
+                _use_formatter(action)
 
 
 def _physics(sub: argparse._SubParsersAction) -> None:
@@ -96,7 +130,7 @@ def _physics(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(handler="calibrate")
 
     p = sub.add_parser("droptest", help="virtual drop test of the seed's experiment")
-    p.add_argument("--material", default="concrete", choices=MATERIALS)
+    p.add_argument("--material", default="concrete", choices=MATERIALS, help="ball material")
     p.add_argument("--mass", type=float, help="ball mass [kg] (default: middle ball of Table 1)")
     p.add_argument("--velocity", type=float, default=1.0, help="impact velocity [m/s]")
     p.add_argument("--beta", type=float, help="impact stiffness (default: Table 3 mean)")
@@ -159,7 +193,13 @@ def _scene(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--out", default="outputs", metavar="DIR", help="folder for CSV and PNG")
     p.add_argument("--repeats", type=int, default=7, help="timed runs per point (median)")
     p.add_argument("--methods", nargs="+", metavar="METHOD", help="methods to run (all)")
-    p.add_argument("--scenes", nargs="+", metavar="SCENE", default=["B1", "shear-3-5"])
+    p.add_argument(
+        "--scenes",
+        nargs="+",
+        metavar="SCENE",
+        default=["B1", "shear-3-5"],
+        help="benchmark scenes (default: B1 shear-3-5)",
+    )
     p.add_argument(
         "--head-to-head-only",
         action="store_true",
@@ -177,7 +217,7 @@ def _study(sub: argparse._SubParsersAction) -> None:
     """Studies: ``run`` and ``check``."""
     p = sub.add_parser("run", help="run a study and write <out>/<name>.nc and a spectrum chart")
     p.add_argument("study", metavar="STUDY.toml")
-    p.add_argument("--out", default="outputs", metavar="DIR", help="output folder (outputs)")
+    p.add_argument("--out", default="outputs", metavar="DIR", help="output folder")
     p.add_argument("--threads", type=int, metavar="N", help="numba threads (in-process run)")
     p.add_argument(
         "--workers",
@@ -223,6 +263,19 @@ def _study(sub: argparse._SubParsersAction) -> None:
         help="building pairs (default both)",
     )
     p.set_defaults(handler="compile")
+    p = sub.add_parser(
+        "init",
+        help="write a shipped study (and its scene files) into the current folder",
+        description=(
+            "Write a shipped study file NAME.toml, and the scene files it reads, into the "
+            "current folder (or --dir), ready for pound-mc check and pound-mc run. Without "
+            "NAME, list the shipped studies."
+        ),
+    )
+    p.add_argument("name", nargs="?", metavar="NAME", help="shipped study (e.g. quickstart)")
+    p.add_argument("--dir", default=".", metavar="DIR", help="folder to write into")
+    p.add_argument("--force", action="store_true", help="overwrite files that exist")
+    p.set_defaults(handler="init")
 
 
 def _analysis(sub: argparse._SubParsersAction) -> None:
@@ -231,7 +284,7 @@ def _analysis(sub: argparse._SubParsersAction) -> None:
         "plot",
         help="draw a chart of a study dataset, a bench/stability CSV or a scene",
         description=PLOT_DESCRIPTION,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
+        formatter_class=HelpFormatter,
     )
     p.add_argument("file", metavar="FILE", help="RESULT.nc, bench.csv, stability.csv or SCENE.toml")
     p.add_argument("--kind", required=True, choices=KINDS, help="which chart")
@@ -243,8 +296,12 @@ def _analysis(sub: argparse._SubParsersAction) -> None:
         metavar="DIM=VALUE",
         help="hold a grid dimension at a value (nearest); repeatable",
     )
-    p.add_argument("--record", metavar="N|NAME", help="record index or name")
-    p.add_argument("--sample", type=int, default=0, metavar="N", help="sample (history; 0)")
+    p.add_argument(
+        "--record",
+        metavar="N|NAME",
+        help="record index or name; spectrum: also 'each' (default: all records pooled)",
+    )
+    p.add_argument("--sample", type=int, default=0, metavar="N", help="sample index (history)")
     p.add_argument("--line", metavar="DIM", help="dimension drawn as one line per value")
     p.add_argument("--by", metavar="DIM", help="dimension of the distribution chart's groups")
     p.add_argument(
@@ -252,7 +309,7 @@ def _analysis(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--event", default="pounding", help="fragility event (default pounding)")
     p.add_argument(
-        "--probability", type=float, default=0.1, help="target probability (required-gap; 0.1)"
+        "--probability", type=float, default=0.1, help="target probability (required-gap)"
     )
     p.set_defaults(handler="plot")
 

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import sys
 import time
+from importlib import resources
 from pathlib import Path
 
 import xarray as xr
@@ -161,4 +162,42 @@ def compile_command(args) -> int:
     rows = compile_kernels(args.methods, args.laws, args.structures, stream=sys.stdout)
     total = sum(r["seconds"] for r in rows)
     print(f"{len(rows)} combinations ready in {total:.1f} s")
+    return 0
+
+
+def shipped_studies() -> dict[str, Path]:
+    """The study files shipped with the package (``studies/*.toml``), by name."""
+    folder = Path(str(resources.files("pound_mc") / "studies"))
+    return {p.stem: p for p in sorted(folder.glob("*.toml"))}
+
+
+def init_command(args) -> int:
+    """``pound-mc init [NAME]``: write a shipped study (and the scenes it reads) into a folder."""
+    studies = shipped_studies()
+    if not args.name:
+        print("shipped studies (pound-mc init NAME writes NAME.toml here):")
+        for name, path in studies.items():
+            first = next((ln for ln in path.read_text().splitlines() if ln.startswith("#")), "#")
+            print(f"  {name:20s} {first.lstrip('# ').strip()}")
+        return 0
+    name = args.name.removesuffix(".toml")
+    if name not in studies:
+        raise InputError(f"no shipped study {name!r}; there are: {', '.join(studies)}")
+    source = studies[name]
+    text = source.read_text(encoding="utf-8")
+    out = Path(args.dir)
+    targets = {out / source.name: text}
+    for scene in sorted(source.parent.glob("scenes/*.toml")):
+        if f"scenes/{scene.name}" in text:
+            targets[out / "scenes" / scene.name] = scene.read_text(encoding="utf-8")
+    existing = [str(p) for p in targets if p.exists()]
+    if existing and not args.force:
+        raise InputError("exists; pass --force to overwrite it", file=existing[0])
+    for path, content in targets.items():
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(content, encoding="utf-8")
+        print(f"wrote {path}")
+    first = next(iter(targets))
+    print(f"next: pound-mc check {first} && "
+          f"pound-mc run {first}")  # fmt: skip
     return 0

@@ -139,7 +139,7 @@ class Study:
 
     @property
     def shape(self) -> tuple[int, ...]:
-        """Shape of the per-simulation arrays: (record, *grid axes, sample)."""
+        """Shape of the per-simulation arrays: ``(record, *grid axes, sample)``."""
         return (len(self.records), *(v.size for v in self.grid.values()), self.n)
 
     @property

@@ -1,0 +1,44 @@
+"""Sphinx configuration of the pound-mc documentation (``sphinx-build -W docs docs/_build``)."""
+
+import shutil
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+from pound_mc._version import __version__  # noqa: E402
+
+# the notebook lives with the studies; it is shown as it is stored, not executed
+GENERATED = Path(__file__).resolve().parent / "_generated"
+GENERATED.mkdir(exist_ok=True)
+shutil.copyfile(ROOT / "studies" / "analysis.ipynb", GENERATED / "analysis.ipynb")
+
+project = "pound-mc"
+author = "pound-mc developers"
+copyright = "2026, pound-mc developers"
+version = release = __version__
+
+extensions = [
+    "myst_nb",
+    "sphinx.ext.autodoc",
+    "sphinx.ext.napoleon",
+    "sphinx.ext.mathjax",
+]
+source_suffix = {".md": "myst-nb", ".ipynb": "myst-nb"}
+exclude_patterns = ["_build", "jupyter_execute"]
+nb_execution_mode = "off"
+myst_enable_extensions = ["dollarmath"]
+myst_heading_anchors = 3
+suppress_warnings = ["myst.header", "myst.xref_missing"]
+
+napoleon_google_docstring = False
+napoleon_numpy_docstring = True
+napoleon_use_rtype = False
+napoleon_use_ivar = True
+autodoc_member_order = "bysource"
+autodoc_typehints = "description"
+autodoc_default_options = {"members": True, "undoc-members": False}
+
+html_theme = "alabaster"
+html_title = f"pound-mc {release}"

@@ -1,0 +1,177 @@
+"""One look for every chart: colours, markers, units, labels and legends.
+
+Every chart of :mod:`pound_mc.analysis` takes its line styles, its axis labels and its legend
+placement from here, so that charts read alike:
+
+- colours from the Okabe-Ito palette (safe for the common colour-vision deficiencies), each line
+  with its own marker, and a new line style every seven lines, so no two lines look alike;
+- one choice of units in charts: lengths (gaps, displacements, penetrations) in mm, forces in
+  MN, intensities in g, everything else in the dataset's own units;
+- units stated once, in brackets after the name (``"initial separation gap [mm]"``);
+- legends outside the data (right of the axes), tick labels turned when there are many.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
+
+__all__ = [
+    "PALETTE",
+    "MARKERS",
+    "UNITS",
+    "line_style",
+    "chart_units",
+    "axis_label",
+    "value_text",
+    "legend_outside",
+    "fit_tick_labels",
+    "new_axes",
+    "save",
+]
+
+#: Okabe & Ito (2008) colour-blind-safe colours (yellow left out: too pale on white).
+PALETTE = ("#0072B2", "#E69F00", "#009E73", "#D55E00", "#CC79A7", "#56B4E9", "#000000")
+#: Markers, one per line in turn.
+MARKERS = ("o", "s", "^", "D", "v", "P", "X", "*")
+_DASHES = ("-", "--", ":")
+
+#: Chart units of a dataset's units: ``{dataset units: (chart units, factor)}``.
+UNITS = {"m": ("mm", 1e3), "N": ("MN", 1e-6), "N s": ("kN s", 1e-3), "J": ("kJ", 1e-3)}
+
+
+def line_style(k: int) -> dict:
+    """Colour, marker and line style of the ``k``-th line of a chart (all distinct up to 21).
+
+    Returns
+    -------
+    dict
+        ``color``, ``marker`` and ``linestyle``, as :meth:`matplotlib.axes.Axes.plot` takes them.
+    """
+    n = len(PALETTE)
+    return {
+        "color": PALETTE[k % n],
+        "marker": MARKERS[k % len(MARKERS)],
+        "linestyle": _DASHES[(k // n) % len(_DASHES)],
+    }
+
+
+def chart_units(units: str | None) -> tuple[str, float]:
+    """Units a chart draws a quantity stored in ``units`` in, and the factor to them."""
+    units = (units or "").strip()
+    if units in UNITS:
+        return UNITS[units]
+    return ("-" if units in ("", "1") else units), 1.0
+
+
+def _name_and_units(attrs: dict, fallback: str) -> tuple[str, str]:
+    name = str(attrs.get("long_name", fallback))
+    units = str(attrs.get("units", ""))
+    if name.endswith(" in units of g"):  # dimensionless multiples of g: say [g] once
+        return name[: -len(" in units of g")], "g"
+    return name, units
+
+
+def axis_label(ds: xr.Dataset, name: str) -> str:
+    """``"long name [chart units]"`` of variable or coordinate ``name`` of ``ds``."""
+    long_name, units = _name_and_units(ds[name].attrs, name)
+    if name == "contact_material":  # names, not numbers: no units
+        return long_name
+    shown, _ = chart_units(units)
+    return f"{long_name} [{shown}]"
+
+
+def scale_of(ds: xr.Dataset, name: str) -> float:
+    """Factor from ``ds[name]``'s stored units to its chart units."""
+    return chart_units(_name_and_units(ds[name].attrs, name)[1])[1]
+
+
+def value_text(ds: xr.Dataset, dim: str, i: int) -> str:
+    """The ``i``-th value of coordinate ``dim`` as text, in chart units (``"10 mm"``).
+
+    A material axis (``contact_material`` with a ``material`` variable of names) gives the name.
+    """
+    if dim == "contact_material" and "material" in ds and ds["material"].dims == (dim,):
+        return str(ds["material"].values[i])
+    value = ds[dim].values[i]
+    if not isinstance(value, float | np.floating | int | np.integer):
+        return str(value)
+    _, units = _name_and_units(ds[dim].attrs, dim)
+    shown, factor = chart_units(units)
+    return f"{float(value) * factor:.4g}" + ("" if shown == "-" else f" {shown}")
+
+
+def legend_outside(ax: Axes, *, title: str | None = None, size: float = 8, **kwargs) -> None:
+    """Legend to the right of the axes, outside the data (nothing drawn if no labels)."""
+    handles, labels = ax.get_legend_handles_labels()
+    if not handles:
+        return
+    ax.legend(
+        loc="upper left",
+        bbox_to_anchor=(1.02, 1.0),
+        borderaxespad=0.0,
+        fontsize=size,
+        title=title,
+        title_fontsize=size,
+        frameon=False,
+        **kwargs,
+    )
+
+
+def fit_tick_labels(ax: Axes, n: int, *, axis: str = "x", most: int = 6) -> None:
+    """Turn the tick labels of ``axis`` by 45 degrees when there are more than ``most``."""
+    if n > most:
+        ax.tick_params(axis=axis, labelrotation=45)
+        for label in ax.get_xticklabels() if axis == "x" else ax.get_yticklabels():
+            label.set_horizontalalignment("right")
+            label.set_rotation_mode("anchor")
+
+
+def new_axes(
+    ax: Axes | Sequence[Axes] | None,
+    figsize: tuple[float, float],
+    *,
+    nrows: int = 1,
+    ncols: int = 1,
+) -> tuple[Figure, np.ndarray]:
+    """The figure and axes a chart draws on: ``ax`` given, or a new figure's.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes, sequence of Axes, or None
+        Where to draw: one Axes per panel of the chart (``nrows * ncols``).
+    figsize : tuple of float
+        Size of a new figure [in].
+    nrows, ncols : int
+        Panels of a new figure.
+
+    Returns
+    -------
+    fig : matplotlib.figure.Figure
+    axes : numpy.ndarray of Axes
+        Flat, ``nrows * ncols`` long.
+    """
+    if ax is None:
+        fig = Figure(figsize=figsize, layout="constrained")
+        axes = np.asarray(fig.subplots(nrows, ncols, squeeze=False), dtype=object).ravel()
+        return fig, axes
+    axes = np.asarray([ax] if isinstance(ax, Axes) else list(ax), dtype=object).ravel()
+    if axes.size != nrows * ncols:
+        raise ValueError(f"this chart draws {nrows * ncols} panel(s); got {axes.size} Axes")
+    return axes[0].figure, axes
+
+
+def save(fig: Figure, path: str | Path | None) -> Figure:
+    """Write ``fig`` as PNG to ``path`` (parent folders created, atomically) and return it."""
+    if path is not None:
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = path.with_name(path.name + ".part")
+        fig.savefig(tmp, dpi=130, format="png")
+        tmp.replace(path)
+    return fig

@@ -1,0 +1,341 @@
+"""Every chart kind on a small version of every shipped study (issue 15).
+
+The studies are found at test time (``studies/*.toml``), so a study added later is covered.
+Each is cut down here (two records, three values per grid axis, four samples, a few seconds of
+motion) and run once per module; every chart kind is drawn from its dataset and the plotted
+data are compared with the dataset's own values.  A kind that cannot apply to a study (the
+required gap without a gap axis, contacts of SDOF buildings, a bench CSV's chart of a dataset)
+must say so in one line: an input error, never a traceback.
+"""
+
+import os
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pytest
+import xarray as xr
+from test_analysis import CHROMIUM, screenshot
+
+import pound_mc  # noqa: F401  (registers ds.pound)
+from pound_mc.analysis import profiles, risk
+from pound_mc.analysis.risk_chart import fragility_panels
+from pound_mc.cli import main
+from pound_mc.cli.analysis import draw
+from pound_mc.cli.commands import KINDS
+from studies import dump_toml
+
+ROOT = Path(__file__).resolve().parent.parent
+STUDIES = sorted((ROOT / "studies").glob("*.toml"))
+CSV_KINDS = ("work-precision", "stability")
+
+
+def _few(values, most: int = 3):
+    """First, middle and last of a grid axis (all when there are ``most`` or fewer)."""
+    if isinstance(values, dict):  # { start, stop, num }
+        return {**values, "num": min(int(values["num"]), most)}
+    if len(values) <= most:
+        return values
+    return [values[0], values[len(values) // 2], values[-1]]
+
+
+def _record(table: dict) -> dict:
+    table = dict(table)
+    if str(table["source"]).startswith("suite:"):  # two real records in place of a suite
+        table["source"] = "builtin:elcentro"
+    if str(table["source"]).startswith("synthetic:"):
+        table["params"] = {**table.get("params", {}), "duration_s": 4.0, "t1_s": 1.0, "t2_s": 3.0}
+    else:
+        table["duration_s"] = 3.0
+    return table
+
+
+def small_study(path: Path) -> str:
+    """The study at ``path`` cut down to a few seconds of CPU."""
+    data = tomllib.loads(path.read_text())
+    data["study"]["name"] = data["study"]["name"] + "_small"
+    if "records" in data:
+        first = _record(data["records"][0])
+        second = _record(data["records"][1] if len(data["records"]) > 1 else data["records"][0])
+        if second["source"] == first["source"]:
+            second["source"] = "builtin:knet-akt013"
+        data["records"] = [first, second]
+    if "record" in data:
+        data["record"] = _record(data["record"])
+    data["grid"] = {key: _few(values) for key, values in data.get("grid", {}).items()}
+    data.setdefault("sampling", {})["n"] = 4
+    return dump_toml(data)
+
+
+@pytest.fixture(scope="module")
+def datasets(tmp_path_factory):
+    """``{study file name: path of its small dataset}``, each run once when first asked for."""
+    folder = tmp_path_factory.mktemp("matrix")
+    done = {}
+
+    def get(path: Path) -> Path:
+        if path.name not in done:
+            study = folder / path.name
+            study.write_text(small_study(path))
+            args = ["run", str(study), "--out", str(folder), "--no-progress", "--no-plot"]
+            assert main(args) == 0
+            name = tomllib.loads(study.read_text())["study"]["name"]
+            done[path.name] = folder / f"{name}.nc"
+        return done[path.name]
+
+    return get
+
+
+def _grid(ds):
+    return [d for d in ds["peak_force"].dims if d not in ("record", "sample")]
+
+
+def _probability(ds, x):
+    """Pounding probability over records and samples: the chart's line data, (x, rest...)."""
+    pounded = (ds["impacts"] > 0).where(ds["status"] == 0).mean(("record", "sample"))
+    return pounded.transpose(x, ...)
+
+
+def _check_spectrum(ds, fig):
+    grid = _grid(ds)
+    q = ds["peak_force_quantile"].median("record").sel(quantile=0.5) / 1e6
+    q = q.isel({d: 0 for d in grid[2:]})
+    lines = fig.axes[0].lines
+    if len(grid) == 1:
+        np.testing.assert_allclose(lines[0].get_ydata(), q.values)
+    else:
+        assert len(lines) == ds.sizes[grid[1]]
+        for k, line in enumerate(lines):
+            np.testing.assert_allclose(line.get_ydata(), q.isel({grid[1]: k}).values)
+
+
+def _check_probability(ds, fig):
+    grid = _grid(ds)
+    x = "contact_gap_m" if "contact_gap_m" in grid else grid[0]
+    rest = [d for d in grid if d != x]
+    p = _probability(ds, x).isel({d: 0 for d in rest[1:]})
+    lines = [ln for ln in fig.axes[0].lines if len(ln.get_xdata()) == ds.sizes[x]]
+    if not rest:
+        np.testing.assert_allclose(lines[0].get_ydata(), p.values)
+        return
+    for k, line in enumerate(lines[: ds.sizes[rest[0]]]):
+        np.testing.assert_allclose(line.get_ydata(), p.isel({rest[0]: k}).values)
+
+
+def _check_distribution(ds, fig):
+    pounded = int(((ds["impacts"] > 0) & (ds["status"] == 0)).sum())
+    hist = fig.axes[1]
+    assert sum(int(p.get_data().values.sum()) for p in hist.patches) == pounded
+
+
+def _check_restitution(ds, fig):
+    ax = fig.axes[0]
+    points = ax.collections[-1].get_offsets()
+    e, e_eff = xr.broadcast(ds["e"], ds["e_effective"])
+    np.testing.assert_allclose(points[:, 0], e.values.ravel())
+    np.testing.assert_allclose(points[:, 1], e_eff.values.ravel())
+
+
+def _check_fragility(ds, fig):
+    dim = next(d for d in risk.INTENSITY_DIMS if d in ds.dims)
+    pounded = ((ds["impacts"] > 0) & (ds["status"] == 0)).sum(("record", "sample"))
+    total = (ds["status"] == 0).sum(("record", "sample"))
+    rest = [d for d in pounded.dims if d != dim]
+    first = {d: 0 for d in rest}
+    expect = (pounded.isel(first) / total.isel(first)).transpose(dim).values
+    stripes = [ln for ln in fig.axes[0].lines if ln.get_linestyle() in ("None", "")][0]
+    np.testing.assert_allclose(stripes.get_ydata(), expect)
+
+
+def _check_required_gap(ds, fig):
+    _check_probability(ds, fig)
+    found = ds.pound.required_gap(0.1, rules=False)["required_gap"]
+    marks = [c for c in fig.axes[0].containers]  # one errorbar per line with a required gap
+    drawn = sorted(float(c.lines[0].get_xdata()[0]) for c in marks)
+    values = np.asarray(found.values, float).ravel()
+    grid = _grid(ds)
+    rest = [d for d in grid if d != "contact_gap_m"]
+    if len(rest) > 1:  # lines over the first other axis, the rest held at their first value
+        values = np.asarray(found.isel({d: 0 for d in rest[1:]}).values, float).ravel()
+    np.testing.assert_allclose(drawn, sorted(v * 1e3 for v in values if np.isfinite(v)))
+
+
+def _check_contacts(ds, fig):
+    line = _grid(ds)[0]
+    ok = ds["contact_peak_force"].where(ds["status"] == 0)
+    median = ok.quantile(0.5, dim=("record", "sample")).transpose(line, "contact") / 1e6
+    for k, ln in enumerate(fig.axes[0].lines):
+        np.testing.assert_allclose(ln.get_xdata(), median.isel({line: k}).values)
+        np.testing.assert_allclose(ln.get_ydata(), ds["contact_elevation"].values)
+
+
+def _check_history(ds, fig):
+    selection, result = ds.pound.worst("peak_force", rerun=True)
+    assert result.outputs["peak_force"] == pytest.approx(float(selection["peak_force"]), 1e-12)
+    force = fig.axes[2]
+    for c, ln in enumerate(force.lines):
+        np.testing.assert_allclose(ln.get_ydata(), result.force_N[:, c] / 1e6)
+
+
+CHECKS = {
+    "spectrum": _check_spectrum,
+    "probability": _check_probability,
+    "distribution": _check_distribution,
+    "restitution": _check_restitution,
+    "fragility": _check_fragility,
+    "required-gap": _check_required_gap,
+    "contacts": _check_contacts,
+    "history": _check_history,
+}
+
+
+def _applies(ds, kind) -> bool:
+    grid = _grid(ds)
+    if kind in CSV_KINDS:
+        return False
+    if kind == "fragility":
+        return any(d in ds.dims for d in risk.INTENSITY_DIMS)
+    if kind == "required-gap":
+        return "contact_gap_m" in grid and ds.sizes["contact_gap_m"] > 1
+    if kind == "contacts":
+        return "contact" in ds.dims
+    if kind in profiles.PROFILE_VARIABLES:
+        return any(v in ds for v in profiles.PROFILE_VARIABLES[kind])
+    return True
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("kind", KINDS)
+@pytest.mark.parametrize("study", STUDIES, ids=[p.stem for p in STUDIES])
+def test_every_chart_kind_on_every_shipped_study(study, kind, datasets, tmp_path, capsys):
+    path = datasets(study)
+    with xr.open_dataset(path) as ds:
+        ds.load()
+    if _applies(ds, kind):
+        kwargs = {"n_boot": 50} if kind == "fragility" else {}
+        if kind == "history":
+            index = ds.pound.worst_index("peak_force")
+            sel = {d: ds[d].values[i] for d, i in index.items() if d not in ("record", "sample")}
+            fig = draw(path, kind, record=index["record"], sample=index["sample"], sel=sel)
+        elif kind == "fragility":
+            fig = risk_fragility(ds, **kwargs)
+        else:
+            fig = draw(path, kind)
+        CHECKS.get(kind, lambda ds, fig: None)(ds, fig)
+        return
+    # a kind that does not apply: one line naming the file and the reason, exit status 2
+    with pytest.raises(ValueError):  # InputError is one
+        draw(path, kind)
+    assert main(["plot", str(path), "--kind", kind, "--out", str(tmp_path / "x.png")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and str(path) in err and "Traceback" not in err, err
+    assert "does not apply" in err or "no intensity axis" in err or "not a CSV" in err, err
+
+
+def risk_fragility(ds, **kwargs):
+    return fragility_panels(ds, **kwargs)
+
+
+def test_small_studies_keep_each_study_s_shape():
+    # the cut-down study keeps every grid axis and the record tables' kinds
+    for path in STUDIES:
+        full, small = tomllib.loads(path.read_text()), tomllib.loads(small_study(path))
+        assert list(small.get("grid", {})) == list(full.get("grid", {})), path.name
+        assert small["sampling"]["n"] == 4
+        assert ("records" in small) == ("records" in full)
+
+
+# -- the report of every study, in Debian's chromium --------------------------------------------
+@pytest.mark.slow
+@pytest.mark.skipif(
+    not os.access(CHROMIUM, os.X_OK),
+    reason="Debian's chromium is not installed (/usr/bin/chromium); .ci/run installs it",
+)
+@pytest.mark.parametrize("study", STUDIES, ids=[p.stem for p in STUDIES])
+def test_report_of_every_study_renders_in_chromium(study, datasets, tmp_path):
+    path = datasets(study)
+    out = tmp_path / "report.html"
+    assert main(["report", str(path), "--out", str(out)]) == 0
+    page = out.read_text()
+    with xr.open_dataset(path) as ds:
+        ds.load()
+    # every chart that applies is on the page
+    expected = {"spectrum", "probability", "distribution", "history"}
+    if _applies(ds, "fragility"):
+        expected.add("fragility")
+    if _applies(ds, "required-gap"):
+        expected.add("required-gap")
+    if _applies(ds, "contacts"):
+        expected.add("contacts")
+    if not int(((ds["impacts"] > 0) & (ds["status"] == 0)).sum()):
+        expected -= {"distribution", "history"}
+    for key in expected:
+        assert f'id="chart-{key}"' in page, key
+    screenshot(tmp_path, out)  # no console message, not blank
+
+
+def test_report_shows_drift_and_ductility_when_present(datasets):
+    from pound_mc.analysis.report import report_html
+
+    ds = _inelastic(datasets)
+    page = report_html(ds, history=False)
+    assert 'id="chart-drift"' in page and 'id="chart-ductility"' in page
+
+
+def _inelastic(datasets):
+    """The shear study's small dataset with inelastic outputs added by hand (DESIGN.md 9)."""
+    shear = next(p for p in STUDIES if p.stem == "shear_spectrum")
+    with xr.open_dataset(datasets(shear)) as ds:
+        ds = ds.load()
+    dims = ds["peak_force"].dims
+    shape = tuple(ds.sizes[d] for d in dims)
+    rng = np.random.default_rng(1)
+    for side, n in (("left", 3), ("right", 5)):  # one storey dim: the lower building NaN-padded
+        drift = np.full((*shape, 5), np.nan)
+        drift[..., :n] = rng.uniform(0.001, 0.02, (*shape, n))
+        long = f"peak storey drift of the {side} building"
+        ds[f"peak_drift_{side}"] = ((*dims, "storey"), drift, {"units": "m", "long_name": long})
+        long = f"peak ductility of the {side} building"
+        ductility = drift / 0.01
+        ds[f"peak_ductility_{side}"] = (
+            (*dims, "storey"),
+            ductility,
+            {"units": "1", "long_name": long},
+        )
+    return ds.assign_coords(storey=np.arange(1, 6))
+
+
+@pytest.mark.filterwarnings("ignore:All-NaN slice:RuntimeWarning")
+def test_drift_and_ductility_profiles_draw_the_dataset_values(datasets):
+    ds = _inelastic(datasets)
+    gap = ds["peak_force"].dims[1]
+    for quantity, scale in (("drift", 1e3), ("ductility", 1.0)):
+        axes = getattr(ds.pound.plot, quantity)()
+        assert len(axes) == 2
+        for ax, side in zip(axes, ("left", "right"), strict=True):
+            values = ds[f"peak_{quantity}_{side}"].where(ds["status"] == 0)
+            median = values.quantile(0.5, dim=("record", "sample")).transpose(gap, "storey")
+            assert len(ax.lines) == ds.sizes[gap]
+            for k, line in enumerate(ax.lines):
+                np.testing.assert_allclose(line.get_xdata(), median.isel({gap: k}).values * scale)
+                np.testing.assert_allclose(line.get_ydata(), ds["storey"].values)
+        unit = "mm" if quantity == "drift" else "-"
+        assert axes[0].get_xlabel().endswith(f"[{unit}]")
+
+
+def test_worst_and_to_dataframe(datasets):
+    shear = next(p for p in STUDIES if p.stem == "shear_spectrum")
+    with xr.open_dataset(datasets(shear)) as ds:
+        ds.load()
+    table = ds.pound.to_dataframe()
+    assert len(table) == ds["peak_force"].size
+    assert list(table.columns[:3]) == list(ds["peak_force"].dims)
+    np.testing.assert_array_equal(table["peak_force"], ds["peak_force"].values.ravel())
+    worst = ds.pound.worst("peak_force")
+    assert float(worst["peak_force"]) == float(ds["peak_force"].where(ds.pound.ok).max())
+    # a per-contact variable: its largest value over the contacts
+    worst = ds.pound.worst("contact_peak_force")
+    assert float(worst["contact_peak_force"].max()) == float(ds["contact_peak_force"].max())
+    counts = ds.pound.status_counts()
+    assert counts.index.tolist() == ["ok", "unstable", "not_converged"]
+    assert int(counts.sum()) == ds["status"].size
