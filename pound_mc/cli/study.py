@@ -11,7 +11,7 @@ from pathlib import Path
 
 import xarray as xr
 
-from pound_mc.analysis.plot import spectrum_chart
+from pound_mc.analysis.plot import distribution_chart, spectrum_chart
 from pound_mc.analysis.risk_chart import fragility_panels, required_gap_chart
 from pound_mc.errors import InputError
 from pound_mc.integrators import METHODS
@@ -91,11 +91,18 @@ def _charts(study, path: Path, out: Path) -> list[Path]:
     """The charts ``run`` draws: the spectrum, or with an intensity axis two risk charts.
 
     With an intensity axis: the required gap against the rules (when the gap is on the grid)
-    and the fragility curves.
+    and the fragility curves.  A study without ``[grid]`` has no axis to draw a spectrum
+    against: its chart is the distribution of the peak force over the samples.
     """
     written = []
     with xr.open_dataset(path) as ds:
         ds.load()
+        if not study.grid:
+            written.append(out / f"{study.name}_distribution.png")
+            view = ds[["peak_force", "status", "impacts"]].expand_dims(scene=["study scene"])
+            view["scene"].attrs = {"long_name": "scene", "units": "1"}
+            distribution_chart(view, written[-1], by="scene")
+            return written
         if study.intensity_key is None:
             written.append(out / f"{study.name}_spectrum.png")
             spectrum_chart(ds, written[-1])
