@@ -177,7 +177,7 @@ def _stop_between_chunks():
 
 
 def part_path(path: Path) -> Path:
-    """This process's temporary name of ``path``: ``.<name>.<pid>.part`` beside it."""
+    """The temporary name of ``path`` in this process: ``.<name>.<pid>.part`` beside it."""
     return path.with_name(f".{path.name}.{os.getpid()}.part")
 
 
