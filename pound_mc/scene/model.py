@@ -355,12 +355,17 @@ def scene_from_dict(data: dict, *, file: str | Path | None = None) -> Scene:
 def load_scene(path: str | Path) -> Scene:
     """Read and validate a scene file (TOML)."""
     path = Path(path)
+    if path.is_symlink() and not path.exists():
+        raise InputError("symbolic link that leads nowhere (a loop, or its target is missing)",
+                         file=str(path))  # fmt: skip
     if not path.is_file():
         raise InputError("no such scene file", file=str(path))
     try:
-        data = tomllib.loads(path.read_text())
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
     except tomllib.TOMLDecodeError as exc:
         raise InputError(f"not valid TOML: {exc}", file=str(path)) from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(f"cannot read the scene file: {exc}", file=str(path)) from None
     return scene_from_dict(data, file=path)
 
 

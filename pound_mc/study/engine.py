@@ -419,8 +419,13 @@ class StudyEngine:
                 out[name][sel] = part[name]
         return out
 
-    def calibrate(self, workers: int | None = None, n: int = 64) -> tuple[float, float]:
+    def calibrate(
+        self, workers: int | None = None, n: int = 64, budget_s: float = 20.0
+    ) -> tuple[float, float]:
         """Time a short run of ``n`` simulations spread evenly over the study.
+
+        Fewer are run when the first (after compilation) shows that ``n`` would take more
+        than ``budget_s`` seconds.
 
         Returns
         -------
@@ -436,6 +441,8 @@ class StudyEngine:
             t0 = time.perf_counter()
             self.run_indices(indices[:1])  # compile (or load numba's cache)
             t1 = time.perf_counter()
+            keep = int(max(1, min(indices.size, budget_s / max(t1 - t0, 1e-9))))
+            indices = indices[np.linspace(0, indices.size - 1, keep).round().astype(np.int64)]
             self.run_indices(indices)
             t2 = time.perf_counter()
         return (t2 - t1) / indices.size, t1 - t0
