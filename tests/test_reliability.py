@@ -324,3 +324,60 @@ def test_cf_check_of_the_shipped_studies_datasets(path, tmp_path):
     written = write_netcdf(ds, tmp_path / f"{study.name}.nc")
     with xr.open_dataset(written, decode_cf=False) as ds:
         assert cf_problems(ds) == []
+
+
+# ---------------------------------------------------------- classes 4 and 5: accuracy flags
+
+
+def test_shortest_contact_is_the_hertz_closed_form():
+    """Class 5: the duration behind the ``inaccurate`` flag is the elastic Hertz duration.
+
+    Source: ``contact_duration_hertz`` (t_c = 2.943 delta_max / v0, DESIGN.md section 4) at the
+    penetration ``max_penetration_elastic`` of the same impact; the kernel's duration uses the
+    rounded 3.218 (m/beta)^0.4 v0^-0.2, hence 1e-3.
+    """
+    from pound_mc.integrators.accuracy import shortest_contact_s
+    from pound_mc.physics.contact import contact_duration_hertz, max_penetration_elastic
+
+    v0, beta, m = np.array([0.01, 0.3, 2.0]), 2.75e9, 5.0e5
+    d = max_penetration_elastic(v0, beta, m)
+    got = shortest_contact_s("jankowski", d, beta, m)
+    np.testing.assert_allclose(got, contact_duration_hertz(v0, beta, m), rtol=1e-3)
+    assert shortest_contact_s("hertz", [0.0, np.nan], beta, m).tolist() == [np.inf, np.inf]
+    # linear spring: half its period, pi sqrt(m / k), whatever the impact
+    np.testing.assert_allclose(shortest_contact_s("linear", [1e-3], 1e8, 1e4), np.pi * 1e-2)
+
+
+def test_under_resolved_fixed_step_contacts_are_flagged_inaccurate():
+    """Classes 4 and 5: fixed-step runs with contacts of a few steps read ``ok``.
+
+    The small study's buildings (T = 0.3 and 1.0 s, 1,000 t each, zero gap, concrete beta) on
+    4 s of AKT013 at 0.3 g: contacts last about 0.1 s.  ``newmark`` at 0.01 s (a handful of
+    steps a contact) is flagged; at 0.001 s it is ``ok`` and within 1 % of the converged peak
+    force (``adaptive`` at 0.001 s, which sub-steps every contact).
+    """
+    import pound_mc.integrators as integrators
+    from pound_mc.motions import load_record, record_arrays
+
+    dt_rec, acc = record_arrays(load_record("builtin:knet-akt013", duration_s=4.0, pga_g=0.3))
+    pair = dict(
+        left_period_s=0.3, right_period_s=1.0, left_mass_kg=1e6, right_mass_kg=1e6,
+        left_damping_ratio=0.05, right_damping_ratio=0.05, gap_m=0.0, xi=0.35, beta=2.75e9,
+        contact_model="jankowski",
+    )  # fmt: skip
+    runs = {
+        (method, dt): integrators.simulate_sdof_pairs(acc, dt_rec, dt_s=dt, method=method, **pair)
+        for method, dt in [
+            ("adaptive", 1e-3),
+            ("newmark", 1e-2),
+            ("newmark", 1e-3),
+            ("central-difference", 1e-2),
+        ]  # fmt: skip
+    }
+    converged = runs["adaptive", 1e-3]
+    assert converged["status"][0] == 0 and converged["impacts"][0] > 0
+    for coarse in (runs["newmark", 1e-2], runs["central-difference", 1e-2]):
+        assert coarse["status"][0] == 3  # inaccurate
+    fine = runs["newmark", 1e-3]
+    assert fine["status"][0] == 0
+    np.testing.assert_allclose(fine["peak_force"], converged["peak_force"], rtol=0.01)

@@ -39,18 +39,23 @@ import numpy as np
 
 from pound_mc._jit import jit
 from pound_mc.errors import InputError
+from pound_mc.integrators.accuracy import flag_inaccurate, shortest_contact_s
 from pound_mc.integrators.adaptive import adaptive
 from pound_mc.integrators.adaptive_pair import adaptive_pair
 from pound_mc.integrators.fixed import CENTRAL_DIFFERENCE, NEWMARK, NEWMARK_EXPLICIT, fixed
 from pound_mc.integrators.laws import LAW_CODES, RELATION_CODES
 from pound_mc.integrators.outputs import (
+    C_MAX_PENETRATION,
     CONTACT_OUTPUTS,
+    IMPACTS,
+    MAX_PENETRATION,
     N_COUT,
     N_OUT,
     OUTPUTS,
     PRE_MODE,
     PRE_RESUME,
     PRE_RUN_TO_CONTACT,
+    STATUS,
     STATUS_NOT_CONVERGED,
     UNSTABLE_ENERGY_FRACTION,
     fail,
@@ -306,6 +311,9 @@ def run_kernel(
         np.ascontiguousarray(beta, dtype=f8), np.ascontiguousarray(xi, dtype=f8),
         settings, q, v, out, cout, hx, hd, hf, np.zeros(0),
     )  # fmt: skip
+    if settings.method != _ADAPTIVE:
+        t_c = shortest_contact_s(model, cout[:, C_MAX_PENETRATION], beta, meff).min()
+        out[STATUS] = flag_inaccurate(out[STATUS], out[IMPACTS], t_c, dt_s)
     outputs = {name: float(out[k]) for k, name in enumerate(OUTPUTS)}
     contacts = {name: cout[:, k].copy() for k, name in enumerate(CONTACT_OUTPUTS)}
     return KernelResult(outputs, contacts, (hx, hd, hf) if history else None)
@@ -438,6 +446,10 @@ def simulate_sdof_pairs(
     dt_rec = float(dt_rec)
     if settings.method != _ADAPTIVE:
         _threaded(_sdof_fixed, nsim, acc, dt_rec, *arrays, settings, out)
+        ml, mr, beta_k, dt_k = arrays[2], arrays[5], arrays[7], arrays[9]
+        t_c = shortest_contact_s(contact_model, out[:, MAX_PENETRATION], beta_k,
+                                 ml * mr / (ml + mr))  # fmt: skip
+        out[:, STATUS] = flag_inaccurate(out[:, STATUS], out[:, IMPACTS], t_c, dt_k)
         return _named(out)
     # simulations that differ only in contact parameters share their linear response up to
     # the first contact (periods, damping ratios, masses, gap and step define a group)
@@ -554,6 +566,11 @@ def simulate_scene_batch(
         out,
         cout,
     )  # fmt: skip
+    if settings.method != _ADAPTIVE:
+        meff = np.asarray(arrays["meff"], dtype=f8)[None, :]
+        t_c = shortest_contact_s(contact_model, cout[:, :, C_MAX_PENETRATION], beta[:, None], meff)
+        t_c = t_c.min(axis=1)
+        out[:, STATUS] = flag_inaccurate(out[:, STATUS], out[:, IMPACTS], t_c, dt_s)
     contacts = {name: cout[:, :, k] for k, name in enumerate(CONTACT_OUTPUTS)}
     contacts["impacts"] = contacts["impacts"].astype(np.int32)
     return _named(out), contacts

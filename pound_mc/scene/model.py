@@ -167,8 +167,10 @@ class SimulationResult:
 
     @property
     def status(self) -> str:
-        """``"ok"``, ``"unstable"`` or ``"not_converged"``."""
-        return {0: "ok", 1: "unstable", 2: "not_converged"}[int(self.outputs["status"])]
+        """``"ok"``, ``"unstable"``, ``"not_converged"`` or ``"inaccurate"``."""
+        return {0: "ok", 1: "unstable", 2: "not_converged", 3: "inaccurate"}[
+            int(self.outputs["status"])
+        ]
 
     def to_json(self) -> dict[str, Any]:
         """JSON-serialisable summary with the pinned keys of DESIGN.md section 7.

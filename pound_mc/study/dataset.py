@@ -82,7 +82,7 @@ RECORD_VARIABLES = {
     "scale_factor": ("1", "factor that scales the record to the intensity of the grid axis"),
 }
 #: Status codes of a simulation (CF flag_values / flag_meanings).
-STATUS_FLAGS = {0: "ok", 1: "unstable", 2: "not_converged"}
+STATUS_FLAGS = {0: "ok", 1: "unstable", 2: "not_converged", 3: "inaccurate"}
 #: Quantiles of the impact force spectrum.
 QUANTILES = (0.05, 0.16, 0.5, 0.84, 0.95)
 
