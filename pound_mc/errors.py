@@ -52,3 +52,19 @@ class InputErrors(InputError):
 
     def __str__(self) -> str:
         return "\n".join(str(e) for e in self.errors)
+
+
+class OutputError(InputError):
+    """A file or folder a run cannot write (disk full, read-only, not a folder, locked).
+
+    Reported like :class:`InputError` (one line naming the path, exit status 2): the fix is
+    the user's (free space, another ``--out``), not the program's.
+    """
+
+
+class ClusterError(InputError):
+    """A Dask cluster that cannot be reached or failed during a run (exit status 2).
+
+    The message says what happened; the chunks written so far are kept, so running the same
+    command again resumes.
+    """

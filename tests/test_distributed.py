@@ -138,6 +138,9 @@ def test_local_cluster_from_the_command_line(study_file, reference, tmp_path):
         (["--workers", "2", "--threads", "2"], "--threads"),
         (["--workers", "0"], "--workers: must be >= 1"),
         (["--scheduler", "no-port"], "cannot connect"),
+        # defect class 3: an unsupported scheme was a traceback, now refused before connecting
+        (["--scheduler", "tls://127.0.0.1:8786"], "unsupported address scheme 'tls://'"),
+        (["--scheduler", "tcp://127.0.0.1:8786", "--dask-timeout", "0"], "--dask-timeout"),
     ],
 )
 def test_bad_cluster_options(study_file, tmp_path, capsys, extra, message):
@@ -153,3 +156,80 @@ def test_missing_dask_names_the_extra(study_file, tmp_path, capsys, monkeypatch)
     assert main(["run", str(study_file), "--out", str(out), "--workers", "2"]) == 2
     assert 'pip install "pound-mc[dask]"' in capsys.readouterr().err
     assert not out.exists()
+
+
+def test_unreachable_and_frozen_scheduler(study_file, tmp_path, capsys):
+    """Defect class 3: a frozen scheduler (accepts, never answers) hung the client silently.
+
+    A socket that listens but never answers stands for a SIGSTOPped scheduler; a closed port
+    for an unreachable one.  Both end in one line, exit 2, within ``--dask-timeout``.
+    """
+    import socket
+
+    with socket.socket() as frozen, socket.socket() as closed:
+        frozen.bind(("127.0.0.1", 0))
+        frozen.listen()
+        closed.bind(("127.0.0.1", 0))  # bound, not listening: connecting is refused
+        for sock in (frozen, closed):
+            out = tmp_path / f"out{sock.fileno()}"
+            address = f"tcp://127.0.0.1:{sock.getsockname()[1]}"
+            argv = ["run", str(study_file), "--out", str(out), "--no-plot", "--no-progress"]
+            t0 = time.monotonic()
+            assert main([*argv, "--scheduler", address, "--dask-timeout", "1"]) == 2
+            assert time.monotonic() - t0 < 30
+            err = capsys.readouterr().err
+            assert f"cannot connect to the Dask scheduler {address!r}" in err, err
+            assert "Traceback" not in err and err.count("\n") == 1, err
+            assert not out.exists()
+
+
+def test_all_workers_lost_then_resume(study_file, reference, tmp_path):
+    """Defect class 3: losing every worker ended in a FutureCancelledError traceback.
+
+    Every worker is killed after the second chunk: the run ends in a ClusterError (exit 2 on the
+    command line) within the timeout, the finished chunks are kept, and a local run resumes to
+    the reference dataset.
+    """
+    from pound_mc.errors import ClusterError
+    from pound_mc.study.distributed import run_study_distributed
+
+    study = load_study(study_file)
+    with (
+        distributed.LocalCluster(
+            n_workers=1,
+            processes=True,
+            threads_per_worker=1,
+            host="127.0.0.1",
+            dashboard_address=":0",
+            silence_logs=logging.CRITICAL,
+            env={"NUMBA_NUM_THREADS": "1"},
+        ) as cluster,
+        distributed.Client(cluster) as client,
+    ):
+        pids = client.run(os.getpid)
+        written = []
+
+        def kill_all(chunk):
+            written.append(chunk.index)
+            if len(written) == 2:
+                for pid in pids.values():
+                    os.kill(pid, signal.SIGKILL)
+                cluster.scale(0)  # no replacement worker: the cluster is gone
+
+        with pytest.raises(ClusterError, match="finished chunks are kept"):
+            run_study_distributed(
+                study,
+                tmp_path,
+                client=client,
+                chunk_size=4,
+                progress=False,
+                on_chunk=kill_all,
+                timeout_s=10,
+                engine=SlowEngine(study),
+            )
+    kept = sorted((tmp_path / "small").glob("chunk_4_*.npz"))
+    assert len(kept) >= 2
+    assert not (tmp_path / ".small.lock").exists()  # the lock was released
+    report = run_study(study, tmp_path, chunk_size=4, progress=False)
+    assert report.chunks_run == len(chunk_ranges(N, 4)) - len(kept)
+    _assert_identical(reference, report.path)

@@ -42,7 +42,8 @@ def test_central_difference_fails_beyond_its_limit(beta):
     wc = S.contact_frequency(beta, scene.contacts[0].m_eff, 0.5)
     inside = S.run_impact(scene, "central-difference", 0.8 * 2.0 / wc)
     beyond = S.run_impact(scene, "central-difference", 4.0 * 2.0 / wc)
-    assert int(inside["status"]) == 0 and abs(inside["energy_residual"]) < 0.05
+    # stable inside the limit, yet a contact of two steps: inaccurate (3), not unstable
+    assert int(inside["status"]) == 3 and abs(inside["energy_residual"]) < 0.05
     assert int(beyond["status"]) == 1
     assert math.isnan(beyond["peak_force"])
     # adaptive sizes its contact sub-steps from the contact duration, not from dt_s

@@ -57,6 +57,15 @@ def main(argv: list[str] | None = None) -> int:
         # the reader of our output went away (``pound-mc ... | head``): nothing more to say
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 0
+    except MemoryError:
+        print(f"pound-mc {args.command}: error: out of memory; make the study or the record "
+              "smaller", file=sys.stderr)  # fmt: skip
+        return 2
+    except OSError as exc:
+        # a file or folder the command cannot read or write (permissions, a full disk)
+        where = f"{exc.filename}: " if exc.filename else ""
+        print(f"pound-mc {args.command}: error: {where}{exc.strerror or exc}", file=sys.stderr)
+        return 2
     return 0 if status is None else int(status)
 
 

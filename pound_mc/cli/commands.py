@@ -232,6 +232,13 @@ def _study(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--chunk-size", type=int, metavar="N", help="simulations per chunk file")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--no-plot", action="store_true", help="do not draw the spectrum chart")
+    p.add_argument(
+        "--dask-timeout",
+        type=float,
+        default=600.0,
+        metavar="S",
+        help="Dask: give up when the scheduler does not answer or no chunk finishes for S s (600)",
+    )
     p.set_defaults(handler="run")
 
     p = sub.add_parser("check", help="validate a study and print its plan; writes nothing")
@@ -240,6 +247,9 @@ def _study(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--chunk-size", type=int, metavar="N", help="simulations per chunk file")
     p.add_argument(
         "--calibrate", type=int, default=64, metavar="N", help="simulations timed for the estimate"
+    )
+    p.add_argument(
+        "--out", default="outputs", metavar="DIR", help="output folder of the disk estimate"
     )
     p.set_defaults(handler="check")
 

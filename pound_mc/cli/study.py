@@ -5,6 +5,7 @@ Their arguments are declared in :mod:`pound_mc.cli.commands`.
 
 from __future__ import annotations
 
+import shutil
 import sys
 import time
 from importlib import resources
@@ -12,7 +13,7 @@ from pathlib import Path
 
 import xarray as xr
 
-from pound_mc.analysis.plot import spectrum_chart
+from pound_mc.analysis.plot import distribution_chart, spectrum_chart
 from pound_mc.analysis.risk_chart import fragility_panels, required_gap_chart
 from pound_mc.errors import InputError
 from pound_mc.integrators import METHODS
@@ -20,12 +21,21 @@ from pound_mc.physics.contact import CONTACT_MODELS
 from pound_mc.study.definition import load_study
 from pound_mc.study.distributed import _import_distributed, run_study_distributed
 from pound_mc.study.engine import StudyEngine
-from pound_mc.study.runner import chunk_ranges, default_chunk_size, plan_text, run_study
+from pound_mc.study.runner import (
+    chunk_ranges,
+    default_chunk_size,
+    memory_estimate,
+    plan_text,
+    run_study,
+)
 from pound_mc.study.warmup import NOTICE_AFTER_S, cache_directory, compile_kernels, warm_up
 
 #: Fixed cost per chunk of a local run (writing its file, Python around the batch call) [s],
 #: measured on a 2-core machine (README, "Throughput and scaling"); added to the estimate.
 CHUNK_OVERHEAD_S = 0.003
+#: ``check`` warns when one simulation takes longer than this [s]: such a study is
+#: effectively endless (a step far too short, a record far too long).
+SLOW_SIMULATION_S = 30.0
 
 
 def run_command(args) -> int:
@@ -42,6 +52,8 @@ def run_command(args) -> int:
             "sets the threads of an in-process run; each Dask worker runs on one thread",
             key="--threads",
         )
+    if not args.dask_timeout > 0:
+        raise InputError(f"must be > 0, got {args.dask_timeout}", key="--dask-timeout")
     if dask:
         _import_distributed()  # a missing optional dependency is reported before any work
     study = load_study(args.study)
@@ -56,7 +68,12 @@ def run_command(args) -> int:
     try:
         if dask:
             report = run_study_distributed(
-                study, args.out, scheduler=args.scheduler, workers=args.workers, **common
+                study,
+                args.out,
+                scheduler=args.scheduler,
+                workers=args.workers,
+                timeout_s=args.dask_timeout,
+                **common,
             )
         else:
             report = run_study(study, args.out, threads=args.threads, **common)
@@ -92,11 +109,18 @@ def _charts(study, path: Path, out: Path) -> list[Path]:
     """The charts ``run`` draws: the spectrum, or with an intensity axis two risk charts.
 
     With an intensity axis: the required gap against the rules (when the gap is on the grid)
-    and the fragility curves.
+    and the fragility curves.  A study without ``[grid]`` has no axis to draw a spectrum
+    against: its chart is the distribution of the peak force over the samples.
     """
     written = []
     with xr.open_dataset(path) as ds:
         ds.load()
+        if not study.grid:
+            written.append(out / f"{study.name}_distribution.png")
+            view = ds[["peak_force", "status", "impacts"]].expand_dims(scene=["study scene"])
+            view["scene"].attrs = {"long_name": "scene", "units": "1"}
+            distribution_chart(view, written[-1], by="scene")
+            return written
         if study.intensity_key is None:
             written.append(out / f"{study.name}_spectrum.png")
             spectrum_chart(ds, written[-1])
@@ -136,6 +160,12 @@ def check_command(args) -> int:
     n_chunks = len(chunk_ranges(study.n_simulations, chunk_size))
     per_sim = seconds + n_chunks * CHUNK_OVERHEAD_S / study.n_simulations
     print(plan_text(study, chunk_size=chunk_size, seconds_per_simulation=per_sim))
+    print(resources_text(study, engine, Path(args.out)))
+    if seconds > SLOW_SIMULATION_S:
+        print(
+            f"  warning   : one simulation takes {seconds:.0f} s (more than "
+            f"{SLOW_SIMULATION_S:.0f} s): lengthen integrator.dt_s or shorten the record",
+        )
     if did_compile:
         where = f"kernels compiled now in {warm_s:.1f} s and cached; a run with them cached"
     else:
@@ -147,6 +177,24 @@ def check_command(args) -> int:
     )
     print("  (nothing written)")
     return 0
+
+
+def resources_text(study, engine, out: Path) -> str:
+    """The memory and disk a run of ``study`` needs, and the free space under ``out``."""
+    results = memory_estimate(study, engine.result_layout())
+    records = sum(acc.nbytes for _dt, acc in engine.records)
+    disk = results  # the chunk files and the dataset, each about the results' size
+    probe = out if out.exists() else next((p for p in out.parents if p.exists()), Path("."))
+    free = shutil.disk_usage(probe).free
+    text = (
+        f"  memory    : about {(results + records) / 2**20:,.1f} MiB (results "
+        f"{results / 2**20:,.1f}, records {records / 2**20:,.1f})\n"
+        f"  disk      : about {disk / 2**20:,.1f} MiB under {out} "
+        f"({free / 2**30:,.1f} GiB free)"
+    )
+    if disk > free:
+        text += "\n  warning   : not enough free disk space for the results"
+    return text
 
 
 def compile_command(args) -> int:

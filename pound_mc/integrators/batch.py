@@ -39,19 +39,25 @@ import numpy as np
 
 from pound_mc._jit import jit
 from pound_mc.errors import InputError
+from pound_mc.integrators.accuracy import flag_inaccurate, shortest_contact_s
 from pound_mc.integrators.adaptive import adaptive
 from pound_mc.integrators.adaptive_pair import adaptive_pair
 from pound_mc.integrators.fixed import CENTRAL_DIFFERENCE, NEWMARK, NEWMARK_EXPLICIT, fixed
 from pound_mc.integrators.hysteretic import N_STOREY_COLUMNS, newmark_hysteretic
 from pound_mc.integrators.laws import LAW_CODES, RELATION_CODES
 from pound_mc.integrators.outputs import (
+    C_MAX_PENETRATION,
     CONTACT_OUTPUTS,
+    IMPACTS,
+    MAX_PENETRATION,
     N_COUT,
     N_OUT,
     OUTPUTS,
+    PEAK_FORCE,
     PRE_MODE,
     PRE_RESUME,
     PRE_RUN_TO_CONTACT,
+    STATUS,
     STATUS_NOT_CONVERGED,
     UNSTABLE_ENERGY_FRACTION,
     fail,
@@ -353,6 +359,9 @@ def run_kernel(
         np.ascontiguousarray(beta, dtype=f8), np.ascontiguousarray(xi, dtype=f8),
         settings, q, v, out, cout, hx, hd, hf, np.zeros(0),
     )  # fmt: skip
+    if settings.method != _ADAPTIVE:
+        t_c = shortest_contact_s(model, cout[:, C_MAX_PENETRATION], beta, meff).min()
+        out[STATUS] = flag_inaccurate(out[STATUS], out[IMPACTS], t_c, dt_s)
     outputs = {name: float(out[k]) for k, name in enumerate(OUTPUTS)}
     contacts = {name: cout[:, k].copy() for k, name in enumerate(CONTACT_OUTPUTS)}
     return KernelResult(outputs, contacts, (hx, hd, hf) if history else None)
@@ -485,6 +494,13 @@ def simulate_sdof_pairs(
     dt_rec = float(dt_rec)
     if settings.method != _ADAPTIVE:
         _threaded(_sdof_fixed, nsim, acc, dt_rec, *arrays, settings, out)
+        half = np.empty_like(out)  # step doubling (pound_mc.integrators.accuracy)
+        _threaded(_sdof_fixed, nsim, acc, dt_rec, *arrays[:9], arrays[9] / 2, settings, half)
+        ml, mr, beta_k, dt_k = arrays[2], arrays[5], arrays[7], arrays[9]
+        t_c = shortest_contact_s(contact_model, out[:, MAX_PENETRATION], beta_k,
+                                 ml * mr / (ml + mr))  # fmt: skip
+        out[:, STATUS] = flag_inaccurate(out[:, STATUS], out[:, IMPACTS], t_c, dt_k,
+                                         out[:, PEAK_FORCE], half[:, PEAK_FORCE])  # fmt: skip
         return _named(out)
     # simulations that differ only in contact parameters share their linear response up to
     # the first contact (periods, damping ratios, masses, gap and step define a group)
@@ -584,9 +600,7 @@ def simulate_scene_batch(
     cout = np.empty((nsim, nc, N_COUT))
     f8 = np.float64
     kernel = _scene_adaptive if settings.method == _ADAPTIVE else _scene_fixed
-    _threaded(
-        kernel,
-        nsim,
+    pair = (
         np.ascontiguousarray(acc, dtype=f8),
         f8(dt_rec),
         *(np.ascontiguousarray(arrays[k], dtype=f8) for k in ("omega", "zeta", "gamma", "phi")),
@@ -596,11 +610,16 @@ def simulate_scene_batch(
         gap,
         beta,
         xi,
-        dt_s,
-        settings,
-        out,
-        cout,
     )  # fmt: skip
+    _threaded(kernel, nsim, *pair, dt_s, settings, out, cout)
+    if settings.method != _ADAPTIVE:
+        half = np.empty_like(out)  # step doubling (pound_mc.integrators.accuracy)
+        _threaded(kernel, nsim, *pair, dt_s / 2, settings, half, np.empty_like(cout))
+        meff = np.asarray(arrays["meff"], dtype=f8)[None, :]
+        t_c = shortest_contact_s(contact_model, cout[:, :, C_MAX_PENETRATION], beta[:, None], meff)
+        t_c = t_c.min(axis=1)
+        out[:, STATUS] = flag_inaccurate(out[:, STATUS], out[:, IMPACTS], t_c, dt_s,
+                                         out[:, PEAK_FORCE], half[:, PEAK_FORCE])  # fmt: skip
     contacts = {name: cout[:, :, k] for k, name in enumerate(CONTACT_OUTPUTS)}
     contacts["impacts"] = contacts["impacts"].astype(np.int32)
     return _named(out), contacts

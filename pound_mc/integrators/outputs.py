@@ -64,6 +64,7 @@ C_PEAK_FORCE, C_IMPACTS, C_MAX_PENETRATION, C_IMPULSE = range(N_COUT)
 
 #: Status codes of a run.
 STATUS_OK, STATUS_UNSTABLE, STATUS_NOT_CONVERGED = 0, 1, 2
+#: (3, ``inaccurate``, is set after the kernels: :mod:`pound_mc.integrators.accuracy`.)
 
 #: A run whose energy balance is broken by more than this fraction of the energy put in
 #: (energy created by the integrator) is flagged unstable.

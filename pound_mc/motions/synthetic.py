@@ -149,6 +149,10 @@ def jennings_envelope(t, t1_s: float = 2.0, t2_s: float = 10.0, c_per_s: float =
     return np.where(t < t1_s, rise, np.where(t <= t2_s, 1.0, tail))
 
 
+#: The most samples a synthetic motion may have (80 MB of float64; a day at 100 Hz).
+MAX_SAMPLES = 1.0e7
+
+
 def _number(params, name, *, minimum=0.0, inclusive=False) -> float:
     value = params[name]
     if isinstance(value, bool) or not isinstance(value, int | float | np.number):
@@ -203,6 +207,12 @@ def validate_params(params: Mapping[str, Any] | None = None) -> dict[str, Any]:
         raise InputError(
             f"dt_s = {p['dt_s']:g} s is longer than duration_s = {p['duration_s']:g} s",
             key="params.dt_s",
+        )
+    if p["duration_s"] / p["dt_s"] > MAX_SAMPLES:
+        raise InputError(
+            f"duration_s / dt_s = {p['duration_s'] / p['dt_s']:.3g} samples, more than "
+            f"{MAX_SAMPLES:.0e} (memory): give a shorter duration_s or a longer dt_s",
+            key="params.duration_s",
         )
     nyquist = math.pi / p["dt_s"]
     if nyquist <= 2.0 * p["omega_g"]:

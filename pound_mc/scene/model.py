@@ -197,8 +197,10 @@ class SimulationResult:
 
     @property
     def status(self) -> str:
-        """``"ok"``, ``"unstable"`` or ``"not_converged"``."""
-        return {0: "ok", 1: "unstable", 2: "not_converged"}[int(self.outputs["status"])]
+        """``"ok"``, ``"unstable"``, ``"not_converged"`` or ``"inaccurate"``."""
+        return {0: "ok", 1: "unstable", 2: "not_converged", 3: "inaccurate"}[
+            int(self.outputs["status"])
+        ]
 
     def to_json(self) -> dict[str, Any]:
         """JSON-serialisable summary with the pinned keys of DESIGN.md section 7.
@@ -405,12 +407,17 @@ def with_tail(acc, dt_rec: float, tail_s: float) -> np.ndarray:
 def load_scene(path: str | Path) -> Scene:
     """Read and validate a scene file (TOML)."""
     path = Path(path)
+    if path.is_symlink() and not path.exists():
+        raise InputError("symbolic link that leads nowhere (a loop, or its target is missing)",
+                         file=str(path))  # fmt: skip
     if not path.is_file():
         raise InputError("no such scene file", file=str(path))
     try:
-        data = tomllib.loads(path.read_text())
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
     except tomllib.TOMLDecodeError as exc:
         raise InputError(f"not valid TOML: {exc}", file=str(path)) from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(f"cannot read the scene file: {exc}", file=str(path)) from None
     return scene_from_dict(data, file=path)
 
 

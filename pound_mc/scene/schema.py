@@ -298,6 +298,8 @@ def source_problem(source: str, base_dir: str | Path | None) -> str | None:
     path = Path(source).expanduser()
     if not path.is_absolute() and base_dir is not None:
         path = Path(base_dir) / path
+    if path.is_symlink() and not path.exists():
+        return f"symbolic link that leads nowhere (a loop, or its target is missing): {path}"
     if not path.exists():
         if re.match(r"^[A-Za-z][\w-]+:", source):
             return (
@@ -343,7 +345,7 @@ RECORD = Table(
         Field("params", "table", "Parameters of a synthetic motion "
               "(`pound_mc.motions.synthetic`)."),
         Field("resample_hz", "number", "New sampling rate (Fourier resampling), before "
-              "truncation.", unit="Hz", minimum=0.0, exclusive_minimum=True),
+              "truncation.", unit="Hz", minimum=0.0, exclusive_minimum=True, maximum=1.0e4),
         Field("filter", "table", "Arguments of obspy's `Trace.filter`, e.g. "
               "`{ type = \"bandpass\", freqmin = 0.1, freqmax = 25.0 }`."),
     ),
@@ -371,9 +373,9 @@ SDOF = Table(
     (
         Field("model", "string", "Building model.", default="sdof", choices=("sdof", "shear")),
         Field("period_s", "number", "Natural period.", unit="s", required=True, minimum=0.0,
-              exclusive_minimum=True, varied=True),
+              exclusive_minimum=True, maximum=100.0, varied=True),
         Field("mass_kg", "number", "Mass.", unit="kg", required=True, minimum=0.0,
-              exclusive_minimum=True, varied=True),
+              exclusive_minimum=True, maximum=1.0e10, varied=True),
         _BUILDING_DAMPING,
         Field("height_m", "number", "Height of the mass; needed only to pair it with a shear "
               "building's floors.", unit="m", minimum=0.0, exclusive_minimum=True),
@@ -394,9 +396,9 @@ SHEAR = Table(
     (
         Field("model", "string", "Building model.", required=True, choices=("sdof", "shear")),
         Field("storey_mass_kg", "numbers", "Floor masses, bottom to top.", unit="kg",
-              required=True, minimum=0.0, exclusive_minimum=True),
+              required=True, minimum=0.0, exclusive_minimum=True, maximum=1.0e10),
         Field("storey_stiffness_N_per_m", "numbers", "Storey shear stiffnesses, bottom to top.",
-              unit="N/m", required=True, minimum=0.0, exclusive_minimum=True),
+              unit="N/m", required=True, minimum=0.0, exclusive_minimum=True, maximum=1.0e14),
         Field("storey_height_m", "numbers", "Storey heights, bottom to top (floor elevations "
               "are their cumulative sums).", unit="m", required=True, minimum=0.0,
               exclusive_minimum=True),
@@ -450,12 +452,12 @@ INTEGRATOR = Table(
               choices=tuple(METHODS)),
         Field("dt_s", "number", "Step of the fixed-step methods, or the bound on steps between "
               "contacts (adaptive).", unit="s", default=0.001, minimum=0.0,
-              exclusive_minimum=True, varied=True),
+              exclusive_minimum=True, maximum=1.0, varied=True),
         Field("substeps", "integer", "Sub-steps per contact-duration estimate while in contact "
-              "(adaptive).", default=16, minimum=4),
+              "(adaptive).", default=16, minimum=4, maximum=1024),
         Field("tail_s", "number", "Free vibration after the record (zero ground acceleration) "
               "of runs with yielding buildings, for their residual drift.", unit="s",
-              default=5.0, minimum=0.0),
+              default=5.0, minimum=0.0, maximum=600.0),
     ),
 )  # fmt: skip
 

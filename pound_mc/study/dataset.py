@@ -26,6 +26,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from pound_mc.errors import OutputError
 from pound_mc.study.definition import grid_dim_name
 
 __all__ = [
@@ -99,7 +100,7 @@ RECORD_VARIABLES = {
     "scale_factor": ("1", "factor that scales the record to the intensity of the grid axis"),
 }
 #: Status codes of a simulation (CF flag_values / flag_meanings).
-STATUS_FLAGS = {0: "ok", 1: "unstable", 2: "not_converged"}
+STATUS_FLAGS = {0: "ok", 1: "unstable", 2: "not_converged", 3: "inaccurate"}
 #: Quantiles of the impact force spectrum.
 QUANTILES = (0.05, 0.16, 0.5, 0.84, 0.95)
 
@@ -216,6 +217,8 @@ def build_dataset(
         "units": "1",
         "long_name": "fraction of samples with at least one impact",
     }
+    for var in ds.variables.values():  # CF: units on every variable (text labels: "1")
+        var.attrs.setdefault("units", "1")
     ds.attrs = {
         "Conventions": "CF-1.13",
         "title": f"pound-mc study {study.name}",
@@ -233,16 +236,33 @@ def build_dataset(
 
 
 def write_netcdf(ds: xr.Dataset, path: str | Path) -> Path:
-    """Write ``ds`` to ``path`` atomically (a temporary file renamed into place)."""
+    """Write ``ds`` to ``path`` atomically (a temporary file renamed into place).
+
+    Coordinates carry no ``_FillValue`` (CF 2.5.1: a coordinate has no missing values);
+    float data variables use NaN.
+
+    Raises
+    ------
+    pound_mc.errors.OutputError
+        The file cannot be written (disk full, read-only folder, a folder in its place): the
+        temporary file is removed and the message names ``path``.
+    """
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.part")
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.part")
     encoding = {}
     for name, var in ds.variables.items():
-        if var.dtype.kind == "f":
+        if name in ds.coords:
+            encoding[name] = {"_FillValue": None}
+        elif var.dtype.kind == "f":
             encoding[name] = {"_FillValue": np.nan}
-        elif var.dtype.kind == "O":
-            encoding[name] = {"dtype": str}
-    ds.to_netcdf(tmp, engine="netcdf4", format="NETCDF4", encoding=encoding)
-    os.replace(tmp, path)
+        if var.dtype.kind == "O":
+            encoding.setdefault(name, {})["dtype"] = str
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        ds.to_netcdf(tmp, engine="netcdf4", format="NETCDF4", encoding=encoding)
+        os.replace(tmp, path)
+    except (OSError, RuntimeError) as exc:  # netCDF4 reports a full disk as "NetCDF: HDF error"
+        tmp.unlink(missing_ok=True)
+        reason = getattr(exc, "strerror", None) or str(exc)
+        raise OutputError(f"cannot write the dataset: {reason}", file=str(path)) from None
     return path

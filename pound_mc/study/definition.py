@@ -625,6 +625,9 @@ def study_from_text(text: str, *, file: str | Path | None = None) -> Study:
 def load_study(path: str | Path) -> Study:
     """Read and validate a study file (see the module docstring for the schema)."""
     path = Path(path)
+    if path.is_symlink() and not path.exists():
+        raise InputError("symbolic link that leads nowhere (a loop, or its target is missing)",
+                         file=str(path))  # fmt: skip
     try:
         text = path.read_text(encoding="utf-8")
     except FileNotFoundError:

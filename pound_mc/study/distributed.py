@@ -12,6 +12,21 @@ the local run's: a run started on a cluster can be finished locally and the othe
 A worker lost mid-study (a killed process, a lost node) loses only its chunks in flight: the
 scheduler gives them to other workers; a task that raises is tried again ``retries`` times.
 
+Cluster faults end the run with a :class:`~pound_mc.errors.ClusterError` (one line, exit status
+2 on the command line), never a traceback, and the chunks written so far are kept, so the same
+command (on the cluster or locally) resumes unchanged:
+
+* an address whose scheme is not ``tcp://`` (``tls://`` needs certificates, ``ucx://`` a
+  transport pound-mc does not set up) is refused before connecting;
+* an unreachable scheduler, or one that accepts the connection but does not answer (a frozen
+  process), is given up after ``timeout_s`` (default :data:`TIMEOUT_S`);
+* all workers lost (the engine scattered to them is lost with them), the scheduler lost, or a
+  chunk that failed ``retries`` times: the error names what happened;
+* no chunk finished for ``timeout_s`` seconds (a frozen scheduler, no workers left): given up.
+
+There is no automatic retry of the whole run: after the cause is fixed, run the same command
+again.
+
 Start workers with one thread each and one worker process per core
 (``dask worker ADDRESS --nworkers N --nthreads 1``): the kernels release the GIL but each
 task uses one numba thread, so a worker thread is a core.
@@ -19,6 +34,7 @@ task uses one numba thread, so a worker thread is a core.
 
 from __future__ import annotations
 
+import asyncio
 import logging
 import uuid
 from collections.abc import Iterable
@@ -27,12 +43,16 @@ from pathlib import Path
 
 import numba
 
-from pound_mc.errors import InputError
+from pound_mc.errors import ClusterError, InputError
 from pound_mc.study.runner import Chunk, run_study
 
-__all__ = ["run_study_distributed", "dask_executor", "run_chunk"]
+__all__ = ["run_study_distributed", "dask_executor", "run_chunk", "TIMEOUT_S"]
 
 _INSTALL = 'pip install "pound-mc[dask]"'
+#: Seconds to wait for the scheduler to answer, and for the next chunk to finish.
+TIMEOUT_S = 600.0
+#: Address schemes pound-mc connects to.
+SCHEMES = ("tcp",)
 
 
 def _import_distributed():
@@ -69,7 +89,20 @@ def run_chunk(engine, start: int, stop: int) -> dict:
         numba.set_num_threads(old)
 
 
-def dask_executor(client, *, retries: int = 3):
+def _fault(exc: BaseException) -> str:
+    """What a cluster failure means, in words."""
+    name = type(exc).__name__
+    text = str(exc)
+    if "lost" in text.lower() and "scatter" in text.lower() or name == "FutureCancelledError":
+        return f"all workers were lost (and the study sent to them): {name}: {text}"
+    if name in ("CommClosedError", "StreamClosedError"):
+        return f"the connection to the scheduler was lost: {name}: {text}"
+    if name == "KilledWorker":
+        return f"a chunk killed every worker that ran it: {text}"
+    return f"{name}: {text}"
+
+
+def dask_executor(client, *, retries: int = 3, timeout_s: float = TIMEOUT_S):
     """Executor (see :func:`pound_mc.study.runner.run_study`) that runs chunks on a Dask cluster.
 
     Parameters
@@ -79,6 +112,13 @@ def dask_executor(client, *, retries: int = 3):
     retries : int
         Times a chunk whose task raised is tried again (a lost worker's chunks are
         rescheduled by the scheduler regardless).
+    timeout_s : float
+        Seconds without a finished chunk after which the cluster is given up [s].
+
+    Raises
+    ------
+    pound_mc.errors.ClusterError
+        The cluster failed (workers or scheduler lost, no chunk finished in ``timeout_s``).
     """
     distributed = _import_distributed()
 
@@ -87,9 +127,10 @@ def dask_executor(client, *, retries: int = 3):
         if not chunks:
             return
         tag = f"pound-mc-{engine.study.name}-{uuid.uuid4().hex[:8]}"
-        [shared] = client.scatter([engine], broadcast=True, hash=False)
         futures = {}
+        failed = False
         try:
+            [shared] = client.scatter([engine], broadcast=True, hash=False, timeout=timeout_s)
             for chunk in chunks:
                 future = client.submit(
                     run_chunk,
@@ -101,26 +142,73 @@ def dask_executor(client, *, retries: int = 3):
                     pure=False,
                 )
                 futures[future] = chunk
-            for future in distributed.as_completed(list(futures)):
-                chunk = futures.pop(future)
-                result = future.result()
-                future.release()
-                yield chunk, result
+            while futures:
+                try:
+                    done, _ = distributed.wait(
+                        list(futures), timeout=timeout_s, return_when="FIRST_COMPLETED"
+                    )
+                except TimeoutError:
+                    failed = True
+                    raise ClusterError(
+                        f"no chunk finished in {timeout_s:g} s (a scheduler that does not "
+                        "answer, or no workers left); finished chunks are kept: run again to "
+                        "resume",
+                        key="--scheduler",
+                    ) from None
+                for future in done:
+                    chunk = futures.pop(future)
+                    result = future.result(timeout=timeout_s)
+                    future.release()
+                    yield chunk, result
+        except ClusterError:
+            raise
+        except GeneratorExit:
+            raise
+        except Exception as exc:  # every failure of the cluster, whatever its class
+            failed = True
+            raise ClusterError(
+                f"the Dask cluster failed: {_fault(exc)}; finished chunks are kept: run again "
+                "to resume",
+                key="--scheduler",
+            ) from None
         finally:
-            if futures:
-                client.cancel(list(futures))
-            client.cancel([shared])
+            if not failed:
+                if futures:
+                    client.cancel(list(futures))
+                if "shared" in locals():
+                    client.cancel([shared])
 
     return run
 
 
-def _connect(distributed, stack: ExitStack, scheduler: str | None, workers: int | None):
+async def _identity(distributed, address: str) -> dict:
+    """Ask the scheduler at ``address`` who it is (a scheduler that does not answer hangs)."""
+    comm = await distributed.comm.connect(address)
+    try:
+        await comm.write({"op": "identity", "reply": True})
+        return await comm.read()
+    finally:
+        comm.abort()
+
+
+def _connect(distributed, stack: ExitStack, scheduler: str | None, workers: int | None,
+             timeout_s: float = TIMEOUT_S):  # fmt: skip
     if scheduler is not None:
+        scheme, sep, _ = scheduler.partition("://")
+        if sep and scheme.lower() not in SCHEMES:
+            raise ClusterError(
+                f"unsupported address scheme {scheme + '://'!r} in {scheduler!r}; pound-mc "
+                f"connects to {', '.join(s + '://' for s in SCHEMES)} schedulers",
+                key="--scheduler",
+            )
         try:
-            return stack.enter_context(distributed.Client(scheduler, timeout="20s"))
-        except (OSError, TimeoutError, ValueError) as exc:
-            raise InputError(
-                f"cannot connect to the Dask scheduler {scheduler!r}: {exc}", key="--scheduler"
+            asyncio.run(asyncio.wait_for(_identity(distributed, scheduler), timeout_s))
+            return stack.enter_context(distributed.Client(scheduler, timeout=timeout_s))
+        except Exception as exc:  # unreachable, refused, no answer: every way connecting fails
+            raise ClusterError(
+                f"cannot connect to the Dask scheduler {scheduler!r} within {timeout_s:g} s: "
+                f"{type(exc).__name__}: {exc or 'no answer'}",
+                key="--scheduler",
             ) from None
     if workers is None or workers < 1:
         raise InputError(f"must be >= 1, got {workers}", key="--workers")
@@ -146,6 +234,7 @@ def run_study_distributed(
     workers: int | None = None,
     client=None,
     retries: int = 3,
+    timeout_s: float = TIMEOUT_S,
     **kwargs,
 ):
     """Run ``study`` on a Dask cluster and write ``<out_dir>/<name>.nc``.
@@ -167,6 +256,8 @@ def run_study_distributed(
         An existing client (left open).
     retries : int
         Retries of a chunk whose task raised.
+    timeout_s : float
+        Seconds to wait for the scheduler to answer and for each next chunk [s].
     **kwargs
         ``fresh``, ``chunk_size``, ``progress``, ``engine``, ``max_chunks``, ``on_chunk`` of
         :func:`pound_mc.study.runner.run_study`.
@@ -189,5 +280,6 @@ def run_study_distributed(
     distributed = _import_distributed()
     with ExitStack() as stack:
         if client is None:
-            client = _connect(distributed, stack, scheduler, workers)
-        return run_study(study, out_dir, executor=dask_executor(client, retries=retries), **kwargs)
+            client = _connect(distributed, stack, scheduler, workers, timeout_s)
+        executor = dask_executor(client, retries=retries, timeout_s=timeout_s)
+        return run_study(study, out_dir, executor=executor, **kwargs)

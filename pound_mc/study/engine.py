@@ -34,7 +34,13 @@ from pound_mc.scene import Scene, scene_from_dict, simulate
 from pound_mc.study.dataset import CONTACT_VARIABLES, INELASTIC_VARIABLES, RESULT_VARIABLES
 from pound_mc.study.definition import INTENSITY_KEYS, MATERIAL_KEY, grid_dim_name, scene_model
 
-__all__ = ["StudyEngine", "load_records", "load_traces"]
+__all__ = ["StudyEngine", "load_records", "load_traces", "STEP_BUDGET"]
+
+#: The most integration steps one simulation may take (record duration over ``dt_s``); a study
+#: that needs more is refused before it runs (``check`` and ``run``): at about 0.3 us a step
+#: it would take over 10 s per simulation, and ``dt_s`` = 1e-7 s on a 30-s record (3e8 steps)
+#: is a typing error rather than a study.
+STEP_BUDGET = 3.0e7
 
 # Scene keys the SDOF-pair batch kernel takes per simulation (defaults: the scene's value);
 # ``contact.beta`` stands for the stiffness, ``contact.k_N_per_m`` for the linear laws.
@@ -141,6 +147,7 @@ class StudyEngine:
         }
         self._intensities()
         self._base = self._base_values(study.scene, self.scene)
+        self._check_steps()
         #: Whether a building is a shear building: then every simulation runs the modes of
         #: :attr:`arrays` (computed once) through the general batch, and the outputs include
         #: the per-contact arrays of :data:`~pound_mc.study.dataset.CONTACT_VARIABLES`.
@@ -184,6 +191,42 @@ class StudyEngine:
                 )
             self.scale_factors = targets[None, :] / own[:, None]
             self._intensity_axis = list(study.grid).index(self.intensity_key) + 1
+
+    def _check_steps(self) -> None:
+        """Refuse steps the kernels would not take as written, and endless simulations.
+
+        A fixed-step method's ``dt_s`` longer than a record's sampling interval would be
+        shortened to it (so would every value of a varied ``dt_s``, whatever the method: its
+        axis would be mislabelled); a simulation of more than :data:`STEP_BUDGET` steps would
+        not end in reasonable time.
+        """
+        study = self.study
+        key = "integrator.dt_s"
+        where = f"grid.{key}" if key in study.grid else key
+        if any(v.key == key for v in study.variables):
+            where = f"sampling.vary.{key}"
+        values = np.asarray(self._values(key, {}, 1) if where == key else
+                            study.grid.get(key, self.samples.get(key)), float)  # fmt: skip
+        fixed = self._base["integrator.method"] != "adaptive"
+        errors = []
+        for r, (dt_rec, acc) in enumerate(self.records):
+            name = study.record_names[r]
+            if (fixed or where != key) and np.max(values) > dt_rec * (1 + 1e-9):
+                errors.append(InputError(
+                    f"{np.max(values):g} s is longer than the sampling interval {dt_rec:g} s "
+                    f"of record {name!r}: the step would be shortened to it; give dt_s <= "
+                    f"{dt_rec:g} s", file=study.path, key=where))  # fmt: skip
+                break
+            steps = (acc.size - 1) * dt_rec / min(float(np.min(values)), dt_rec)
+            if steps > STEP_BUDGET:
+                errors.append(InputError(
+                    f"{np.min(values):g} s makes {steps:.3g} steps per simulation on record "
+                    f"{name!r}, more than the budget of {STEP_BUDGET:.0e} steps (the run would "
+                    "not end); give a longer dt_s or a shorter record", file=study.path,
+                    key=where))  # fmt: skip
+                break
+        if errors:
+            raise InputErrors(errors)
 
     def record_of(self, index: int) -> tuple[float, np.ndarray]:
         """``(dt_s, acceleration)`` simulation ``index`` runs: its record, scaled to its intensity.
@@ -394,8 +437,13 @@ class StudyEngine:
                 out[name][sel] = part[name]
         return out
 
-    def calibrate(self, workers: int | None = None, n: int = 64) -> tuple[float, float]:
+    def calibrate(
+        self, workers: int | None = None, n: int = 64, budget_s: float = 20.0
+    ) -> tuple[float, float]:
         """Time a short run of ``n`` simulations spread evenly over the study.
+
+        Fewer are run when the first (after compilation) shows that ``n`` would take more
+        than ``budget_s`` seconds.
 
         Returns
         -------
@@ -411,6 +459,8 @@ class StudyEngine:
             t0 = time.perf_counter()
             self.run_indices(indices[:1])  # compile (or load numba's cache)
             t1 = time.perf_counter()
+            keep = int(max(1, min(indices.size, budget_s / max(t1 - t0, 1e-9))))
+            indices = indices[np.linspace(0, indices.size - 1, keep).round().astype(np.int64)]
             self.run_indices(indices)
             t2 = time.perf_counter()
         return (t2 - t1) / indices.size, t1 - t0

@@ -8,12 +8,14 @@ Used by :mod:`pound_mc.study.definition`.
 
 from __future__ import annotations
 
+import hashlib
+import re
 from pathlib import Path
 
 from pound_mc.errors import InputError
 from pound_mc.motions import suites
 
-__all__ = ["check_intensity", "expand_records"]
+__all__ = ["check_intensity", "expand_records", "record_files", "input_hashes"]
 
 
 def _suite_meta(entry) -> dict:
@@ -109,3 +111,47 @@ def check_intensity(study, prefixes: list[str], file, errors: list) -> None:
                     key=where + "sa_period_s",
                 )
             )
+
+
+def record_files(study) -> list[tuple[str, Path]]:
+    """The files a study's records are read from: ``[(key, path), ...]``.
+
+    ``key`` names the record's ``source`` as messages do (``"record.source"``,
+    ``"records[3].source"``).  Built-in records, suites and synthetic motions are part of the
+    installed packages (their version is in the run's identity) and are not listed.
+    """
+    base_dir = None if study.path is None else Path(study.path).parent
+    out = []
+    for i, record in enumerate(study.records):
+        source = record.get("source")
+        if not isinstance(source, str) or re.match(r"^[A-Za-z][\w-]+:", source):
+            continue  # builtin:, suite:, synthetic:
+        path = Path(source).expanduser()
+        if not path.is_absolute() and base_dir is not None:
+            path = base_dir / path
+        out.append((f"{study.record_table(i)}.source", path))
+    return out
+
+
+def input_hashes(study) -> dict[str, str]:
+    """The identity of a study's inputs: SHA-256 of the study text and of every record file.
+
+    Returns
+    -------
+    dict
+        ``{"study": hash of the text, "<key> (<path>)": hash of the file's bytes, ...}``; a
+        file that cannot be read hashes to ``"unreadable"`` (reading it then fails with its
+        own message).
+    """
+    out = {"study": study.hash}
+    for key, path in record_files(study):
+        digest = hashlib.sha256()
+        try:
+            with open(path, "rb") as fh:
+                for block in iter(lambda: fh.read(1 << 20), b""):
+                    digest.update(block)
+            value = digest.hexdigest()
+        except OSError:
+            value = "unreadable"
+        out[f"{key} ({path})"] = value
+    return out

@@ -4,9 +4,23 @@ The simulations of a study are numbered in C order of ``study.shape`` = ``(recor
 axes, sample)`` and cut into chunks of ``chunk_size``.  Each finished chunk is written
 atomically to ``<out>/<name>/chunk_NNNNNN.npz`` (temporary file renamed into place), so an
 interrupted run (Ctrl-C, a killed process) loses at most the chunks in flight; re-running the
-same study skips the finished ones.  A changed study file is detected by its hash and refused
-unless ``fresh=True``.  When every chunk is done the dataset is assembled and written to
-``<out>/<name>.nc``.
+same study skips the finished ones.  When every chunk is done the dataset is assembled and
+written to ``<out>/<name>.nc``.
+
+Run identity: ``<out>/<name>/manifest.json`` holds the SHA-256 of the study text and of every
+record file the study reads (:func:`pound_mc.study.records.input_hashes`) and the package
+version; a resume whose inputs differ is refused, naming the changed input, unless
+``fresh=True`` (then the earlier results are discarded).  An unreadable manifest is reported as
+such, not as a changed study.
+
+One writer per output: a run holds an exclusive advisory lock (:func:`fcntl.flock`) on
+``<out>/.<name>.lock`` (which records its process id) from the manifest check to the dataset;
+a second run on the same study and folder is refused at once.  The kernel releases the lock
+when the process ends, however it ends, so a lock left by a killed run is never in the way.
+Temporary files carry the process id (``.<file>.<pid>.part``); the ones a killed run left
+behind are removed by the next run that takes the lock, and a failed write (disk full, a
+read-only folder) removes its own and ends in an :class:`~pound_mc.errors.OutputError` naming
+the path.
 
 Every simulation writes only its own output slot and all random numbers are drawn before any
 chunk runs, so results do not depend on thread count, chunk size or backend.
@@ -25,6 +39,7 @@ environment lookup per stage and is not meant for users.
 
 from __future__ import annotations
 
+import fcntl
 import io
 import json
 import os
@@ -43,10 +58,11 @@ import numpy as np
 from tqdm.auto import tqdm
 
 from pound_mc._version import __version__
-from pound_mc.errors import InputError
+from pound_mc.errors import InputError, OutputError
 from pound_mc.integrators.threads import numba_threads
 from pound_mc.study.dataset import build_dataset, write_netcdf
 from pound_mc.study.engine import StudyEngine
+from pound_mc.study.records import input_hashes
 from pound_mc.study.warmup import warm_up
 
 __all__ = [
@@ -57,6 +73,8 @@ __all__ = [
     "plan_text",
     "chunk_ranges",
     "default_chunk_size",
+    "output_lock",
+    "memory_estimate",
 ]
 
 _MANIFEST = "manifest.json"
@@ -158,24 +176,34 @@ def _stop_between_chunks():
         signal.signal(signal.SIGINT, old)
 
 
+def part_path(path: Path) -> Path:
+    """The temporary name of ``path`` in this process: ``.<name>.<pid>.part`` beside it."""
+    return path.with_name(f".{path.name}.{os.getpid()}.part")
+
+
 def _atomic_write_bytes(path: Path, data: bytes, stage: str) -> None:
     """Write ``data`` to a temporary file, flush it to disk and rename it to ``path``.
 
     A reader sees either no ``path`` or the complete file, never a part of it; the temporary
-    ``.<name>.part`` an interrupted write leaves behind is never read and is overwritten by
-    the next write.
+    file (:func:`part_path`) an interrupted write leaves behind is never read and is removed
+    by the next run.  A write that fails (disk full, read-only folder) removes it and raises
+    :class:`~pound_mc.errors.OutputError` naming ``path``.
     """
-    tmp = path.with_name(f".{path.name}.part")
-    with open(tmp, "wb") as fh:
-        half = len(data) // 2
-        fh.write(data[:half])
-        fh.flush()
-        _pause_at(f"{stage}:half")
-        fh.write(data[half:])
-        fh.flush()
-        os.fsync(fh.fileno())
-    _pause_at(f"{stage}:part")
-    os.replace(tmp, path)
+    tmp = part_path(path)
+    try:
+        with open(tmp, "wb") as fh:
+            half = len(data) // 2
+            fh.write(data[:half])
+            fh.flush()
+            _pause_at(f"{stage}:half")
+            fh.write(data[half:])
+            fh.flush()
+            os.fsync(fh.fileno())
+        _pause_at(f"{stage}:part")
+        os.replace(tmp, path)
+    except OSError as exc:
+        tmp.unlink(missing_ok=True)
+        raise OutputError(f"cannot write: {exc.strerror or exc}", file=str(path)) from None
 
 
 def _atomic_savez(path: Path, stage: str = "chunk", **arrays) -> None:
@@ -213,26 +241,103 @@ def plan_text(study, chunk_size: int | None = None, seconds_per_simulation: floa
     return "\n".join(lines)
 
 
+@contextmanager
+def output_lock(out_dir: Path, name: str):
+    """Hold the exclusive advisory lock of study ``name``'s results in ``out_dir``.
+
+    The lock file ``<out_dir>/.<name>.lock`` holds the process id of the run that has it.
+
+    Raises
+    ------
+    pound_mc.errors.OutputError
+        Another live process holds the lock (its id named), or the folder cannot be written.
+    """
+    path = Path(out_dir) / f".{name}.lock"
+    while True:
+        try:
+            Path(out_dir).mkdir(parents=True, exist_ok=True)
+            fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
+        except OSError as exc:
+            where = exc.filename or path
+            raise OutputError(f"cannot write: {exc.strerror or exc}", file=str(where)) from None
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            holder = os.pread(fd, 64, 0).decode(errors="replace").strip() or "unknown"
+            os.close(fd)
+            raise OutputError(
+                f"another run (process {holder}) is writing these results; wait for it to "
+                "end, or give another --out",
+                file=str(path),
+            ) from None
+        try:
+            same = os.fstat(fd).st_ino == os.stat(path).st_ino
+        except FileNotFoundError:
+            same = False
+        if same:
+            break
+        os.close(fd)  # the holder removed the file as we opened it: take the new one
+    try:
+        os.ftruncate(fd, 0)
+        os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
+        yield path
+    finally:
+        path.unlink(missing_ok=True)
+        os.close(fd)
+
+
+def _remove_parts(out_dir: Path, name: str) -> None:
+    """Remove the temporary files killed runs left behind (the caller holds the lock)."""
+    work = out_dir / name
+    stale = list(work.glob(".*.part")) if work.is_dir() else []
+    stale += out_dir.glob(f".{name}.nc.*part")
+    for path in stale:
+        path.unlink(missing_ok=True)
+
+
+def _changed_inputs(old: dict, inputs: dict) -> list[str]:
+    """The inputs whose hash differs from the earlier run's (``manifest.json``)."""
+    before = old.get("inputs")
+    if not isinstance(before, dict):  # a manifest of an older version: the study hash only
+        before = {"study": old.get("study_hash")}
+    changed = []
+    for key, value in inputs.items():
+        if before.get(key) != value:
+            what = "the study file" if key == "study" else key
+            changed.append(what + (" (not in the earlier run)" if key not in before else ""))
+    changed += [f"{key} (no longer read)" for key in before if key not in inputs]
+    if old.get("pound_mc_version") != __version__:
+        changed.append(f"the package version ({old.get('pound_mc_version')} -> {__version__})")
+    return changed
+
+
 def _check_manifest(work: Path, study, fresh: bool) -> None:
     manifest = work / _MANIFEST
-    if manifest.exists():
+    inputs = input_hashes(study)
+    if fresh and (work.exists() or work.is_symlink()):
+        _remove_tree(work)
+    elif manifest.exists():
         try:
-            old = json.loads(manifest.read_text())
-        except (OSError, ValueError):
-            old = {}
-        if old.get("study_hash") != study.hash:
-            if not fresh:
-                raise InputError(
-                    f"the study changed since the results in {work} were started "
-                    "(hash differs); run with --fresh to discard them and start again",
-                    file=str(study.path) if study.path else None,
-                )
-            shutil.rmtree(work)
-        elif fresh:
-            shutil.rmtree(work)
-    elif fresh and work.exists():
-        shutil.rmtree(work)
-    work.mkdir(parents=True, exist_ok=True)
+            old = json.loads(manifest.read_text(encoding="utf-8"))
+            if not isinstance(old, dict):
+                raise ValueError("not a JSON object")
+        except (OSError, ValueError) as exc:
+            raise InputError(
+                f"the manifest of earlier results is unreadable or corrupt ({exc}); run with "
+                "--fresh to discard them and start again",
+                file=str(manifest),
+            ) from None
+        changed = _changed_inputs(old, inputs)
+        if changed:
+            raise InputError(
+                f"changed since the results in {work} were started: {'; '.join(changed)}; "
+                "run with --fresh to discard them and start again",
+                file=str(study.path) if study.path else None,
+            )
+    try:
+        work.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise OutputError(f"cannot create: {exc.strerror or exc}", file=str(work)) from None
     if not manifest.exists():
         _atomic_write_text(
             manifest,
@@ -243,10 +348,60 @@ def _check_manifest(work: Path, study, fresh: bool) -> None:
                     "n_simulations": study.n_simulations,
                     "shape": list(study.shape),
                     "pound_mc_version": __version__,
+                    "inputs": inputs,
                 },
                 indent=1,
             ),
             stage="manifest",
+        )
+
+
+def _remove_tree(work: Path) -> None:
+    """Remove earlier results (``--fresh``); a file or link in their place goes too."""
+    try:
+        if work.is_dir() and not work.is_symlink():
+            shutil.rmtree(work)
+        else:
+            work.unlink()
+    except OSError as exc:
+        raise OutputError(f"cannot remove: {exc.strerror or exc}", file=str(work)) from None
+
+
+def memory_estimate(study, layout: dict) -> int:
+    """Bytes of memory a run holds for its results: the flat arrays, twice (the dataset).
+
+    Parameters
+    ----------
+    study : pound_mc.study.definition.Study
+        The study.
+    layout : dict
+        :meth:`pound_mc.study.engine.StudyEngine.result_layout`.
+    """
+    per_sim = sum(
+        np.dtype(dtype).itemsize * int(np.prod(tail, dtype=np.int64))
+        for tail, dtype in layout.values()
+    )
+    return 2 * study.n_simulations * per_sim
+
+
+def _physical_memory() -> int | None:
+    """Bytes of physical memory of this machine, if the system says."""
+    try:
+        return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    except (AttributeError, ValueError, OSError):
+        return None
+
+
+def _check_memory(study, layout: dict) -> None:
+    """Refuse a study whose results do not fit in memory before anything is written."""
+    need, have = memory_estimate(study, layout), _physical_memory()
+    if have is not None and need > have:
+        raise InputError(
+            f"{study.n_simulations:,} simulations need about {need / 2**30:,.1f} GiB of memory "
+            f"for their results, more than this machine's {have / 2**30:,.1f} GiB; make the "
+            "grid or the number of samples smaller",
+            file=str(study.path) if study.path else None,
+            key="sampling.n",
         )
 
 
@@ -344,13 +499,33 @@ def run_study(
     out_dir = Path(out_dir)
     chunk_size = chunk_size or study.chunk_size or default_chunk_size(study.n_simulations)
     engine = engine or StudyEngine(study)
+    layout = engine.result_layout()  # {name: (shape after the simulation axis, dtype)}
+    _check_memory(study, layout)
+    with output_lock(out_dir, study.name):
+        _remove_parts(out_dir, study.name)
+        return _run_locked(
+            study, out_dir, engine, layout, fresh, chunk_size, progress, max_chunks, executor,
+            on_chunk,
+        )  # fmt: skip
+
+
+def _run_locked(study, out_dir, engine, layout, fresh, chunk_size, progress, max_chunks, executor,
+                on_chunk) -> RunReport:  # fmt: skip
+    """:func:`run_study` once the output lock is held."""
     work = out_dir / study.name
     _check_manifest(work, study, fresh)
 
     n = study.n_simulations
     ranges = chunk_ranges(n, chunk_size)
-    layout = engine.result_layout()  # {name: (shape after the simulation axis, dtype)}
-    flat = {name: np.empty((n, *tail), dtype=dtype) for name, (tail, dtype) in layout.items()}
+    try:
+        flat = {name: np.empty((n, *tail), dtype=dtype) for name, (tail, dtype) in layout.items()}
+    except MemoryError:
+        raise InputError(
+            f"not enough memory for the results of {n:,} simulations; make the grid or the "
+            "number of samples smaller",
+            file=str(study.path) if study.path else None,
+            key="sampling.n",
+        ) from None
     todo = []
     for k, (start, stop) in enumerate(ranges):
         path = work / f"chunk_{chunk_size}_{k:06d}.npz"

@@ -62,7 +62,8 @@ STUDY = Table(
     "What the study is called and the root of its random numbers (study files only).",
     (
         Field("name", "string", "Name of the study and of its dataset: letters, digits, - and "
-              "_.", required=True, pattern=r"^[A-Za-z0-9][A-Za-z0-9_-]*$"),
+              "_, at most 100 characters (file names).", required=True,
+              pattern=r"^[A-Za-z0-9][A-Za-z0-9_-]{0,99}$"),
         Field("seed", "integer", "Root seed of the sampling.", required=True, minimum=0),
         Field("description", "string", "Free text, kept in the dataset.", default=""),
         Field("chunk_size", "integer", "Simulations per chunk file (default about 1/50 of the "
