@@ -121,8 +121,8 @@ def test_history_runs_the_pair_kernel():
     arrays = scene.modal_arrays()
     plain, _, _ = run_kernel(acc, dt, **arrays, **kwargs(scene))
     fast, _, (hx, hd, hf) = run_kernel(acc, dt, **arrays, **kwargs(scene), history=True)
-    for key in OUTPUTS:
-        assert fast[key] == plain[key], key
+    for key in OUTPUTS:  # NaN where an output does not apply (the inelastic ones)
+        np.testing.assert_array_equal(fast[key], plain[key], err_msg=key)
     _, _, (gx, gd, gf) = general(acc, dt, arrays, scene, history=True)
     assert hx.shape == gx.shape == (acc.size, 2)
     assert np.count_nonzero(hf) == np.count_nonzero(gf) > 0  # contact at some samples
