@@ -58,7 +58,8 @@ from pound_mc.integrators.outputs import (
 )
 from pound_mc.integrators.pair import newmark_pair
 from pound_mc.integrators.toolkit import MAX_STEPS
-from pound_mc.physics.contact import check_relation
+from pound_mc.physics.contact import CONTACT_MODELS, check_relation, reported_xi
+from pound_mc.physics.materials import E_FLOOR, PER_IMPACT_OUTSIDE, restitution_rows
 
 __all__ = [
     "METHODS",
@@ -85,8 +86,44 @@ METHODS = tuple(_METHOD_CODES)
 
 #: Settings of one kernel run, as the kernels take them: codes of the contact law, of its
 #: damping relation and of the method, the step bound ``dt_s`` [s] and the contact sub-steps
-#: per contact duration (``adaptive``).  Build it with :func:`kernel_settings`.
-KernelSettings = namedtuple("KernelSettings", "model relation method dt_s substeps")
+#: per contact duration (``adaptive``), then the restitution set per impact (empty arrays:
+#: fixed restitution): the policy outside the measured velocities (0 clamp, 1 extrapolate) and
+#: the lowest restitution it may reach, the table of the relation's ``xi`` on a uniform grid of
+#: ``e`` (start, spacing), the seed's Table 2 rows (velocities [m/s], ``e_min``, ``e_max``)
+#: and that ``xi`` table.  Build it with :func:`kernel_settings`.
+KernelSettings = namedtuple(
+    "KernelSettings",
+    "model relation method dt_s substeps outside rest_floor xi_e0 xi_de rest_v rest_lo rest_hi "
+    "xi_tab",
+)
+#: Spacing of the ``e`` grid of a relation's ``xi`` table [-] (linear interpolation in it is
+#: within 2e-8 of the relation for e >= 0.3).
+XI_TABLE_DE = 1e-4
+
+
+def _restitution_arrays(model: str, relation: str | None, restitution: dict | None) -> tuple:
+    """Settings fields of per-impact restitution (:data:`KernelSettings`), empty without."""
+    empty = np.zeros(0)
+    if restitution is None:
+        return 0, 0.0, 0.0, 1.0, empty, empty, empty, empty
+    outside = restitution.get("outside", "clamp")
+    if outside not in PER_IMPACT_OUTSIDE:
+        raise InputError(
+            f"unknown policy {outside!r}; choose one of {list(PER_IMPACT_OUTSIDE)}",
+            key="contact.outside",
+        )
+    if CONTACT_MODELS[model].damping is None:
+        raise InputError(
+            f"the {model!r} law has no damping to set per impact", key="contact.restitution"
+        )
+    v, lo, hi = restitution_rows(restitution["material"])
+    e_grid = np.linspace(E_FLOOR, 1.0, int(round((1.0 - E_FLOOR) / XI_TABLE_DE)) + 1)
+    xi_tab = (
+        empty if CONTACT_MODELS[model].damping == "zeta"
+        else np.asarray(reported_xi(model, e_grid, relation), dtype=np.float64)
+    )  # fmt: skip
+    de = float(e_grid[1] - e_grid[0])
+    return (PER_IMPACT_OUTSIDE.index(outside), E_FLOOR, E_FLOOR, de, v, lo, hi, xi_tab)
 
 
 class KernelResult(NamedTuple):
@@ -109,8 +146,13 @@ def kernel_settings(
     relation: str | None = None,
     dt_s: float = 0.001,
     substeps: int = 16,
+    restitution: dict | None = None,
 ) -> KernelSettings:
     """Kernel settings from names (``relation`` None: the law's default).
+
+    ``restitution``: ``{"material": NAME, "outside": "clamp" | "extrapolate"}`` sets each
+    impact's restitution from the seed's Table 2 at its onset velocity (the kernels' ``xi``
+    then holds the quantile of the measured range); None: fixed.
 
     Raises
     ------
@@ -124,8 +166,9 @@ def kernel_settings(
         )
     rel = RELATION_CODES[model][relation] if relation is not None else 0
     return KernelSettings(
-        LAW_CODES[model], rel, _METHOD_CODES[method], float(dt_s), float(substeps)
-    )
+        LAW_CODES[model], rel, _METHOD_CODES[method], float(dt_s), float(substeps),
+        *_restitution_arrays(model, relation, restitution),
+    )  # fmt: skip
 
 
 @jit(inline=True)
@@ -261,6 +304,7 @@ def run_kernel(
     q0=None,
     v0=None,
     history: bool = False,
+    restitution: dict | None = None,
 ) -> KernelResult:
     """Run one simulation on prepared modal arrays.
 
@@ -280,8 +324,11 @@ def run_kernel(
         Initial modal state (default at rest).
     history : bool
         Also return histories at the record's samples.
+    restitution : dict, optional
+        Restitution set per impact (:func:`kernel_settings`); ``xi`` then holds its quantile.
     """
-    settings = kernel_settings(model, method, relation=relation, dt_s=dt_s, substeps=substeps)
+    settings = kernel_settings(model, method, relation=relation, dt_s=dt_s, substeps=substeps,
+                               restitution=restitution)  # fmt: skip
     n = omega.size
     nc = gap.size
     nf = phi.shape[0]
@@ -315,7 +362,9 @@ def run_kernel(
 def _with_step(settings, dt_s):
     """``settings`` with the step bound ``dt_s`` of one simulation."""
     return KernelSettings(settings.model, settings.relation, settings.method, dt_s,
-                          settings.substeps)  # fmt: skip
+                          settings.substeps, settings.outside, settings.rest_floor,
+                          settings.xi_e0, settings.xi_de, settings.rest_v, settings.rest_lo,
+                          settings.rest_hi, settings.xi_tab)  # fmt: skip
 
 
 @jit(inline=True)
@@ -416,6 +465,7 @@ def simulate_sdof_pairs(
     contact_model: str = "jankowski",
     relation: str | None = None,
     substeps: int = 16,
+    restitution: dict | None = None,
 ) -> dict[str, np.ndarray]:
     """Run many SDOF-pair simulations on one record in threads.
 
@@ -423,9 +473,11 @@ def simulate_sdof_pairs(
     ``xi`` is the damping ratio (the restitution ``e`` for ``hertzdamp``), ``relation`` the
     law's damping relation (None: its default).  Returns ``{output name: array}`` for every
     name in :data:`OUTPUTS`; each simulation writes only its own slot, so results do not
-    depend on the number of threads.
+    depend on the number of threads.  ``restitution``: set per impact (:func:`kernel_settings`;
+    ``xi`` then holds its quantile).
     """
-    settings = kernel_settings(contact_model, method, relation=relation, substeps=substeps)
+    settings = kernel_settings(contact_model, method, relation=relation, substeps=substeps,
+                               restitution=restitution)  # fmt: skip
     arrays = [
         left_period_s, left_damping_ratio, left_mass_kg, right_period_s, right_damping_ratio,
         right_mass_kg, gap_m, beta, xi, dt_s,
@@ -496,6 +548,7 @@ def simulate_scene_batch(
     contact_model: str = "jankowski",
     relation: str | None = None,
     substeps: int = 16,
+    restitution: dict | None = None,
 ) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
     """Run many simulations of one pair of buildings (any model) on one record, in threads.
 
@@ -514,6 +567,8 @@ def simulate_scene_batch(
         Integration method, contact law and its damping relation (None: the law's default).
     substeps : int
         Contact sub-steps per estimated contact duration (``adaptive``).
+    restitution : dict, optional
+        Restitution set per impact (:func:`kernel_settings`; ``xi`` then holds its quantile).
 
     Returns
     -------
@@ -522,7 +577,8 @@ def simulate_scene_batch(
     contacts : dict
         ``{name: (nsim, n_contacts)}`` for every name in :data:`CONTACT_OUTPUTS`.
     """
-    settings = kernel_settings(contact_model, method, relation=relation, substeps=substeps)
+    settings = kernel_settings(contact_model, method, relation=relation, substeps=substeps,
+                               restitution=restitution)  # fmt: skip
     nc = arrays["psi"].shape[0]
     beta, xi, dt_s = np.broadcast_arrays(
         *[np.asarray(a, dtype=np.float64) for a in (beta, xi, dt_s)]

@@ -34,6 +34,11 @@ so the right-hand side is smooth inside every segment.  Peak force and peak disp
 continuous-time maxima: the dense output of every segment is sampled finely and the best sample
 refined with :func:`scipy.optimize.minimize_scalar`.
 
+With ``restitution = "velocity"`` each impact's ``e`` is
+:func:`pound_mc.physics.materials.restitution_at` (the seed's Table 2) at the relative
+velocity at the onset event, and its damping (``xi`` by
+:func:`pound_mc.physics.relations.xi_from_e`, or ``zeta``) is fixed for that episode.
+
 This is slow (seconds for a 30 s SDOF-pair record) and meant for tests and checks only.
 """
 
@@ -47,7 +52,8 @@ from scipy.optimize import minimize_scalar
 
 from pound_mc.integrators.outputs import IMPACT_MIN_PENETRATION_M
 from pound_mc.motions import record_arrays
-from pound_mc.physics.relations import HERTZDAMP_RELATIONS
+from pound_mc.physics.materials import restitution_at
+from pound_mc.physics.relations import HERTZDAMP_RELATIONS, xi_from_e
 
 __all__ = ["reference_solution"]
 
@@ -122,7 +128,9 @@ def reference_solution(
     dict
         ``peak_force`` [N], ``impacts``, ``max_penetration`` [m] (0 without impacts),
         ``peak_disp_left``, ``peak_disp_right`` [m] (max over floors and time of ``|x|``),
-        ``impact_times`` (list [s]), ``peak_force_time`` [s], per-contact arrays
+        ``impact_times`` (list [s]), ``impact_velocities`` (list [m/s], the onset velocity of
+        every impact), ``peak_force_restitution`` (``e`` of the peak-force episode, NaN with
+        fixed restitution), ``peak_force_time`` [s], per-contact arrays
         ``contact_peak_force`` and ``contact_impacts``, ``x_end``, ``v_end`` (final state),
         ``segments`` (solver calls), ``wall_s``.
     """
@@ -161,13 +169,35 @@ def reference_solution(
     meff = np.array([ct.m_eff for ct in scene.contacts], dtype=float)
     gap = np.broadcast_to(np.asarray(scene.gap_m, dtype=float), (nc,)).copy()
     beta = float(scene.stiffness)
+    velocity = getattr(scene, "restitution", "fixed") == "velocity"
     if model == "hertzdamp":
-        e_coef = float(scene.e)
-        xi = 0.0
+        e_coef = float(scene.e) if not velocity else 1.0
+        xi0 = 0.0
         zeta_of = HERTZDAMP_RELATIONS[scene.relation or "ye2009"]
     else:
         e_coef = 1.0
-        xi = float(scene.xi) if scene.xi is not None else 0.0
+        xi0 = float(scene.xi) if scene.xi is not None else 0.0
+    xi = np.full(nc, xi0)
+    zhd = np.zeros(nc)
+    e_episode = np.full(nc, np.nan)
+    v_episode = np.zeros(nc)
+    impact_velocities: list[float] = []
+    peak_e = np.nan
+
+    def start_episode(j, vimp):
+        """Damping of an episode of contact ``j`` starting at velocity ``vimp`` [m/s]."""
+        v_episode[j] = vimp
+        if velocity:
+            e_episode[j] = restitution_at(
+                scene.material, max(vimp, 1e-12), scene.e_quantile, outside=scene.outside
+            )
+            if model == "hertzdamp":
+                zhd[j] = zeta_of(e_episode[j], max(vimp, 1e-12))
+            else:
+                xi[j] = xi_from_e(e_episode[j], scene.relation)
+        elif model == "hertzdamp":
+            zhd[j] = zeta_of(e_coef, max(vimp, 1e-12))
+
     zhd = np.zeros(nc)
 
     y = np.zeros(2 * n)
@@ -192,8 +222,7 @@ def reference_solution(
         if d > 0.0:
             dd = y[n + il[j]] - y[n + ir[j]]
             phase[j] = _APPROACH if dd > 0.0 else _RESTITUTION
-            if model == "hertzdamp":
-                zhd[j] = zeta_of(e_coef, max(dd, 1e-12))
+            start_episode(j, dd)
 
     state = {"ag0": 0.0, "slope": 0.0, "t0": 0.0}
 
@@ -203,7 +232,7 @@ def reference_solution(
             if phase[j] != _OPEN:
                 d = x[il[j]] - x[ir[j]] - gap[j]
                 dd = v[il[j]] - v[ir[j]]
-                f[j] = _contact_force(model, d, dd, beta, xi, meff[j], zhd[j], phase[j])
+                f[j] = _contact_force(model, d, dd, beta, xi[j], meff[j], zhd[j], phase[j])
         return f
 
     def rhs(t, yy):
@@ -249,7 +278,7 @@ def reference_solution(
 
     def scan_segment(sol_t, dense):
         """Continuous-time maxima of |x| per floor and of the contact forces."""
-        nonlocal peak_f_time
+        nonlocal peak_f_time, peak_e
         tt = np.asarray(sol_t)
         if tt.size < 2:
             return
@@ -274,7 +303,7 @@ def reference_solution(
                 # penetration and its rate from the state (displacements, then velocities)
                 d = s[il[j]] - s[ir[j]] - gap[j]
                 dd = s[n + il[j]] - s[n + ir[j]]
-                return _contact_force(model, d, dd, beta, xi, meff[j], zhd[j], phase[j])
+                return _contact_force(model, d, dd, beta, xi[j], meff[j], zhd[j], phase[j])
 
             def force_at(t, force_of=force_of):
                 return force_of(dense(t))
@@ -300,6 +329,7 @@ def reference_solution(
                 peak_f[j] = val
                 if val >= peak_f.max():
                     peak_f_time = t_best
+                    peak_e = e_episode[j]
 
     for i in range(npts - 1):
         t_a = i * dt_rec
@@ -353,9 +383,7 @@ def reference_solution(
                     phase[j] = _APPROACH
                     pending[j] = True  # an impact once the penetration is deep enough
                     impact_times.append(t)
-                    if model == "hertzdamp":
-                        vimp = y[n + il[j]] - y[n + ir[j]]
-                        zhd[j] = zeta_of(e_coef, max(vimp, 1e-12))
+                    start_episode(j, y[n + il[j]] - y[n + ir[j]])
                     h_last = None  # let the solver choose a step for the stiff contact
                 elif kind == "turn":
                     phase[j] = _RESTITUTION
@@ -364,6 +392,7 @@ def reference_solution(
                     if pending[j] and pen > IMPACT_MIN_PENETRATION_M:
                         impacts[j] += 1
                         pending[j] = False
+                        impact_velocities.append(float(v_episode[j]))
                 elif kind == "separation":
                     phase[j] = _OPEN
                 else:
@@ -380,6 +409,8 @@ def reference_solution(
         "peak_disp_left": float(x_left.max()),
         "peak_disp_right": float(x_right.max()),
         "impact_times": impact_times,
+        "impact_velocities": impact_velocities,
+        "peak_force_restitution": float(peak_e),
         "contact_peak_force": peak_f.copy(),
         "contact_impacts": impacts.copy(),
         "x_end": y[:n].copy(),

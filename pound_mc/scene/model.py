@@ -29,7 +29,10 @@ _STUDY_TABLES = {"study", "grid", "sampling", "records"}
 
 
 #: Fields of a :class:`Scene` the modal arrays depend on (the cache key holds their values).
-_MODAL_FIELDS = ("left", "right", "contacts", "contact_model", "stiffness", "xi", "e")
+_MODAL_FIELDS = (
+    "left", "right", "contacts", "contact_model", "stiffness", "xi", "e", "restitution",
+    "e_quantile",
+)  # fmt: skip
 
 
 @dataclass
@@ -57,6 +60,10 @@ class Scene:
     method: str = "adaptive"
     dt_s: float = 0.001
     substeps: int = 16
+    restitution: str = "fixed"
+    material: str | None = None
+    e_quantile: float | None = None
+    outside: str = "clamp"
     file: str | None = None
     base_dir: Path | None = None
     _cache: dict = field(default_factory=dict, init=False, repr=False, compare=False)
@@ -116,6 +123,8 @@ class Scene:
         # per impact from e and the impact velocity (hertzdamp)
         per_impact = CONTACT_MODELS[self.contact_model].damping == "zeta"
         xi = self.e if per_impact else self.xi
+        if self.restitution == "velocity":
+            xi = self.e_quantile  # the kernels set e and the damping at every impact
         return {
             "omega": np.r_[self.left.omega, self.right.omega],
             "zeta": np.r_[
@@ -130,6 +139,12 @@ class Scene:
             "beta": np.full(nc, float(self.stiffness)),
             "xi": np.full(nc, float(xi if xi is not None else 0.0)),
         }
+
+    def restitution_rule(self) -> dict | None:
+        """The kernels' per-impact restitution (``restitution = "velocity"``), else None."""
+        if self.restitution != "velocity":
+            return None
+        return {"material": self.material, "outside": self.outside}
 
     def load_record(self):
         """The scene's record as an obspy Trace [m/s^2], preprocessed."""
@@ -198,6 +213,9 @@ class SimulationResult:
             "contact_model": self.scene.contact_model,
             "xi": num(self.scene.xi) if self.scene.xi is not None else None,
             "steps": int(o["steps"]),
+            "max_impact_velocity": num(o["max_impact_velocity"]),
+            "median_impact_velocity": num(o["median_impact_velocity"]),
+            "peak_force_restitution": num(o["peak_force_restitution"]),
             "contacts": [
                 {
                     "left_floor": c.left_floor + 1,
@@ -206,6 +224,7 @@ class SimulationResult:
                     "gap_m": float(self.scene.gap_m[k]),
                     "peak_force_N": num(self.contacts["peak_force"][k]),
                     "impacts": int(self.contacts["impacts"][k]),
+                    "max_impact_velocity": num(self.contacts["max_impact_velocity"][k]),
                 }
                 for k, c in enumerate(self.scene.contacts)
             ],
@@ -253,6 +272,25 @@ def _contact(ct: dict, n_contacts: int | None, file, errors: list) -> dict:
                        key=f"contact.{other}")
         )  # fmt: skip
     v["stiffness"] = v.get(skey)
+    velocity = v.get("restitution") == "velocity"
+    if velocity:
+        for key in ("material", "e_quantile"):
+            if key not in ct:
+                errors.append(InputError("is needed with restitution = 'velocity'", file=file,
+                                         key=f"contact.{key}"))  # fmt: skip
+        for key in ("e", "xi"):
+            if key in ct:
+                errors.append(InputError("is set per impact with restitution = 'velocity'",
+                                         file=file, key=f"contact.{key}"))  # fmt: skip
+        if CONTACT_MODELS[model].damping is None:
+            errors.append(InputError(f"the {model!r} law has no damping to set per impact",
+                                     file=file, key="contact.restitution"))  # fmt: skip
+        v["relation"] = v.get("relation") or schema.default_relation(model)
+        return _contact_gaps(v, n_contacts, file, errors)
+    for key in ("material", "e_quantile"):
+        if key in ct:
+            errors.append(InputError("applies only with restitution = 'velocity'", file=file,
+                                     key=f"contact.{key}"))  # fmt: skip
     if "xi" in ct and "e" in ct:
         errors.append(InputError("give either xi or e, not both", file=file, key="contact.xi"))
     elif "e" not in ct and "xi" not in ct and model in ("jankowski", "kelvin"):
@@ -269,6 +307,11 @@ def _contact(ct: dict, n_contacts: int | None, file, errors: list) -> dict:
             errors.append(InputError(exc.message, file=file, key="contact.relation"))
     elif "relation" in ct:
         v.pop("relation", None)  # without e the relation says nothing
+    return _contact_gaps(v, n_contacts, file, errors)
+
+
+def _contact_gaps(v: dict, n_contacts: int | None, file, errors: list) -> dict:
+    """``contact.gap_m`` as one gap per contact."""
     if "gap_m" in v and n_contacts is not None:
         gaps = np.atleast_1d(np.asarray(v["gap_m"], dtype=float))
         if gaps.size == 1:
@@ -347,6 +390,10 @@ def scene_from_dict(data: dict, *, file: str | Path | None = None) -> Scene:
         method=it["method"],
         dt_s=float(it["dt_s"]),
         substeps=it["substeps"],
+        restitution=ct.get("restitution", "fixed"),
+        material=ct.get("material"),
+        e_quantile=None if ct.get("e_quantile") is None else float(ct["e_quantile"]),
+        outside=ct.get("outside", "clamp"),
         file=file_s,
         base_dir=base_dir,
     )
@@ -408,6 +455,7 @@ def simulate(
         dt_s=dt_s or scene.dt_s,
         substeps=substeps or scene.substeps,
         history=history,
+        restitution=scene.restitution_rule(),
     )
     if m != scene.method or dt_s or substeps:
         scene = replace(

@@ -26,6 +26,7 @@ from pound_mc.integrators import METHODS
 from pound_mc.motions import UNITS, builtin_catalogue, suites, synthetic
 from pound_mc.physics import contact
 from pound_mc.physics.contact import CONTACT_MODELS
+from pound_mc.physics.materials import MATERIALS, PER_IMPACT_OUTSIDE
 
 __all__ = [
     "Field",
@@ -419,6 +420,20 @@ CONTACT = Table(
                   f"{name}: {', '.join(law.relations)}"
                   for name, law in contact.CONTACT_MODELS.items() if law.relations
               )),
+        Field("restitution", "string", "`fixed`: one restitution (`e` or `xi`) for every impact; "
+              "`velocity`: each impact's e from the seed's Table 2 at its prior-impact velocity "
+              "(the relative velocity at contact onset) for `material`, at quantile `e_quantile` "
+              "of the measured range, its damping from `relation`, fixed for that impact.",
+              default="fixed", choices=("fixed", "velocity")),
+        Field("material", "string", "Material of Table 2 (restitution = \"velocity\").",
+              choices=MATERIALS),
+        Field("e_quantile", "number", "Quantile of Table 2's measured range of e at each "
+              "impact's velocity (restitution = \"velocity\"): 0 its lower, 1 its upper bound.",
+              minimum=0.0, maximum=1.0, varied=True),
+        Field("outside", "string", "Restitution outside Table 2's velocities (restitution = "
+              "\"velocity\"): `clamp` holds the nearest measured range, `extrapolate` continues "
+              "the end segments linearly (e kept within [0.05, 1]).", default="clamp",
+              choices=PER_IMPACT_OUTSIDE),
     ),
 )  # fmt: skip
 
