@@ -286,6 +286,11 @@ def fixed(
                 qs[j] = phat * ikhat[j]
             for c in range(nc):
                 dstar[c] = rowdot(psi, c, qs) - gap[c]
+                if per_impact and dstar[c] > 0.0 and not was_in[c]:
+                    # an episode starts in this step: its damping from the rate before it
+                    cd[c], zhd[c], ep[c, EP_E] = episode_damping(settings, model, relation, xi[c],
+                                                                 ddpen[c], beta[c], meff[c], cd[c],
+                                                                 zhd[c])  # fmt: skip
             if not _implicit_forces(model, method, dstar, dtry, dpen, ddpen, g, c2h, fc, beta,
                                     cd, zhd, fn, jac, rhs):  # fmt: skip
                 status = STATUS_NOT_CONVERGED
@@ -305,9 +310,11 @@ def fixed(
                 pending[c] = True  # an episode: an impact once it is deep enough
                 ep[c, EP_V0] = dd1
                 if per_impact:
-                    cd[c], zhd[c], ep[c, EP_E] = episode_damping(
-                        settings, model, relation, xi[c], dd1, beta[c], meff[c], cd[c], zhd[c]
-                    )
+                    # the prior-impact velocity: the rate at the last step point before contact
+                    ep[c, EP_V0] = ddpen[c]
+                    cd[c], zhd[c], ep[c, EP_E] = episode_damping(settings, model, relation, xi[c],
+                                                                 ddpen[c], beta[c], meff[c], cd[c],
+                                                                 zhd[c])  # fmt: skip
                 else:
                     zhd[c] = episode_zeta(model, relation, xi[c], dd1, zhd[c])
             if pending[c] and d1 > IMPACT_MIN_PENETRATION_M:

@@ -103,6 +103,10 @@ def newmark_pair(
             if method == NEWMARK_EXPLICIT:
                 fn = fc  # lagged one step
             elif dstar > 0.0:
+                if per_impact and not was_in:
+                    # an episode starts in this step: its damping from the rate before it
+                    cd, zhd, e_ep = episode_damping(settings, model, relation, xi[0], ddpen, b,
+                                                    meff[0], cd, zhd)  # fmt: skip
                 fn, conv = newton_scalar(model, dstar, dpen, ddpen, gg, c2h, fc, b, cd, zhd)
                 if not conv:
                     status = outputs.STATUS_NOT_CONVERGED
@@ -123,7 +127,9 @@ def newmark_pair(
                 pending = True  # an episode: an impact once it is deep enough
                 v_ep = dd1
                 if per_impact:
-                    cd, zhd, e_ep = episode_damping(settings, model, relation, xi[0], dd1, b,
+                    # the prior-impact velocity: the rate at the last step point before contact
+                    v_ep = ddpen
+                    cd, zhd, e_ep = episode_damping(settings, model, relation, xi[0], ddpen, b,
                                                     meff[0], cd, zhd)  # fmt: skip
                 else:
                     zhd = episode_zeta(model, relation, xi[0], dd1, zhd)
