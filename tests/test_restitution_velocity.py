@@ -7,12 +7,17 @@ damping comes from the relation, fixed for that impact.
 
 import numpy as np
 import pytest
+import xarray as xr
 
 from pound_mc.errors import InputError
 from pound_mc.integrators import run_kernel
 from pound_mc.integrators.reference import reference_solution
 from pound_mc.physics.materials import restitution_at, restitution_rows, table
 from pound_mc.scene import scene_from_dict, simulate
+from pound_mc.study.definition import study_from_text
+from pound_mc.study.engine import StudyEngine
+from pound_mc.study.runner import run_study
+from studies import SMALL_SDOF, Whole, study_text
 
 FREE = {"model": "sdof", "period_s": 1.0e5, "mass_kg": 1000.0, "damping_ratio": 0.0}
 
@@ -145,3 +150,40 @@ def test_b1_velocity_restitution_against_reference():
     )
     # the impacts really had different e: velocities spread over Table 2's rows
     assert velocities.min() < 0.5 * velocities.max()
+
+
+def test_study_samples_the_quantile(tmp_path):
+    # a study with restitution set per impact and e_quantile sampled uniform over [0, 1]: each
+    # simulation of the dataset is the scene the engine names for it (scene_of), and the e used
+    # at the peak force lies in concrete's Table 2 band at that impact's velocity
+    text = study_text(
+        SMALL_SDOF,
+        study={"name": "quantile"},
+        grid={"left.period_s": [0.3, 0.5]},
+        contact=Whole({"model": "jankowski", "gap_m": 0.002, "beta": 2.75e9,
+                       "restitution": "velocity", "material": "concrete", "e_quantile": 0.5}),
+        sampling=Whole({"n": 4, "method": "sobol", "vary": {
+            "contact.e_quantile": {"distribution": "uniform", "low": 0.0, "high": 1.0}}}),
+    )  # fmt: skip
+    study = study_from_text(text, file=tmp_path / "quantile.toml")
+    ds = xr.load_dataset(run_study(study, tmp_path, progress=False).path)
+    engine = StudyEngine(study)
+    flat = {
+        k: ds[k].values.ravel()
+        for k in (
+            "peak_force",
+            "impacts",
+            "max_impact_velocity",
+            "median_impact_velocity",
+            "peak_force_restitution",
+        )
+    }
+    assert (flat["impacts"] > 0).any()
+    for i in range(flat["impacts"].size):
+        res = simulate(engine.scene_of(i))
+        for key, values in flat.items():
+            assert res.outputs[key] == pytest.approx(values[i], rel=1e-12, nan_ok=True), key
+        if flat["impacts"][i]:
+            lo = restitution_at("concrete", flat["max_impact_velocity"][i], 0.0)
+            assert flat["peak_force_restitution"][i] >= min(lo, 0.4278) - 1e-12
+            assert flat["peak_force_restitution"][i] <= 0.784 + 1e-12

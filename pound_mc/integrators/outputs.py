@@ -186,8 +186,6 @@ def impact_log(nc):
     return np.full((nc, 2), np.nan), np.zeros(16), np.full(1, np.nan)
 
 
-
-
 @jit
 def log_impact(log, count, v0):
     """Append ``v0`` to ``log`` (doubled when full); returns the log and the new count."""

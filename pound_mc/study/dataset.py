@@ -50,11 +50,18 @@ RESULT_VARIABLES = {
     "dissipated_energy": ("J", "energy dissipated in impacts", "f8"),
     "energy_residual": ("1", "energy balance residual relative to input energy", "f8"),
     "status": ("1", "simulation status", "i1"),
-    "max_impact_velocity": ("m s-1", "largest prior-impact velocity (relative velocity at "
-                            "contact onset) of the impacts", "f8"),
+    "max_impact_velocity": (
+        "m s-1",
+        "largest prior-impact velocity (relative velocity at contact onset) of the impacts",
+        "f8",
+    ),
     "median_impact_velocity": ("m s-1", "median prior-impact velocity of the impacts", "f8"),
-    "peak_force_restitution": ("1", "coefficient of restitution of the impact that holds the "
-                               "peak force (restitution set per impact; NaN otherwise)", "f8"),
+    "peak_force_restitution": (
+        "1",
+        "coefficient of restitution of the impact that holds the "
+        "peak force (restitution set per impact; NaN otherwise)",
+        "f8",
+    ),
 }
 #: Per-simulation, per-contact outputs of studies with a shear building (an extra trailing
 #: ``contact`` dimension): name -> (units, long_name, dtype).
