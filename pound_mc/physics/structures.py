@@ -28,6 +28,7 @@ __all__ = [
     "shear_building",
     "building_from_dict",
     "contacts_between",
+    "wall",
 ]
 
 #: Floors whose elevations differ by less than this are at equal height [m].
@@ -40,8 +41,9 @@ class Building:
 
     Attributes
     ----------
-    model : {"sdof", "shear"}
-        Kind of model.
+    model : {"sdof", "shear", "wall"}
+        Kind of model (``wall``: rigid and immovable, one "floor" of infinite mass and no
+        modes).
     storey_mass_kg : numpy.ndarray
         Floor masses, bottom to top [kg].
     storey_stiffness_N_per_m : numpy.ndarray
@@ -62,6 +64,11 @@ class Building:
     gamma: np.ndarray = field(init=False, repr=False)
 
     def __post_init__(self):
+        if self.model == "wall":
+            object.__setattr__(self, "omega", np.zeros(0))
+            object.__setattr__(self, "phi", np.zeros((1, 0)))
+            object.__setattr__(self, "gamma", np.zeros(0))
+            return
         omega, phi = _modes(self.mass_matrix(), self.stiffness_matrix())
         gamma = phi.T @ self.storey_mass_kg
         object.__setattr__(self, "omega", omega)
@@ -87,6 +94,8 @@ class Building:
         k = self.storey_stiffness_N_per_m
         n = k.size
         mat = np.zeros((n, n))
+        if self.model == "wall":
+            return mat  # immovable: no storey spring
         for i in range(n):
             mat[i, i] += k[i]
             if i + 1 < n:
@@ -96,6 +105,8 @@ class Building:
 
     def damping_matrix(self) -> np.ndarray:
         """Classical damping matrix ``M phi diag(2 zeta omega) phi.T M`` [N s/m]."""
+        if self.model == "wall":
+            return np.zeros((1, 1))
         m = self.mass_matrix()
         return m @ self.phi @ np.diag(2.0 * self.damping_ratio * self.omega) @ self.phi.T @ m
 
@@ -203,6 +214,24 @@ def shear_building(
     return Building("shear", m, k, np.cumsum(h), z)
 
 
+def wall(height_m: float | None = None, *, file=None, prefix: str = "") -> Building:
+    """A rigid, immovable wall (a moat wall, an abutment): infinite mass, no modes.
+
+    Its one "floor" stays at the ground's displacement; a contact with it has the effective
+    mass of the building's floor (``m_eff = m1``).
+
+    Parameters
+    ----------
+    height_m : float, optional
+        Height of the wall's top [m]: it meets the other building's floors at or below it
+        (default: only its lowest floor).
+    """
+    elevation = None
+    if height_m is not None:
+        elevation = _check_positive(height_m, key=f"{prefix}height_m", file=file)
+    return Building("wall", np.array([np.inf]), np.array([np.inf]), elevation, 0.0)
+
+
 def building_from_dict(spec: dict, *, file=None, side: str = "left") -> Building:
     """Build a :class:`Building` from a scene file's ``[left]`` or ``[right]`` table."""
     prefix = f"{side}."
@@ -278,12 +307,34 @@ class Contact:
 
     @property
     def m_eff(self) -> float:
-        """Effective mass ``m1 m2 / (m1 + m2)`` [kg]."""
+        """Effective mass ``m1 m2 / (m1 + m2)`` [kg] (``m1`` against a wall's infinite mass)."""
+        if math.isinf(self.m_right):
+            return float(self.m_left)
         return self.m_left * self.m_right / (self.m_left + self.m_right)
 
 
 def contacts_between(left: Building, right: Building, *, file=None) -> list[Contact]:
-    """Pairs of floors that can pound: every pair at equal height (one for an SDOF pair)."""
+    """Pairs of floors that can pound: every pair at equal height (one for an SDOF pair).
+
+    Against a wall (``right``): the left building's floors at or below the wall's height, or
+    only its lowest floor where the wall has none.
+    """
+    if right.model == "wall":
+        if left.model == "wall":
+            raise InputError("a wall stands only on the right", file=file, key="left.model")
+        mr = right.storey_mass_kg[0]
+        if right.elevation_m is None or left.elevation_m is None:
+            z = None if left.elevation_m is None else float(left.elevation_m[0])
+            return [Contact(0, 0, z, left.storey_mass_kg[0], mr)]
+        out = [
+            Contact(i, 0, float(z), left.storey_mass_kg[i], mr)
+            for i, z in enumerate(left.elevation_m)
+            if z <= right.elevation_m[0] + HEIGHT_TOLERANCE_M
+        ]
+        if not out:
+            raise InputError("the wall is lower than the building's first floor", file=file,
+                             key="right.height_m")  # fmt: skip
+        return out
     if (
         left.model == "sdof"
         and right.model == "sdof"

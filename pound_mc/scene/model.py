@@ -19,7 +19,14 @@ from pound_mc.errors import InputError
 from pound_mc.integrators import run_kernel
 from pound_mc.motions import load_record, record_arrays
 from pound_mc.physics.contact import CONTACT_MODELS, reported_xi
-from pound_mc.physics.structures import Building, Contact, contacts_between, sdof, shear_building
+from pound_mc.physics.structures import (
+    Building,
+    Contact,
+    contacts_between,
+    sdof,
+    shear_building,
+    wall,
+)
 from pound_mc.scene import schema
 
 __all__ = ["Scene", "SimulationResult", "scene_from_dict", "load_scene", "simulate"]
@@ -244,7 +251,12 @@ def _building(spec, side: str, file, errors: list) -> Building | None:
     errors.extend(local)
     if local:
         return None
+    if model == "wall" and side != "right":
+        errors.append(InputError("a wall stands only on the right", file=file, key=f"{side}.model"))
+        return None
     try:
+        if model == "wall":
+            return wall(v.get("height_m"), file=file, prefix=f"{side}.")
         if model == "sdof":
             return sdof(v["period_s"], v["mass_kg"], v["damping_ratio"], v.get("height_m"),
                         file=file, prefix=f"{side}.")  # fmt: skip

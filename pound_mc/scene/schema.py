@@ -359,7 +359,8 @@ SDOF = Table(
     "A single-degree-of-freedom building (`[left]` or `[right]` with `model = \"sdof\"`, the "
     "default).",
     (
-        Field("model", "string", "Building model.", default="sdof", choices=("sdof", "shear")),
+        Field("model", "string", "Building model.", default="sdof",
+              choices=("sdof", "shear", "wall")),
         Field("period_s", "number", "Natural period.", unit="s", required=True, minimum=0.0,
               exclusive_minimum=True, varied=True),
         Field("mass_kg", "number", "Mass.", unit="kg", required=True, minimum=0.0,
@@ -378,7 +379,8 @@ SHEAR = Table(
     "are computed once per study, so a study varies only `contact.*` keys and "
     "`integrator.dt_s` with it.",
     (
-        Field("model", "string", "Building model.", required=True, choices=("sdof", "shear")),
+        Field("model", "string", "Building model.", required=True,
+              choices=("sdof", "shear", "wall")),
         Field("storey_mass_kg", "numbers", "Floor masses, bottom to top.", unit="kg",
               required=True, minimum=0.0, exclusive_minimum=True),
         Field("storey_stiffness_N_per_m", "numbers", "Storey shear stiffnesses, bottom to top.",
@@ -391,8 +393,22 @@ SHEAR = Table(
     variant="model = 'shear'",
 )  # fmt: skip
 
+WALL = Table(
+    "wall",
+    "A rigid, immovable wall (`[right]` with `model = \"wall\"`): a moat wall or an abutment, "
+    "of infinite mass (a contact's effective mass is the building floor's mass).",
+    (
+        Field("model", "string", "Building model.", required=True,
+              choices=("sdof", "shear", "wall")),
+        Field("height_m", "number", "Height of the wall's top: it meets the other building's "
+              "floors at or below it (default: only its lowest floor).", unit="m", minimum=0.0,
+              exclusive_minimum=True),
+    ),
+    variant="model = 'wall'",
+)  # fmt: skip
+
 #: Building tables by ``model``.
-BUILDINGS = {"sdof": SDOF, "shear": SHEAR}
+BUILDINGS = {"sdof": SDOF, "shear": SHEAR, "wall": WALL}
 
 CONTACT = Table(
     "contact",

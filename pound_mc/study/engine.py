@@ -144,7 +144,9 @@ class StudyEngine:
         #: Whether a building is a shear building: then every simulation runs the modes of
         #: :attr:`arrays` (computed once) through the general batch, and the outputs include
         #: the per-contact arrays of :data:`~pound_mc.study.dataset.CONTACT_VARIABLES`.
-        self.mdof = any(scene_model(study.scene, side) == "shear" for side in ("left", "right"))
+        self.mdof = any(
+            scene_model(study.scene, side) in ("shear", "wall") for side in ("left", "right")
+        )
         self.arrays = self.scene.modal_arrays() if self.mdof else None
 
     def _intensities(self) -> None:
