@@ -166,8 +166,10 @@ def reference_solution(
     masses = np.diag(m)
 
     nc = len(scene.contacts)
-    il = np.array([ct.left_floor for ct in scene.contacts], dtype=int)
-    ir = np.array([nl + ct.right_floor for ct in scene.contacts], dtype=int)
+    # penetration of contact j: w[j] @ x - gap (a floor, or a column interpolated between
+    # floors, of each building); its force acts on the floors by the same weights
+    w = np.array([np.r_[ct.weights("left", nl), -ct.weights("right", nr)]
+                  for ct in scene.contacts]).reshape(nc, n)  # fmt: skip
     meff = np.array([ct.m_eff for ct in scene.contacts], dtype=float)
     gap = np.broadcast_to(np.asarray(scene.gap_m, dtype=float), (nc,)).copy()
     beta = float(scene.stiffness)
@@ -220,9 +222,9 @@ def reference_solution(
     # phases at the start (already in contact: by the sign of delta_dot, not counted)
     phase = np.zeros(nc, dtype=int)
     for j in range(nc):
-        d = y[il[j]] - y[ir[j]] - gap[j]
+        d = w[j] @ y[:n] - gap[j]
         if d > 0.0:
-            dd = y[n + il[j]] - y[n + ir[j]]
+            dd = w[j] @ y[n:]
             phase[j] = _APPROACH if dd > 0.0 else _RESTITUTION
             start_episode(j, dd)
 
@@ -232,8 +234,8 @@ def reference_solution(
         f = np.zeros(nc)
         for j in range(nc):
             if phase[j] != _OPEN:
-                d = x[il[j]] - x[ir[j]] - gap[j]
-                dd = v[il[j]] - v[ir[j]]
+                d = w[j] @ x - gap[j]
+                dd = w[j] @ v
                 f[j] = _contact_force(model, d, dd, beta, xi[j], meff[j], zhd[j], phase[j])
         return f
 
@@ -243,20 +245,19 @@ def reference_solution(
         dy[n + fixed] = 0.0
         if np.any(phase):
             f = forces(yy[:n], yy[n:])
-            np.subtract.at(dy, n + il, f / masses[il])
-            np.add.at(dy, n + ir, f / masses[ir])
+            dy[n:] -= (w.T @ f) / masses
         return dy
 
     def make_event(j, which, direction):
         if which == "d":
 
             def ev(_t, yy):
-                return yy[il[j]] - yy[ir[j]] - gap[j]
+                return w[j] @ yy[:n] - gap[j]
 
         else:
 
             def ev(_t, yy):
-                return yy[n + il[j]] - yy[n + ir[j]]
+                return w[j] @ yy[n:]
 
         ev.terminal = True
         ev.direction = direction
@@ -304,8 +305,8 @@ def reference_solution(
 
             def force_of(s, j=j):
                 # penetration and its rate from the state (displacements, then velocities)
-                d = s[il[j]] - s[ir[j]] - gap[j]
-                dd = s[n + il[j]] - s[n + ir[j]]
+                d = w[j] @ s[:n] - gap[j]
+                dd = w[j] @ s[n:]
                 return _contact_force(model, d, dd, beta, xi[j], meff[j], zhd[j], phase[j])
 
             def force_at(t, force_of=force_of):
@@ -386,11 +387,11 @@ def reference_solution(
                     phase[j] = _APPROACH
                     pending[j] = True  # an impact once the penetration is deep enough
                     impact_times.append(t)
-                    start_episode(j, y[n + il[j]] - y[n + ir[j]])
+                    start_episode(j, w[j] @ y[n:])
                     h_last = None  # let the solver choose a step for the stiff contact
                 elif kind == "turn":
                     phase[j] = _RESTITUTION
-                    pen = y[il[j]] - y[ir[j]] - gap[j]  # a maximum of the penetration
+                    pen = w[j] @ y[:n] - gap[j]  # a maximum of the penetration
                     max_pen[j] = max(max_pen[j], pen)
                     if pending[j] and pen > IMPACT_MIN_PENETRATION_M:
                         impacts[j] += 1

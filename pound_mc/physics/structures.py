@@ -296,7 +296,13 @@ class Contact:
     elevation_m : float or None
         Height of the contact [m] (``None`` for an SDOF pair without heights).
     m_left, m_right : float
-        Masses that meet [kg].
+        Masses that meet [kg]; on a column, its effective mass ``1 / sum(w_k^2 / m_k)`` (the
+        mass a point whose displacement is ``sum(w_k x_k)`` opposes to an impulse).
+    left_at, right_at : tuple
+        Where a floor of one building meets the other's column: ``((floor, weight), ...)``,
+        the floors (0-based, -1 the ground) whose displacements, so weighted, are the column's
+        at the contact height (linear between the floors below and above); empty for a floor.
+        ``left_floor`` / ``right_floor`` then name the floor below (-1: the ground).
     """
 
     left_floor: int
@@ -304,6 +310,23 @@ class Contact:
     elevation_m: float | None
     m_left: float
     m_right: float
+    left_at: tuple = ()
+    right_at: tuple = ()
+
+    @property
+    def kind(self) -> str:
+        """``"floor"`` (floor against floor) or ``"column"`` (a floor against a column)."""
+        return "column" if self.left_at or self.right_at else "floor"
+
+    def weights(self, side: str, n_floors: int) -> np.ndarray:
+        """Weights of ``side``'s floors (``"left"`` / ``"right"``) in the contact's displacement."""
+        w = np.zeros(n_floors)
+        at = self.left_at if side == "left" else self.right_at
+        floor = self.left_floor if side == "left" else self.right_floor
+        for f, wf in at or ((floor, 1.0),):
+            if f >= 0:
+                w[f] += wf
+        return w
 
     @property
     def m_eff(self) -> float:
@@ -313,7 +336,25 @@ class Contact:
         return self.m_left * self.m_right / (self.m_left + self.m_right)
 
 
-def contacts_between(left: Building, right: Building, *, file=None) -> list[Contact]:
+def _column(z: float, building: Building, tol: float):
+    """Where height ``z`` meets ``building``'s column: ``(floor below, at, effective mass)``.
+
+    None where ``z`` is above its roof (or within ``tol`` of it: a floor contact instead).
+    """
+    elev = building.elevation_m
+    if z >= elev[-1] - tol:
+        return None
+    j = int(np.searchsorted(elev, z))  # first floor above z
+    z_lo = elev[j - 1] if j > 0 else 0.0
+    w = (z - z_lo) / (elev[j] - z_lo)
+    at = ((j - 1, float(1.0 - w)), (j, float(w)))
+    compliance = sum(wf * wf / building.storey_mass_kg[f] for f, wf in at if f >= 0)
+    return j - 1, at, 1.0 / compliance
+
+
+def contacts_between(
+    left: Building, right: Building, *, file=None, level_tolerance_m: float = 0.0
+) -> list[Contact]:
     """Pairs of floors that can pound: every pair at equal height (one for an SDOF pair).
 
     Against a wall (``right``): the left building's floors at or below the wall's height, or
@@ -348,13 +389,29 @@ def contacts_between(left: Building, right: Building, *, file=None) -> list[Cont
                 file=file,
                 key=f"{side}.height_m",
             )
+    tol = max(float(level_tolerance_m), HEIGHT_TOLERANCE_M)
     out = []
+    met_l, met_r = set(), set()
     for i, zl in enumerate(left.elevation_m):
         for j, zr in enumerate(right.elevation_m):
-            if abs(zl - zr) <= HEIGHT_TOLERANCE_M:
+            if abs(zl - zr) <= tol:
                 out.append(
                     Contact(i, j, float(zl), left.storey_mass_kg[i], right.storey_mass_kg[j])
                 )
+                met_l.add(i)
+                met_r.add(j)
+    # a floor between the other building's floors meets its column
+    for i, zl in enumerate(left.elevation_m):
+        col = None if i in met_l else _column(zl, right, tol)
+        if col is not None:
+            out.append(Contact(i, col[0], float(zl), left.storey_mass_kg[i], col[2],
+                               right_at=col[1]))  # fmt: skip
+    for j, zr in enumerate(right.elevation_m):
+        col = None if j in met_r else _column(zr, left, tol)
+        if col is not None:
+            out.append(Contact(col[0], j, float(zr), col[2], right.storey_mass_kg[j],
+                               left_at=col[1]))  # fmt: skip
+    out.sort(key=lambda c: c.elevation_m)  # stable: floor contacts keep their order
     if not out:
         raise InputError(
             "no floors of the two buildings are at equal height, so they cannot pound",

@@ -124,7 +124,11 @@ class Scene:
         phi[:fl, :nl] = self.left.phi
         phi[fl:, nl:] = self.right.phi
         side = np.r_[np.zeros(fl, dtype=np.int64), np.ones(fr, dtype=np.int64)]
-        psi = np.array([phi[c.left_floor] - phi[fl + c.right_floor] for c in self.contacts])
+        psi = np.array([
+            c.weights("left", fl) @ phi[:fl] - c.weights("right", fr) @ phi[fl:]
+            if c.kind == "column" else phi[c.left_floor] - phi[fl + c.right_floor]
+            for c in self.contacts
+        ])  # fmt: skip
         nc = len(self.contacts)
         # the kernels' damping parameter: xi, or the restitution e for laws whose damping is set
         # per impact from e and the impact velocity (hertzdamp)
@@ -225,6 +229,7 @@ class SimulationResult:
             "peak_force_restitution": num(o["peak_force_restitution"]),
             "contacts": [
                 {
+                    "kind": c.kind,
                     "left_floor": c.left_floor + 1,
                     "right_floor": c.right_floor + 1,
                     "elevation_m": c.elevation_m,
@@ -380,7 +385,9 @@ def scene_from_dict(data: dict, *, file: str | Path | None = None) -> Scene:
     contacts = None
     if left is not None and right is not None:
         try:
-            contacts = contacts_between(left, right, file=file_s)
+            level = data.get("contact", {}).get("level_tolerance_m", 0.0)
+            level = level if isinstance(level, int | float) and level >= 0 else 0.0
+            contacts = contacts_between(left, right, file=file_s, level_tolerance_m=level)
         except InputError as exc:
             errors.append(exc)
     ct = _contact(dict(data.get("contact", {})), None if contacts is None else len(contacts),

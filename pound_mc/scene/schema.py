@@ -450,6 +450,11 @@ CONTACT = Table(
               "\"velocity\"): `clamp` holds the nearest measured range, `extrapolate` continues "
               "the end segments linearly (e kept within [0.05, 1]).", default="clamp",
               choices=PER_IMPACT_OUTSIDE),
+        Field("level_tolerance_m", "number", "Floors of the two buildings within this of equal "
+              "height meet floor to floor; any other floor below the other building's roof "
+              "meets its column, whose displacement there is interpolated linearly between its "
+              "floors below and above (the ground below the first), with the column's "
+              "effective mass 1 / sum(w^2 / m).", unit="m", default=0.0, minimum=0.0),
     ),
 )  # fmt: skip
 
