@@ -135,6 +135,8 @@ def check_command(args) -> int:
     n_chunks = len(chunk_ranges(study.n_simulations, chunk_size))
     per_sim = seconds + n_chunks * CHUNK_OVERHEAD_S / study.n_simulations
     print(plan_text(study, chunk_size=chunk_size, seconds_per_simulation=per_sim))
+    for line in engine.scene.contact_lines():
+        print(f"  {line}")
     if did_compile:
         where = f"kernels compiled now in {warm_s:.1f} s and cached; a run with them cached"
     else:

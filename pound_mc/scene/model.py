@@ -151,6 +151,31 @@ class Scene:
             "xi": np.full(nc, float(xi if xi is not None else 0.0)),
         }
 
+    def contact_lines(self) -> list[str]:
+        """One line per contact (height, floors or column weights, effective mass), or none.
+
+        Lines only where a contact meets a column (a floor between the other building's floors).
+        """
+        if all(c.kind == "floor" for c in self.contacts):
+            return []
+
+        def column(at):
+            return " + ".join(
+                f"{w:.4g} x " + ("ground" if f < 0 else f"floor {f + 1}") for f, w in at
+            )
+
+        lines = []
+        for k, c in enumerate(self.contacts):
+            if c.right_at:
+                what = f"left floor {c.left_floor + 1} on the right column ({column(c.right_at)})"
+            elif c.left_at:
+                what = f"right floor {c.right_floor + 1} on the left column ({column(c.left_at)})"
+            else:
+                what = f"left floor {c.left_floor + 1} - right floor {c.right_floor + 1}"
+            lines.append(f"contact {k + 1} at {c.elevation_m:g} m: {what}, "
+                         f"m_eff {c.m_eff:.6g} kg")  # fmt: skip
+        return lines
+
     def restitution_rule(self) -> dict | None:
         """The kernels' per-impact restitution (``restitution = "velocity"``), else None."""
         if self.restitution != "velocity":
