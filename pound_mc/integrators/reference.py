@@ -145,13 +145,17 @@ def reference_solution(
     acc = np.asarray(acc, dtype=float)
     npts = acc.size
 
-    left, right = scene.left, scene.right
-    nl, nr = left.n_floors, right.n_floors
-    n = nl + nr
+    # a row of buildings (``scene.row``) or the two; the left one's floors first
+    buildings = getattr(scene, "row", None) or [scene.left, scene.right]
+    left = buildings[0]
+    starts = np.cumsum([0] + [b.n_floors for b in buildings])
+    nl = left.n_floors
+    n = int(starts[-1])
     m = np.zeros((n, n))
     k = np.zeros((n, n))
     c = np.zeros((n, n))
-    for sl, b in ((slice(0, nl), left), (slice(nl, n), right)):
+    for j, b in enumerate(buildings):
+        sl = slice(starts[j], starts[j + 1])
         m[sl, sl] = b.mass_matrix()
         k[sl, sl] = b.stiffness_matrix()
         c[sl, sl] = b.damping_matrix()
@@ -168,8 +172,11 @@ def reference_solution(
     nc = len(scene.contacts)
     # penetration of contact j: w[j] @ x - gap (a floor, or a column interpolated between
     # floors, of each building); its force acts on the floors by the same weights
-    w = np.array([np.r_[ct.weights("left", nl), -ct.weights("right", nr)]
-                  for ct in scene.contacts]).reshape(nc, n)  # fmt: skip
+    w = np.zeros((nc, n))
+    for j, ct in enumerate(scene.contacts):
+        p = getattr(ct, "pair", 0)
+        w[j, starts[p] : starts[p + 1]] = ct.weights("left", buildings[p].n_floors)
+        w[j, starts[p + 1] : starts[p + 2]] -= ct.weights("right", buildings[p + 1].n_floors)
     meff = np.array([ct.m_eff for ct in scene.contacts], dtype=float)
     gap = np.broadcast_to(np.asarray(scene.gap_m, dtype=float), (nc,)).copy()
     beta = float(scene.stiffness)
@@ -211,7 +218,7 @@ def reference_solution(
         y[n:] = np.asarray(v0, dtype=float)
 
     # tolerances
-    omega_all = np.r_[left.omega, right.omega]
+    omega_all = np.concatenate([b.omega for b in buildings])
     pga = float(np.max(np.abs(acc))) if npts else 0.0
     x_scale = max(pga / omega_all.min() ** 2, np.max(np.abs(y[:n])), 1e-300)
     x_scale = max(x_scale, np.max(np.abs(y[n:])) / omega_all.min())

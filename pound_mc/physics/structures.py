@@ -312,6 +312,8 @@ class Contact:
     m_right: float
     left_at: tuple = ()
     right_at: tuple = ()
+    #: In a row of buildings, the index of the pair's left building (0: the first two).
+    pair: int = 0
 
     @property
     def kind(self) -> str:

@@ -33,6 +33,8 @@ __all__ = ["Scene", "SimulationResult", "scene_from_dict", "load_scene", "simula
 
 #: Tables a study adds to a scene (checked by :mod:`pound_mc.study.definition`).
 _STUDY_TABLES = {"study", "grid", "sampling", "records"}
+#: A row of buildings (``[[buildings]]``, left to right) in place of ``[left]`` and ``[right]``.
+ROW_TABLE = "buildings"
 
 
 #: Fields of a :class:`Scene` the modal arrays depend on (the cache key holds their values).
@@ -71,6 +73,7 @@ class Scene:
     material: str | None = None
     e_quantile: float | None = None
     outside: str = "clamp"
+    row: list[Building] | None = None
     file: str | None = None
     base_dir: Path | None = None
     _cache: dict = field(default_factory=dict, init=False, repr=False, compare=False)
@@ -118,6 +121,8 @@ class Scene:
 
         A new set of arrays at every call; :func:`simulate` uses a cached one.
         """
+        if self.row is not None:
+            return self._row_arrays()
         nl, nr = self.left.omega.size, self.right.omega.size
         fl, fr = self.left.n_floors, self.right.n_floors
         phi = np.zeros((fl + fr, nl + nr))
@@ -150,6 +155,40 @@ class Scene:
             "beta": np.full(nc, float(self.stiffness)),
             "xi": np.full(nc, float(xi if xi is not None else 0.0)),
         }
+
+    def _row_arrays(self) -> dict[str, np.ndarray]:
+        """:meth:`modal_arrays` of a row: contacts between neighbours (``Contact.pair``).
+
+        ``side`` is 0 for the first building's floors and 1 for every other's, so that
+        ``peak_disp_left`` is the first building's and ``peak_disp_right`` the largest of
+        the others'.
+        """
+        row = self.row
+        floors = np.cumsum([0] + [b.n_floors for b in row])
+        modes = np.cumsum([0] + [b.omega.size for b in row])
+        phi = np.zeros((floors[-1], modes[-1]))
+        for k, b in enumerate(row):
+            phi[floors[k] : floors[k + 1], modes[k] : modes[k + 1]] = b.phi
+        psi = np.array([
+            c.weights("left", row[c.pair].n_floors) @ phi[floors[c.pair] : floors[c.pair + 1]]
+            - c.weights("right", row[c.pair + 1].n_floors)
+            @ phi[floors[c.pair + 1] : floors[c.pair + 2]]
+            for c in self.contacts
+        ])  # fmt: skip
+        nc = len(self.contacts)
+        return {
+            "omega": np.concatenate([b.omega for b in row]),
+            "zeta": np.concatenate([np.full(b.omega.size, b.damping_ratio) for b in row]),
+            "gamma": np.concatenate([b.gamma for b in row]),
+            "phi": phi,
+            "side": np.r_[np.zeros(row[0].n_floors, dtype=np.int64),
+                          np.ones(floors[-1] - row[0].n_floors, dtype=np.int64)],
+            "psi": psi.reshape(nc, modes[-1]),
+            "gap": np.asarray(self.gap_m, dtype=float),
+            "meff": np.array([c.m_eff for c in self.contacts]),
+            "beta": np.full(nc, float(self.stiffness)),
+            "xi": np.full(nc, float(self.xi if self.xi is not None else 0.0)),
+        }  # fmt: skip
 
     def contact_lines(self) -> list[str]:
         """One line per contact (height, floors or column weights, effective mass), or none.
@@ -262,14 +301,18 @@ class SimulationResult:
                     "peak_force_N": num(self.contacts["peak_force"][k]),
                     "impacts": int(self.contacts["impacts"][k]),
                     "max_impact_velocity": num(self.contacts["max_impact_velocity"][k]),
+                    **({"pair": c.pair + 1} if self.scene.row is not None else {}),
                 }
                 for k, c in enumerate(self.scene.contacts)
             ],
         }
 
 
-def _building(spec, side: str, file, errors: list) -> Building | None:
-    """Check ``[left]`` or ``[right]`` against its model's table and build it."""
+def _building(spec, side: str, file, errors: list, wall_ok: bool | None = None) -> Building | None:
+    """Check ``[left]`` or ``[right]`` against its model's table and build it.
+
+    ``wall_ok``: whether it may be a wall (default: on the right only).
+    """
     model = spec.get("model", "sdof")
     table = schema.BUILDINGS.get(model) if isinstance(model, str) else None
     if table is None:
@@ -281,7 +324,7 @@ def _building(spec, side: str, file, errors: list) -> Building | None:
     errors.extend(local)
     if local:
         return None
-    if model == "wall" and side != "right":
+    if model == "wall" and not (side == "right" if wall_ok is None else wall_ok):
         errors.append(InputError("a wall stands only on the right", file=file, key=f"{side}.model"))
         return None
     try:
@@ -382,13 +425,24 @@ def scene_from_dict(data: dict, *, file: str | Path | None = None) -> Scene:
     file_s = None if file is None else str(file)
     base_dir = None if file is None else Path(file).parent
     errors: list[InputError] = []
-    extra = sorted(set(data) - set(schema.SCENE_TABLES) - _STUDY_TABLES)
+    extra = sorted(set(data) - set(schema.SCENE_TABLES) - _STUDY_TABLES - {ROW_TABLE})
     for key in extra:
         errors.append(
             InputError(f"unknown table; allowed: {', '.join(schema.SCENE_TABLES)}", file=file_s,
                        key=key)
         )  # fmt: skip
-    for table in ("record", "left", "right"):
+    is_row = ROW_TABLE in data
+    if is_row:
+        row_specs = data[ROW_TABLE]
+        if not (isinstance(row_specs, list) and len(row_specs) >= 2
+                and all(isinstance(b, dict) for b in row_specs)):  # fmt: skip
+            errors.append(InputError("must be two or more [[buildings]] tables, left to right",
+                                     file=file_s, key=ROW_TABLE))  # fmt: skip
+        for table in ("left", "right"):
+            if table in data:
+                errors.append(InputError(f"give [{table}] or [[buildings]], not both",
+                                         file=file_s, key=table))  # fmt: skip
+    for table in ("record",) if is_row else ("record", "left", "right"):
         if not isinstance(data.get(table), dict):
             errors.append(InputError("is required (a table)", file=file_s, key=table))
     for table in ("contact", "integrator"):
@@ -405,13 +459,27 @@ def scene_from_dict(data: dict, *, file: str | Path | None = None) -> Scene:
         problem = schema.source_problem(checked["source"], base_dir)
         if problem is not None:
             errors.append(InputError(problem, file=file_s, key="record.source"))
-    left = _building(data["left"], "left", file_s, errors)
-    right = _building(data["right"], "right", file_s, errors)
+    level = data.get("contact", {}).get("level_tolerance_m", 0.0)
+    level = level if isinstance(level, int | float) and level >= 0 else 0.0
+    row = None
+    if is_row:
+        row = [_building(b, f"{ROW_TABLE}[{k}]", file_s, errors, wall_ok=k == len(row_specs) - 1)
+               for k, b in enumerate(row_specs)]  # fmt: skip
+        left, right = row[0], row[-1]
+    else:
+        left = _building(data["left"], "left", file_s, errors)
+        right = _building(data["right"], "right", file_s, errors)
     contacts = None
-    if left is not None and right is not None:
+    if row is not None and all(b is not None for b in row):
+        contacts = []
+        for k in range(len(row) - 1):
+            try:
+                pair = contacts_between(row[k], row[k + 1], file=file_s, level_tolerance_m=level)
+                contacts += [replace(c, pair=k) for c in pair]
+            except InputError as exc:
+                errors.append(InputError(exc.message, file=file_s, key=f"{ROW_TABLE}[{k + 1}]"))
+    elif row is None and left is not None and right is not None:
         try:
-            level = data.get("contact", {}).get("level_tolerance_m", 0.0)
-            level = level if isinstance(level, int | float) and level >= 0 else 0.0
             contacts = contacts_between(left, right, file=file_s, level_tolerance_m=level)
         except InputError as exc:
             errors.append(exc)
@@ -438,6 +506,7 @@ def scene_from_dict(data: dict, *, file: str | Path | None = None) -> Scene:
         material=ct.get("material"),
         e_quantile=None if ct.get("e_quantile") is None else float(ct["e_quantile"]),
         outside=ct.get("outside", "clamp"),
+        row=row,
         file=file_s,
         base_dir=base_dir,
     )
