@@ -6,12 +6,17 @@ import math
 
 import numpy as np
 import pytest
+import xarray as xr
 from scipy.special import gamma
 
 from pound_mc.errors import InputError
 from pound_mc.integrators import run_kernel
 from pound_mc.integrators.reference import reference_solution
 from pound_mc.scene import scene_from_dict, simulate
+from pound_mc.study.definition import study_from_text
+from pound_mc.study.engine import StudyEngine
+from pound_mc.study.runner import run_study
+from studies import SMALL_SDOF, Whole, study_text
 
 M, BETA = 1000.0, 2.75e9
 FREE = {"model": "sdof", "period_s": 1.0e5, "mass_kg": M, "damping_ratio": 0.0}
@@ -95,3 +100,17 @@ def test_wall_only_on_the_right():
              "right": FREE, "contact": {"xi": 0.3}}
         )  # fmt: skip
     assert "left.model" in str(info.value)
+
+
+def test_study_against_a_wall(tmp_path):
+    # a study of an SDOF against a wall runs through the scene batch; each simulation of the
+    # dataset is the scene the engine names for it
+    text = study_text(SMALL_SDOF, study={"name": "wall"}, right=Whole({"model": "wall"}),
+                      grid={"left.period_s": None}, sampling={"n": 2})  # fmt: skip
+    study = study_from_text(text, file=tmp_path / "wall.toml")
+    ds = xr.load_dataset(run_study(study, tmp_path, progress=False).path)
+    engine = StudyEngine(study)
+    peak = ds["peak_force"].values.ravel()
+    assert (ds["impacts"].values > 0).all()
+    for i in range(peak.size):
+        assert simulate(engine.scene_of(i)).outputs["peak_force"] == peak[i]
