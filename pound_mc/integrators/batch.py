@@ -48,9 +48,11 @@ from pound_mc.integrators.outputs import (
     N_COUT,
     N_OUT,
     OUTPUTS,
+    PEAK_FORCE_RESTITUTION,
     PRE_MODE,
     PRE_RESUME,
     PRE_RUN_TO_CONTACT,
+    STATUS,
     STATUS_NOT_CONVERGED,
     UNSTABLE_ENERGY_FRACTION,
     fail,
@@ -60,6 +62,7 @@ from pound_mc.integrators.pair import newmark_pair
 from pound_mc.integrators.toolkit import MAX_STEPS
 from pound_mc.physics.contact import CONTACT_MODELS, check_relation, reported_xi
 from pound_mc.physics.materials import E_FLOOR, PER_IMPACT_OUTSIDE, restitution_rows
+from pound_mc.physics.relations import exact_table, restitution_of_xi
 
 __all__ = [
     "METHODS",
@@ -96,6 +99,8 @@ KernelSettings = namedtuple(
     "model relation method dt_s substeps outside rest_floor xi_e0 xi_de rest_v rest_lo rest_hi "
     "xi_tab",
 )
+#: Largest damping ratio of the ``exact`` table [-].
+_XI_MAX = float(exact_table()["xi"].max())
 #: Spacing of the ``e`` grid of a relation's ``xi`` table [-] (linear interpolation in it is
 #: within 2e-8 of the relation for e >= 0.3).
 XI_TABLE_DE = 1e-4
@@ -273,6 +278,29 @@ def _threaded(kernel, n: int, *args) -> None:
             future.result()
 
 
+def _fixed_restitution(out, settings, xi) -> None:
+    """``peak_force_restitution`` of runs with one restitution for every impact (ok runs).
+
+    The restitution the law rebounds with for its damping parameter: ``xi`` by the exact
+    single impact (Jankowski), ``exp(-pi xi / sqrt(1 - xi^2))`` (Kelvin), ``e`` itself
+    (Hertz-damp, whose ``xi`` holds it), 1 for the undamped laws.
+    """
+    if settings.rest_v.size > 0:
+        return  # set per impact by the kernels
+    law = CONTACT_MODELS[next(k for k, v in LAW_CODES.items() if v == settings.model)]
+    xi = np.broadcast_to(np.asarray(xi, dtype=float), out.shape[:-1])
+    if law.damping is None:
+        e = np.ones_like(xi)
+    elif law.damping == "zeta":
+        e = xi
+    elif law.name == "kelvin":
+        e = np.exp(-math.pi * xi / np.sqrt(np.maximum(1.0 - xi * xi, 1e-300)))
+    else:
+        e = np.asarray(restitution_of_xi(np.clip(xi, 0.0, _XI_MAX)), dtype=float)
+    ok = out[..., STATUS] == 0
+    out[..., PEAK_FORCE_RESTITUTION] = np.where(ok, e, out[..., PEAK_FORCE_RESTITUTION])
+
+
 def _named(out):
     """``{name: column}`` of an output matrix (one row per simulation) with integer counts."""
     result = {name: out[..., k] for k, name in enumerate(OUTPUTS)}
@@ -353,6 +381,7 @@ def run_kernel(
         np.ascontiguousarray(beta, dtype=f8), np.ascontiguousarray(xi, dtype=f8),
         settings, q, v, out, cout, hx, hd, hf, np.zeros(0),
     )  # fmt: skip
+    _fixed_restitution(out, settings, xi[0] if np.size(xi) else 0.0)
     outputs = {name: float(out[k]) for k, name in enumerate(OUTPUTS)}
     contacts = {name: cout[:, k].copy() for k, name in enumerate(CONTACT_OUTPUTS)}
     return KernelResult(outputs, contacts, (hx, hd, hf) if history else None)
@@ -490,6 +519,7 @@ def simulate_sdof_pairs(
     dt_rec = float(dt_rec)
     if settings.method != _ADAPTIVE:
         _threaded(_sdof_fixed, nsim, acc, dt_rec, *arrays, settings, out)
+        _fixed_restitution(out, settings, arrays[8])
         return _named(out)
     # simulations that differ only in contact parameters share their linear response up to
     # the first contact (periods, damping ratios, masses, gap and step define a group)
@@ -500,6 +530,7 @@ def simulate_sdof_pairs(
     group = group.ravel().astype(np.int64)
     _threaded(_sdof_groups, first.size, acc, dt_rec, *arrays, settings, first, shared)
     _threaded(_sdof_adaptive, nsim, acc, dt_rec, *arrays, settings, out, group, shared)
+    _fixed_restitution(out, settings, arrays[8])
     return _named(out)
 
 
@@ -612,4 +643,5 @@ def simulate_scene_batch(
     )  # fmt: skip
     contacts = {name: cout[:, :, k] for k, name in enumerate(CONTACT_OUTPUTS)}
     contacts["impacts"] = contacts["impacts"].astype(np.int32)
+    _fixed_restitution(out, settings, xi)
     return _named(out), contacts

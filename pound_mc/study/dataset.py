@@ -59,7 +59,7 @@ RESULT_VARIABLES = {
     "peak_force_restitution": (
         "1",
         "coefficient of restitution of the impact that holds the "
-        "peak force (restitution set per impact; NaN otherwise)",
+        "peak force (with one restitution for every impact: the one its law rebounds with)",
         "f8",
     ),
 }
