@@ -187,3 +187,27 @@ def test_study_samples_the_quantile(tmp_path):
             lo = restitution_at("concrete", flat["max_impact_velocity"][i], 0.0)
             assert flat["peak_force_restitution"][i] >= min(lo, 0.4278) - 1e-12
             assert flat["peak_force_restitution"][i] <= 0.784 + 1e-12
+
+
+def test_per_impact_material_variable():
+    # contact.e = { material = "concrete", per_impact = true }: the scene takes restitution =
+    # "velocity" with concrete, and the quantile is sampled uniform over [0, 1]
+    text = study_text(
+        SMALL_SDOF,
+        study={"name": "per_impact"},
+        sampling={"vary": {"contact.e": {"material": "concrete", "per_impact": True},
+                           "contact.beta": {"material": "concrete"}}},
+    )  # fmt: skip
+    study = study_from_text(text)
+    assert [v.key for v in study.variables] == ["contact.beta", "contact.e_quantile"]
+    q = study.variables[1]
+    assert (q.kind, q.a, q.b) == ("uniform", 0.0, 1.0)
+    engine = StudyEngine(study)
+    quantiles = engine.parameters(np.arange(8))["contact.xi"]  # the kernels' xi: the quantile
+    for i in range(8):
+        scene = engine.scene_of(i)
+        assert (scene.restitution, scene.material, scene.e) == ("velocity", "concrete", None)
+        assert scene.e_quantile == quantiles[i]
+        assert 0.0 <= scene.e_quantile <= 1.0
+    with pytest.raises(InputError):
+        study_from_text(text.replace("per_impact = true", "per_impact = false"))

@@ -148,6 +148,9 @@ VARY_TABLES = {
                   exclusive_minimum=True),
             Field("mass_kg", "number", "For `contact.beta`: the range at this ball mass "
                   "(default: all masses).", unit="kg", minimum=0.0, exclusive_minimum=True),
+            Field("per_impact", "boolean", "For `contact.e`: each impact's e from Table 2 at its "
+                  "own prior-impact velocity (`[contact] restitution = \"velocity\"` with this "
+                  "material), the quantile `contact.e_quantile` sampled uniform over [0, 1]."),
         ),
         variant="material",
     ),
