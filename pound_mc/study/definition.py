@@ -416,35 +416,6 @@ def _material_variable(key, vspec, names: list[str], file, errors: list):
     return dataclasses.replace(per_material[0], source=source), per_material
 
 
-def _per_impact(vary: dict, scene: dict, file, errors: list) -> dict:
-    """``contact.e = { material = NAME, per_impact = true }``: restitution set per impact.
-
-    The scene's ``[contact]`` then takes ``restitution = "velocity"`` with that material, and
-    its quantile ``contact.e_quantile`` is sampled uniform over [0, 1].  Returns ``vary``
-    with that variable in place of ``contact.e``.
-    """
-    spec = vary.get("contact.e")
-    if not (isinstance(spec, dict) and "per_impact" in spec):
-        return vary
-    where = "sampling.vary.contact.e"
-    if spec["per_impact"] is not True:
-        errors.append(
-            InputError("must be true (or left out)", file=file, key=f"{where}.per_impact")
-        )
-        return {k: v for k, v in vary.items() if k != "contact.e"}
-    material = spec.get("material")
-    if material not in materials.MATERIALS or set(spec) != {"material", "per_impact"}:
-        errors.append(InputError(f"per_impact takes only material, one of "
-                                 f"{list(materials.MATERIALS)}", file=file, key=where))  # fmt: skip
-        return {k: v for k, v in vary.items() if k != "contact.e"}
-    contact = {k: v for k, v in scene.get("contact", {}).items() if k not in ("e", "xi")}
-    contact.update(restitution="velocity", material=material, e_quantile=0.5)
-    scene["contact"] = contact
-    out = {k: v for k, v in vary.items() if k != "contact.e"}
-    out["contact.e_quantile"] = {"distribution": "uniform", "low": 0.0, "high": 1.0}
-    return out
-
-
 def _vary(vary: dict, grid: dict, labels: dict, file, errors: list) -> tuple[list, dict]:
     """``[sampling.vary]``: the random variables, and those that follow the material axis."""
     variables, material_variables = [], {}
@@ -621,7 +592,7 @@ def study_from_text(text: str, *, file: str | Path | None = None) -> Study:
     grid, labels = _grid(data.get("grid", {}), fname, errors)
     spec = check_table(SAMPLING, data.get("sampling", {}), file=fname, prefix="sampling.",
                        errors=errors)  # fmt: skip
-    vary = _per_impact(spec.get("vary", {}), scene, fname, errors)
+    vary = sampling.per_impact(spec.get("vary", {}), scene, fname, errors)
     variables, material_variables = _vary(vary, grid, labels, fname, errors)
     variables = _fixed_structure(scene, grid, variables, fname, errors)
     study = Study(
