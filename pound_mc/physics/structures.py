@@ -341,10 +341,11 @@ class Contact:
 def _column(z: float, building: Building, tol: float):
     """Where height ``z`` meets ``building``'s column: ``(floor below, at, effective mass)``.
 
-    None where ``z`` is above its roof (or within ``tol`` of it: a floor contact instead).
+    None unless ``z`` lies between two of its floors (below the first floor or above the roof,
+    or within ``tol`` of a floor: a floor contact instead).
     """
     elev = building.elevation_m
-    if z >= elev[-1] - tol:
+    if z >= elev[-1] - tol or z <= elev[0] + tol:
         return None
     j = int(np.searchsorted(elev, z))  # first floor above z
     z_lo = elev[j - 1] if j > 0 else 0.0

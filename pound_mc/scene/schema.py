@@ -451,10 +451,10 @@ CONTACT = Table(
               "the end segments linearly (e kept within [0.05, 1]).", default="clamp",
               choices=PER_IMPACT_OUTSIDE),
         Field("level_tolerance_m", "number", "Floors of the two buildings within this of equal "
-              "height meet floor to floor; any other floor below the other building's roof "
-              "meets its column, whose displacement there is interpolated linearly between its "
-              "floors below and above (the ground below the first), with the column's "
-              "effective mass 1 / sum(w^2 / m).", unit="m", default=0.0, minimum=0.0),
+              "height meet floor to floor; any other floor between two floors of the other "
+              "building meets its column, whose displacement there is interpolated linearly "
+              "between those floors, with the column's effective mass 1 / sum(w^2 / m).",
+              unit="m", default=0.0, minimum=0.0),
     ),
 )  # fmt: skip
 
