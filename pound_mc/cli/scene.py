@@ -44,6 +44,8 @@ def simulate_command(args) -> int:
         print(f"peak disp left   {info['peak_disp_left_m']:.6g} m")
         print(f"peak disp right  {info['peak_disp_right_m']:.6g} m")
         print(f"energy residual  {info['energy_residual']:.3g} (of the energy put in)")
+        for line in scene.contact_lines():
+            print(line)
         if args.plot:
             print(f"chart            {args.plot}")
     return 0 if info["status"] == "ok" else 1

@@ -166,6 +166,8 @@ def check_command(args) -> int:
             f"  warning   : one simulation takes {seconds:.0f} s (more than "
             f"{SLOW_SIMULATION_S:.0f} s): lengthen integrator.dt_s or shorten the record",
         )
+    for line in engine.scene.contact_lines():
+        print(f"  {line}")
     if did_compile:
         where = f"kernels compiled now in {warm_s:.1f} s and cached; a run with them cached"
     else:

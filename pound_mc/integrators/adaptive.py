@@ -24,6 +24,7 @@ from pound_mc._jit import jit
 from pound_mc.integrators.laws import (
     contact_forces,
     duration,
+    episode_damping,
     episode_zeta,
     force,
     force_rate,
@@ -32,8 +33,11 @@ from pound_mc.integrators.laws import (
 from pound_mc.integrators.outputs import (
     C_IMPACTS,
     C_IMPULSE,
+    C_MAX_IMPACT_VELOCITY,
     C_MAX_PENETRATION,
     C_PEAK_FORCE,
+    EP_E,
+    EP_V0,
     IMPACT_MIN_PENETRATION_M,
     PRE_E0,
     PRE_E_D,
@@ -48,6 +52,9 @@ from pound_mc.integrators.outputs import (
     STATUS_OK,
     STATUS_UNSTABLE,
     finish,
+    finish_impacts,
+    impact_log,
+    log_impact,
     reset_contacts,
     snapshot,
 )
@@ -311,10 +318,11 @@ def _locate_switch(q, v, q1, v1, a0, a1, psi, gap, phase, hs):
 
 @jit(inline=True)
 def _contact_peaks(q, v, q1, v1, a0, a1, psi, gap, beta, cd, zhd, phase, model, fc0, fc, cimp,
-                   cout, pending, hs, t, peak_f, peak_t):  # fmt: skip
+                   cout, pending, hs, t, peak_f, peak_t, ep, vlog, nlog, peak_e):  # fmt: skip
     """Peak force per contact (Hermite on F with its rate), penetration and impulse.
 
-    Returns the run's peak force and its time, raised where this sub-step holds a new one.
+    Returns the run's peak force and its time, raised where this sub-step holds a new one, and
+    the impact-velocity log with its count (``ep``, ``peak_e``: see ``outputs.impact_log``).
     """
     for c in range(gap.size):
         cout[c, C_IMPULSE] += cimp[c]
@@ -347,6 +355,7 @@ def _contact_peaks(q, v, q1, v1, a0, a1, psi, gap, beta, cd, zhd, phase, model, 
         if fm > peak_f:
             peak_f = fm
             peak_t = t + tm
+            peak_e[0] = ep[c, EP_E]
         dm = max(d0, d1)
         if dd0 > 0.0 and dd1 < 0.0:
             hm, _ = hermite_max(d0, dd0, d1, dd1, hs)
@@ -357,12 +366,19 @@ def _contact_peaks(q, v, q1, v1, a0, a1, psi, gap, beta, cd, zhd, phase, model, 
         if pending[c] and dm > IMPACT_MIN_PENETRATION_M:
             cout[c, C_IMPACTS] += 1.0  # the episode is an impact
             pending[c] = False
-    return peak_f, peak_t
+            vlog, nlog = log_impact(vlog, nlog, ep[c, EP_V0])
+            cout[c, C_MAX_IMPACT_VELOCITY] = max(cout[c, C_MAX_IMPACT_VELOCITY], ep[c, EP_V0])
+    return peak_f, peak_t, vlog, nlog
 
 
 @jit(inline=True)
-def _open_contact(c, v, psi, xi, beta, meff, zhd, phase, pending, model, relation, substeps, hc):
+def _open_contact(c, v, psi, xi, beta, meff, zhd, phase, pending, model, relation, substeps, hc,
+                  settings, cd, ep):  # fmt: skip
     """Contact ``c`` starts an episode: its phase, episode damping and sub-step bound.
+
+    With restitution set per impact (``settings.rest_v`` not empty, ``xi`` its quantile) the
+    episode's damping follows from Table 2 at the onset velocity, into ``cd`` and ``zhd``;
+    ``ep`` keeps the onset velocity and restitution of the episode.
 
     The episode counts as an impact once its penetration exceeds ``IMPACT_MIN_PENETRATION_M``
     (:func:`_contact_peaks`).
@@ -370,7 +386,12 @@ def _open_contact(c, v, psi, xi, beta, meff, zhd, phase, pending, model, relatio
     v0c = rowdot(psi, c, v)
     phase[c] = 1
     pending[c] = True
-    zhd[c] = episode_zeta(model, relation, xi[c], v0c, zhd[c])
+    ep[c, EP_V0] = v0c
+    if settings.rest_v.size > 0:
+        cd[c], zhd[c], ep[c, EP_E] = episode_damping(settings, model, relation, xi[c], v0c,
+                                                     beta[c], meff[c], cd[c], zhd[c])  # fmt: skip
+    else:
+        zhd[c] = episode_zeta(model, relation, xi[c], v0c, zhd[c])
     return min(hc, duration(model, v0c, beta[c], meff[c]) / substeps)
 
 
@@ -459,6 +480,8 @@ def adaptive(
     phase = np.zeros(nc, dtype=np.int64)
     pending = np.zeros(nc, dtype=np.bool_)  # an episode not yet counted as an impact
     zhd = np.zeros(nc)
+    ep, vlog, peak_e = impact_log(nc)
+    nlog = 0
     peaks = np.zeros(nf)
     dc0 = np.empty(nc)
     ddc0 = np.empty(nc)
@@ -551,7 +574,7 @@ def adaptive(
                 s += hh
                 if c_on >= 0:
                     hc = _open_contact(c_on, v, psi, xi, beta, meff, zhd, phase, pending, model,
-                                       relation, substeps, h)  # fmt: skip
+                                       relation, substeps, h, settings, cd, ep)  # fmt: skip
                     t_onset = i * dt_rec + s
                     in_contact = True
                 else:
@@ -579,9 +602,10 @@ def adaptive(
                 e_in += de_in
                 e_d += de_d
                 w_c += dw_c
-                peak_f, peak_t = _contact_peaks(q, v, q1, v1, a0, a1, psi, gap, beta, cd, zhd,
-                                                phase, model, fc0, fc, cimp, cout, pending, hs,
-                                                i * dt_rec + s, peak_f, peak_t)  # fmt: skip
+                peak_f, peak_t, vlog, nlog = _contact_peaks(
+                    q, v, q1, v1, a0, a1, psi, gap, beta, cd, zhd, phase, model, fc0, fc, cimp,
+                    cout, pending, hs, i * dt_rec + s, peak_f, peak_t, ep, vlog, nlog, peak_e,
+                )  # fmt: skip
                 track_floors(phi, side, q, v, q1, v1, hs, peaks)
                 for j in range(n):
                     q[j] = q1[j]
@@ -590,7 +614,8 @@ def adaptive(
                 if c_ev >= 0 and hs == t_ev:
                     if kind == _ONSET:
                         hc = _open_contact(c_ev, v, psi, xi, beta, meff, zhd, phase, pending,
-                                           model, relation, substeps, hc)  # fmt: skip
+                                           model, relation, substeps, hc, settings, cd,
+                                           ep)  # fmt: skip
                         t_onset = i * dt_rec + s
                     elif kind == _TO_RESTITUTION:
                         phase[c_ev] = 2
@@ -621,3 +646,4 @@ def adaptive(
             stored_energy += stored(model, rowdot(psi, c, q) - gap[c], beta[c])
     finish(out, cout, peaks, side, phase, q, v, omega, e0, e_in, e_d, w_c, stored_energy,
            peak_f, peak_t, steps, status)  # fmt: skip
+    finish_impacts(out, cout, vlog, nlog, peak_e[0])

@@ -28,6 +28,7 @@ from pound_mc._jit import jit
 from pound_mc.integrators.laws import (
     LAW_CODES,
     duration,
+    episode_damping,
     episode_zeta,
     force,
     force_rate,
@@ -36,6 +37,7 @@ from pound_mc.integrators.laws import (
 from pound_mc.integrators.outputs import (
     C_IMPACTS,
     C_IMPULSE,
+    C_MAX_IMPACT_VELOCITY,
     C_MAX_PENETRATION,
     C_PEAK_FORCE,
     IMPACT_MIN_PENETRATION_M,
@@ -52,6 +54,9 @@ from pound_mc.integrators.outputs import (
     STATUS_OK,
     STATUS_UNSTABLE,
     finish,
+    finish_impacts,
+    impact_log,
+    log_impact,
 )
 from pound_mc.integrators.toolkit import (
     advance,
@@ -400,6 +405,11 @@ def adaptive_pair(
     pot = model == _JANKOWSKI
     whole = m_sub == 1
     kpot = 0.8 * cd
+    # restitution set per impact (Table 2 at the onset velocity; ``xi0`` holds its quantile)
+    per_impact = settings.rest_v.size > 0
+    _, vlog, _ = impact_log(1)
+    nlog = 0
+    v_ep = e_ep = peak_e = math.nan
     ramp_0 = RAMP_START_POT if pot else RAMP_START
     ramp_k = RAMP_GROWTH_POT if pot else RAMP_GROWTH
     tail = TAIL_POT if pot else TAIL
@@ -596,7 +606,13 @@ def adaptive_pair(
                     v0c = ps0 * v0 + ps1 * v1
                     phase = 1
                     pending = True
-                    zhd = episode_zeta(model, relation, xi0, v0c, zhd)
+                    v_ep = v0c
+                    if per_impact:
+                        cd, zhd, e_ep = episode_damping(settings, model, relation, xi0, v0c, b,
+                                                        me, cd, zhd)  # fmt: skip
+                        kpot = 0.8 * cd
+                    else:
+                        zhd = episode_zeta(model, relation, xi0, v0c, zhd)
                     hc = min(h, duration(model, v0c, b, me) / substeps)
                     t_onset = i * dt_rec + s
                     in_contact = True
@@ -701,6 +717,7 @@ def adaptive_pair(
                     if fm > peak_f:
                         peak_f = fm
                         peak_t = i * dt_rec + s + tm
+                        peak_e = e_ep
                     dm = max(d0, d1)
                     if dd0 > 0.0 and dd1 < 0.0:
                         hm, _ = hermite_max(d0, dd0, d1, dd1, hs)
@@ -711,6 +728,7 @@ def adaptive_pair(
                     if pending and dm > IMPACT_MIN_PENETRATION_M:
                         impacts += 1.0  # the episode is an impact
                         pending = False
+                        vlog, nlog = log_impact(vlog, nlog, v_ep)
                 # peak floor displacements over the sub-step (Hermite)
                 pk0 = _track_floor(f0 * q0, f0 * v0, f0 * nq0, f0 * nv0, hs, pk0)
                 pk1 = _track_floor(f1 * q1, f1 * v1, f1 * nq1, f1 * nv1, hs, pk1)
@@ -724,7 +742,13 @@ def adaptive_pair(
                         phase = 1
                         pending = True
                         v0c = ps0 * v0 + ps1 * v1
-                        zhd = episode_zeta(model, relation, xi0, v0c, zhd)
+                        v_ep = v0c
+                        if per_impact:
+                            cd, zhd, e_ep = episode_damping(settings, model, relation, xi0, v0c,
+                                                            b, me, cd, zhd)  # fmt: skip
+                            kpot = 0.8 * cd
+                        else:
+                            zhd = episode_zeta(model, relation, xi0, v0c, zhd)
                         hc = min(hc, duration(model, v0c, b, me) / substeps)
                         t_onset = i * dt_rec + s
                     elif kind == 2:
@@ -757,6 +781,7 @@ def adaptive_pair(
     cout[0, C_IMPACTS] = impacts
     cout[0, C_MAX_PENETRATION] = maxpen
     cout[0, C_IMPULSE] = impulse
+    cout[0, C_MAX_IMPACT_VELOCITY] = vlog[:nlog].max() if nlog > 0 else 0.0
     peaks = np.empty(2)
     peaks[0] = pk0
     peaks[1] = pk1
@@ -767,6 +792,7 @@ def adaptive_pair(
         stored_energy = stored(model, ps0 * q0 + ps1 * q1 - gp, b)
     finish(out, cout, peaks, side, ph, q, v, omega, e0, e_in, e_d, w_c, stored_energy, peak_f,
            peak_t, steps, status)  # fmt: skip
+    finish_impacts(out, cout, vlog, nlog, peak_e)
 
 
 @jit(inline=True)

@@ -54,6 +54,7 @@ from pound_mc.integrators.outputs import (
     N_OUT,
     OUTPUTS,
     PEAK_FORCE,
+    PEAK_FORCE_RESTITUTION,
     PRE_MODE,
     PRE_RESUME,
     PRE_RUN_TO_CONTACT,
@@ -65,7 +66,9 @@ from pound_mc.integrators.outputs import (
 )
 from pound_mc.integrators.pair import newmark_pair
 from pound_mc.integrators.toolkit import MAX_STEPS
-from pound_mc.physics.contact import check_relation
+from pound_mc.physics.contact import CONTACT_MODELS, check_relation, reported_xi
+from pound_mc.physics.materials import E_FLOOR, PER_IMPACT_OUTSIDE, restitution_rows
+from pound_mc.physics.relations import exact_table, restitution_of_xi
 
 __all__ = [
     "METHODS",
@@ -92,8 +95,46 @@ METHODS = tuple(_METHOD_CODES)
 
 #: Settings of one kernel run, as the kernels take them: codes of the contact law, of its
 #: damping relation and of the method, the step bound ``dt_s`` [s] and the contact sub-steps
-#: per contact duration (``adaptive``).  Build it with :func:`kernel_settings`.
-KernelSettings = namedtuple("KernelSettings", "model relation method dt_s substeps")
+#: per contact duration (``adaptive``), then the restitution set per impact (empty arrays:
+#: fixed restitution): the policy outside the measured velocities (0 clamp, 1 extrapolate) and
+#: the lowest restitution it may reach, the table of the relation's ``xi`` on a uniform grid of
+#: ``e`` (start, spacing), the seed's Table 2 rows (velocities [m/s], ``e_min``, ``e_max``)
+#: and that ``xi`` table.  Build it with :func:`kernel_settings`.
+KernelSettings = namedtuple(
+    "KernelSettings",
+    "model relation method dt_s substeps outside rest_floor xi_e0 xi_de rest_v rest_lo rest_hi "
+    "xi_tab",
+)
+#: Largest damping ratio of the ``exact`` table [-].
+_XI_MAX = float(exact_table()["xi"].max())
+#: Spacing of the ``e`` grid of a relation's ``xi`` table [-] (linear interpolation in it is
+#: within 2e-8 of the relation for e >= 0.3).
+XI_TABLE_DE = 1e-4
+
+
+def _restitution_arrays(model: str, relation: str | None, restitution: dict | None) -> tuple:
+    """Settings fields of per-impact restitution (:data:`KernelSettings`), empty without."""
+    empty = np.zeros(0)
+    if restitution is None:
+        return 0, 0.0, 0.0, 1.0, empty, empty, empty, empty
+    outside = restitution.get("outside", "clamp")
+    if outside not in PER_IMPACT_OUTSIDE:
+        raise InputError(
+            f"unknown policy {outside!r}; choose one of {list(PER_IMPACT_OUTSIDE)}",
+            key="contact.outside",
+        )
+    if CONTACT_MODELS[model].damping is None:
+        raise InputError(
+            f"the {model!r} law has no damping to set per impact", key="contact.restitution"
+        )
+    v, lo, hi = restitution_rows(restitution["material"])
+    e_grid = np.linspace(E_FLOOR, 1.0, int(round((1.0 - E_FLOOR) / XI_TABLE_DE)) + 1)
+    xi_tab = (
+        empty if CONTACT_MODELS[model].damping == "zeta"
+        else np.asarray(reported_xi(model, e_grid, relation), dtype=np.float64)
+    )  # fmt: skip
+    de = float(e_grid[1] - e_grid[0])
+    return (PER_IMPACT_OUTSIDE.index(outside), E_FLOOR, E_FLOOR, de, v, lo, hi, xi_tab)
 
 
 class KernelResult(NamedTuple):
@@ -116,8 +157,13 @@ def kernel_settings(
     relation: str | None = None,
     dt_s: float = 0.001,
     substeps: int = 16,
+    restitution: dict | None = None,
 ) -> KernelSettings:
     """Kernel settings from names (``relation`` None: the law's default).
+
+    ``restitution``: ``{"material": NAME, "outside": "clamp" | "extrapolate"}`` sets each
+    impact's restitution from the seed's Table 2 at its onset velocity (the kernels' ``xi``
+    then holds the quantile of the measured range); None: fixed.
 
     Raises
     ------
@@ -131,8 +177,9 @@ def kernel_settings(
         )
     rel = RELATION_CODES[model][relation] if relation is not None else 0
     return KernelSettings(
-        LAW_CODES[model], rel, _METHOD_CODES[method], float(dt_s), float(substeps)
-    )
+        LAW_CODES[model], rel, _METHOD_CODES[method], float(dt_s), float(substeps),
+        *_restitution_arrays(model, relation, restitution),
+    )  # fmt: skip
 
 
 @jit(inline=True)
@@ -275,6 +322,29 @@ def _threaded(kernel, n: int, *args) -> None:
             future.result()
 
 
+def _fixed_restitution(out, settings, xi) -> None:
+    """``peak_force_restitution`` of runs with one restitution for every impact (ok runs).
+
+    The restitution the law rebounds with for its damping parameter: ``xi`` by the exact
+    single impact (Jankowski), ``exp(-pi xi / sqrt(1 - xi^2))`` (Kelvin), ``e`` itself
+    (Hertz-damp, whose ``xi`` holds it), 1 for the undamped laws.
+    """
+    if settings.rest_v.size > 0:
+        return  # set per impact by the kernels
+    law = CONTACT_MODELS[next(k for k, v in LAW_CODES.items() if v == settings.model)]
+    xi = np.broadcast_to(np.asarray(xi, dtype=float), out.shape[:-1])
+    if law.damping is None:
+        e = np.ones_like(xi)
+    elif law.damping == "zeta":
+        e = xi
+    elif law.name == "kelvin":
+        e = np.exp(-math.pi * xi / np.sqrt(np.maximum(1.0 - xi * xi, 1e-300)))
+    else:
+        e = np.asarray(restitution_of_xi(np.clip(xi, 0.0, _XI_MAX)), dtype=float)
+    ok = out[..., STATUS] == 0
+    out[..., PEAK_FORCE_RESTITUTION] = np.where(ok, e, out[..., PEAK_FORCE_RESTITUTION])
+
+
 def _named(out):
     """``{name: column}`` of an output matrix (one row per simulation) with integer counts."""
     result = {name: out[..., k] for k, name in enumerate(OUTPUTS)}
@@ -307,6 +377,7 @@ def run_kernel(
     v0=None,
     history: bool = False,
     storeys=None,
+    restitution: dict | None = None,
 ) -> KernelResult:
     """Run one simulation on prepared modal arrays.
 
@@ -329,8 +400,11 @@ def run_kernel(
     storeys : tuple (drift rows, storey table), optional
         Yielding storeys (:meth:`pound_mc.scene.Scene.storey_arrays`): run the inelastic
         kernel (``newmark`` or ``newmark-explicit``; no histories).
+    restitution : dict, optional
+        Restitution set per impact (:func:`kernel_settings`); ``xi`` then holds its quantile.
     """
-    settings = kernel_settings(model, method, relation=relation, dt_s=dt_s, substeps=substeps)
+    settings = kernel_settings(model, method, relation=relation, dt_s=dt_s, substeps=substeps,
+                               restitution=restitution)  # fmt: skip
     if storeys is not None:
         _check_inelastic(settings, history)
     n = omega.size
@@ -359,6 +433,7 @@ def run_kernel(
         np.ascontiguousarray(beta, dtype=f8), np.ascontiguousarray(xi, dtype=f8),
         settings, q, v, out, cout, hx, hd, hf, np.zeros(0),
     )  # fmt: skip
+    _fixed_restitution(out, settings, xi[0] if np.size(xi) else 0.0)
     if settings.method != _ADAPTIVE:
         t_c = shortest_contact_s(model, cout[:, C_MAX_PENETRATION], beta, meff).min()
         out[STATUS] = flag_inaccurate(out[STATUS], out[IMPACTS], t_c, dt_s)
@@ -371,7 +446,9 @@ def run_kernel(
 def _with_step(settings, dt_s):
     """``settings`` with the step bound ``dt_s`` of one simulation."""
     return KernelSettings(settings.model, settings.relation, settings.method, dt_s,
-                          settings.substeps)  # fmt: skip
+                          settings.substeps, settings.outside, settings.rest_floor,
+                          settings.xi_e0, settings.xi_de, settings.rest_v, settings.rest_lo,
+                          settings.rest_hi, settings.xi_tab)  # fmt: skip
 
 
 @jit(inline=True)
@@ -472,6 +549,7 @@ def simulate_sdof_pairs(
     contact_model: str = "jankowski",
     relation: str | None = None,
     substeps: int = 16,
+    restitution: dict | None = None,
 ) -> dict[str, np.ndarray]:
     """Run many SDOF-pair simulations on one record in threads.
 
@@ -479,9 +557,11 @@ def simulate_sdof_pairs(
     ``xi`` is the damping ratio (the restitution ``e`` for ``hertzdamp``), ``relation`` the
     law's damping relation (None: its default).  Returns ``{output name: array}`` for every
     name in :data:`OUTPUTS`; each simulation writes only its own slot, so results do not
-    depend on the number of threads.
+    depend on the number of threads.  ``restitution``: set per impact (:func:`kernel_settings`;
+    ``xi`` then holds its quantile).
     """
-    settings = kernel_settings(contact_model, method, relation=relation, substeps=substeps)
+    settings = kernel_settings(contact_model, method, relation=relation, substeps=substeps,
+                               restitution=restitution)  # fmt: skip
     arrays = [
         left_period_s, left_damping_ratio, left_mass_kg, right_period_s, right_damping_ratio,
         right_mass_kg, gap_m, beta, xi, dt_s,
@@ -494,6 +574,7 @@ def simulate_sdof_pairs(
     dt_rec = float(dt_rec)
     if settings.method != _ADAPTIVE:
         _threaded(_sdof_fixed, nsim, acc, dt_rec, *arrays, settings, out)
+        _fixed_restitution(out, settings, arrays[8])
         half = np.empty_like(out)  # step doubling (pound_mc.integrators.accuracy)
         _threaded(_sdof_fixed, nsim, acc, dt_rec, *arrays[:9], arrays[9] / 2, settings, half)
         ml, mr, beta_k, dt_k = arrays[2], arrays[5], arrays[7], arrays[9]
@@ -511,6 +592,7 @@ def simulate_sdof_pairs(
     group = group.ravel().astype(np.int64)
     _threaded(_sdof_groups, first.size, acc, dt_rec, *arrays, settings, first, shared)
     _threaded(_sdof_adaptive, nsim, acc, dt_rec, *arrays, settings, out, group, shared)
+    _fixed_restitution(out, settings, arrays[8])
     return _named(out)
 
 
@@ -559,6 +641,7 @@ def simulate_scene_batch(
     contact_model: str = "jankowski",
     relation: str | None = None,
     substeps: int = 16,
+    restitution: dict | None = None,
 ) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
     """Run many simulations of one pair of buildings (any model) on one record, in threads.
 
@@ -577,6 +660,8 @@ def simulate_scene_batch(
         Integration method, contact law and its damping relation (None: the law's default).
     substeps : int
         Contact sub-steps per estimated contact duration (``adaptive``).
+    restitution : dict, optional
+        Restitution set per impact (:func:`kernel_settings`; ``xi`` then holds its quantile).
 
     Returns
     -------
@@ -585,7 +670,8 @@ def simulate_scene_batch(
     contacts : dict
         ``{name: (nsim, n_contacts)}`` for every name in :data:`CONTACT_OUTPUTS`.
     """
-    settings = kernel_settings(contact_model, method, relation=relation, substeps=substeps)
+    settings = kernel_settings(contact_model, method, relation=relation, substeps=substeps,
+                               restitution=restitution)  # fmt: skip
     nc = arrays["psi"].shape[0]
     beta, xi, dt_s = np.broadcast_arrays(
         *[np.asarray(a, dtype=np.float64) for a in (beta, xi, dt_s)]
@@ -622,4 +708,5 @@ def simulate_scene_batch(
                                          out[:, PEAK_FORCE], half[:, PEAK_FORCE])  # fmt: skip
     contacts = {name: cout[:, :, k] for k, name in enumerate(CONTACT_OUTPUTS)}
     contacts["impacts"] = contacts["impacts"].astype(np.int32)
+    _fixed_restitution(out, settings, xi)
     return _named(out), contacts

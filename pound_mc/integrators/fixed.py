@@ -18,6 +18,7 @@ import numpy as np
 
 from pound_mc._jit import jit
 from pound_mc.integrators.laws import (
+    episode_damping,
     episode_zeta,
     force,
     force_grad,
@@ -28,14 +29,20 @@ from pound_mc.integrators.laws import (
 from pound_mc.integrators.outputs import (
     C_IMPACTS,
     C_IMPULSE,
+    C_MAX_IMPACT_VELOCITY,
     C_MAX_PENETRATION,
     C_PEAK_FORCE,
     DIVERGENCE_LIMIT_M,
+    EP_E,
+    EP_V0,
     IMPACT_MIN_PENETRATION_M,
     STATUS_NOT_CONVERGED,
     STATUS_OK,
     STATUS_UNSTABLE,
     finish,
+    finish_impacts,
+    impact_log,
+    log_impact,
     reset_contacts,
 )
 from pound_mc.integrators.toolkit import (
@@ -150,6 +157,17 @@ def fixed(
     fn = np.zeros(nc)
     fprev = np.zeros(nc)
     zhd = np.zeros(nc)
+    # restitution set per impact (Table 2 at the onset velocity; ``xi`` holds its quantile)
+    per_impact = settings.rest_v.size > 0
+    ep, vlog, peak_e = impact_log(nc)
+    nlog = 0
+    if per_impact:
+        # before the first onset (a step into contact runs with the damping it starts with):
+        # the range at the lowest measured velocity
+        for c in range(nc):
+            cd[c], zhd[c], _ = episode_damping(settings, model, relation, xi[c],
+                                               settings.rest_v[0], beta[c], meff[c], cd[c],
+                                               zhd[c])  # fmt: skip
     dpen = np.zeros(nc)
     ddpen = np.zeros(nc)
     was_in = np.zeros(nc, dtype=np.bool_)
@@ -251,6 +269,7 @@ def fixed(
                 if fc[c] > peak_f:
                     peak_f = fc[c]
                     peak_t = t1 - h
+                    peak_e[0] = ep[c, EP_E]
             pin_prev, pd_prev, pc_prev = pin1, pd1, pc1
             for j in range(n):
                 qprev[j] = q[j]
@@ -267,6 +286,11 @@ def fixed(
                 qs[j] = phat * ikhat[j]
             for c in range(nc):
                 dstar[c] = rowdot(psi, c, qs) - gap[c]
+                if per_impact and dstar[c] > 0.0 and not was_in[c]:
+                    # an episode starts in this step: its damping from the rate before it
+                    cd[c], zhd[c], ep[c, EP_E] = episode_damping(settings, model, relation, xi[c],
+                                                                 ddpen[c], beta[c], meff[c], cd[c],
+                                                                 zhd[c])  # fmt: skip
             if not _implicit_forces(model, method, dstar, dtry, dpen, ddpen, g, c2h, fc, beta,
                                     cd, zhd, fn, jac, rhs):  # fmt: skip
                 status = STATUS_NOT_CONVERGED
@@ -284,10 +308,21 @@ def fixed(
             dd1 = rowdot(psi, c, vn)
             if d1 > 0.0 and not was_in[c]:
                 pending[c] = True  # an episode: an impact once it is deep enough
-                zhd[c] = episode_zeta(model, relation, xi[c], dd1, zhd[c])
+                ep[c, EP_V0] = dd1
+                if per_impact:
+                    # the prior-impact velocity: the rate at the last step point before contact
+                    ep[c, EP_V0] = ddpen[c]
+                    cd[c], zhd[c], ep[c, EP_E] = episode_damping(settings, model, relation, xi[c],
+                                                                 ddpen[c], beta[c], meff[c], cd[c],
+                                                                 zhd[c])  # fmt: skip
+                else:
+                    zhd[c] = episode_zeta(model, relation, xi[c], dd1, zhd[c])
             if pending[c] and d1 > IMPACT_MIN_PENETRATION_M:
                 cout[c, C_IMPACTS] += 1.0
                 pending[c] = False
+                vlog, nlog = log_impact(vlog, nlog, ep[c, EP_V0])
+                cout[c, C_MAX_IMPACT_VELOCITY] = max(cout[c, C_MAX_IMPACT_VELOCITY],
+                                                     ep[c, EP_V0])  # fmt: skip
             was_in[c] = d1 > 0.0
             dpen[c] = d1
             ddpen[c] = dd1
@@ -311,6 +346,7 @@ def fixed(
                 if fn[c] > peak_f:
                     peak_f = fn[c]
                     peak_t = t1
+                    peak_e[0] = ep[c, EP_E]
             pin_prev, pd_prev, pc_prev = pin1, pd1, pc1
             for j in range(n):
                 q[j] = qn[j]
@@ -349,3 +385,4 @@ def fixed(
             phase[c] = 1
     finish(out, cout, peaks, side, phase, q, v, omega, e0, e_in, e_d, w_c, stored_energy,
            peak_f, peak_t, steps, status)  # fmt: skip
+    finish_impacts(out, cout, vlog, nlog, peak_e[0])

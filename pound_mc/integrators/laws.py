@@ -9,6 +9,8 @@ passes names.
 
 from __future__ import annotations
 
+import math
+
 from pound_mc._jit import jit
 from pound_mc.integrators.toolkit import rowdot
 from pound_mc.physics.contact import CONTACT_MODELS
@@ -201,3 +203,63 @@ def newton_scalar(model, dstar, dn, ddn, g, c2h, fprev, beta, c0, zeta):
             return f, True
         d = d_new
     return f, False
+
+
+@jit(inline=True)
+def impact_restitution(settings, quantile, v0):
+    """Restitution [-] of an impact at prior-impact velocity ``v0`` [m/s], set per impact.
+
+    ``settings.rest_v``: the table's velocities [m/s], ``rest_lo`` / ``rest_hi``: its range of
+    ``e`` at them; linear in velocity between rows, outside them held (``settings.outside``
+    0) or continued linearly and kept within ``[rest_floor, 1]`` (1); ``e`` at ``quantile``
+    of the range.
+    """
+    rv = settings.rest_v
+    lo = settings.rest_lo
+    hi = settings.rest_hi
+    n = rv.size
+    if v0 <= rv[0]:
+        k = 0
+    elif v0 >= rv[n - 1]:
+        k = n - 2
+    else:
+        k = 0
+        while v0 > rv[k + 1]:
+            k += 1
+    t = (v0 - rv[k]) / (rv[k + 1] - rv[k])
+    if settings.outside == 0:
+        t = min(max(t, 0.0), 1.0)
+    e_lo = lo[k] + t * (lo[k + 1] - lo[k])
+    e_hi = hi[k] + t * (hi[k + 1] - hi[k])
+    if settings.outside != 0:
+        e_lo = min(max(e_lo, settings.rest_floor), 1.0)
+        e_hi = min(max(e_hi, settings.rest_floor), 1.0)
+    return e_lo + quantile * (e_hi - e_lo)
+
+
+@jit(inline=True)
+def impact_xi(settings, e):
+    """Damping ratio [-] for restitution ``e`` by the run's relation (its table, linear)."""
+    tab = settings.xi_tab
+    x = (e - settings.xi_e0) / settings.xi_de
+    if x <= 0.0:
+        return tab[0]
+    k = int(x)
+    if k >= tab.size - 1:
+        return tab[tab.size - 1]
+    t = x - k
+    return tab[k] + t * (tab[k + 1] - tab[k])
+
+
+@jit(inline=True)
+def episode_damping(settings, model, relation, quantile, v0, beta, meff, cd, zhd):
+    """Damping of an episode whose restitution is set per impact at its onset velocity ``v0``.
+
+    Returns ``(c0, zeta, e)``: the damping constant of the law [N s/m per its law], the
+    Hertz-damp constant [s/m] and the restitution used [-].
+    """
+    v = max(v0, 1e-12)
+    e = impact_restitution(settings, quantile, v)
+    if model == _HERTZDAMP:
+        return cd, episode_zeta(model, relation, e, v, zhd), e
+    return 2.0 * impact_xi(settings, e) * math.sqrt(beta * meff), zhd, e

@@ -38,6 +38,10 @@ OUTPUTS = (
     "hysteretic_energy",
     "peak_floor_accel_left",
     "peak_floor_accel_right",
+    # impact velocities and per-impact restitution: DESIGN.md section 9
+    "max_impact_velocity",
+    "median_impact_velocity",
+    "peak_force_restitution",
 )
 N_OUT = len(OUTPUTS)
 (
@@ -51,6 +55,7 @@ N_OUT = len(OUTPUTS)
 ) = range(12, 21)  # fmt: skip
 #: Outputs of inelastic runs only (the storeys' responses), NaN from the elastic kernels.
 INELASTIC_OUTPUTS = OUTPUTS[PEAK_DUCTILITY_LEFT : PEAK_FLOOR_ACCEL_RIGHT + 1]
+MAX_IMPACT_VELOCITY, MEDIAN_IMPACT_VELOCITY, PEAK_FORCE_RESTITUTION = range(21, N_OUT)
 #: Outputs that are NaN for a run that is not ok (no plain numbers to be taken for results).
 _NAN_WHEN_FAILED = (
     PEAK_FORCE, MAX_PENETRATION, PEAK_DISP_LEFT, PEAK_DISP_RIGHT, IMPULSE, DISSIPATED_ENERGY,
@@ -58,9 +63,9 @@ _NAN_WHEN_FAILED = (
 )  # fmt: skip
 
 #: Per-contact outputs (columns of the kernel's contact matrix).
-CONTACT_OUTPUTS = ("peak_force", "impacts", "max_penetration", "impulse")
+CONTACT_OUTPUTS = ("peak_force", "impacts", "max_penetration", "impulse", "max_impact_velocity")
 N_COUT = len(CONTACT_OUTPUTS)
-C_PEAK_FORCE, C_IMPACTS, C_MAX_PENETRATION, C_IMPULSE = range(N_COUT)
+C_PEAK_FORCE, C_IMPACTS, C_MAX_PENETRATION, C_IMPULSE, C_MAX_IMPACT_VELOCITY = range(N_COUT)
 
 #: Status codes of a run.
 STATUS_OK, STATUS_UNSTABLE, STATUS_NOT_CONVERGED = 0, 1, 2
@@ -98,6 +103,7 @@ def reset_contacts(cout):
         cout[c, C_IMPACTS] = 0.0
         cout[c, C_MAX_PENETRATION] = -np.inf
         cout[c, C_IMPULSE] = 0.0
+        cout[c, C_MAX_IMPACT_VELOCITY] = 0.0
 
 
 @jit
@@ -185,3 +191,53 @@ def finish(out, cout, peaks, side, phase, q, v, omega, e0, e_in, e_d, w_c, store
         for c in range(nc):
             if cout[c, C_IMPACTS] == 0.0:
                 cout[c, C_MAX_PENETRATION] = 0.0
+
+
+# Impact velocities (the relative velocity at contact onset, the prior-impact velocity of the
+# seed's Table 2) and the restitution of each episode: ``episodes`` has a row per contact with
+# the onset velocity [m/s] and the restitution [-] of its current episode (NaN: fixed
+# restitution); ``log`` collects the onset velocity of every impact; ``peak_e`` (one value) the
+# restitution of the episode that holds the peak force.
+EP_V0, EP_E = 0, 1
+
+
+@jit
+def impact_log(nc):
+    """Empty episode table, impact-velocity log and peak-force restitution of a run."""
+    return np.full((nc, 2), np.nan), np.zeros(16), np.full(1, np.nan)
+
+
+@jit
+def log_impact(log, count, v0):
+    """Append ``v0`` to ``log`` (doubled when full); returns the log and the new count."""
+    if count == log.size:
+        grown = np.empty(2 * log.size)
+        grown[:count] = log
+        log = grown
+    log[count] = v0
+    return log, count + 1
+
+
+@jit
+def finish_impacts(out, cout, log, count, peak_e):
+    """Impact-velocity outputs (max, median), per-contact maxima and the peak-force ``e``.
+
+    Called after :func:`finish`; a run that is not ok reports NaN, one without impacts 0
+    velocities and NaN restitution.
+    """
+    vmax = 0.0
+    med = 0.0
+    if count > 0:
+        vals = np.sort(log[:count])
+        vmax = vals[count - 1]
+        mid = count // 2
+        med = vals[mid] if count % 2 == 1 else 0.5 * (vals[mid - 1] + vals[mid])
+    out[MAX_IMPACT_VELOCITY] = vmax
+    out[MEDIAN_IMPACT_VELOCITY] = med
+    out[PEAK_FORCE_RESTITUTION] = peak_e if count > 0 else np.nan
+    if out[STATUS] != STATUS_OK:
+        out[MAX_IMPACT_VELOCITY] = np.nan
+        out[MEDIAN_IMPACT_VELOCITY] = np.nan
+        out[PEAK_FORCE_RESTITUTION] = np.nan
+        for c in range(cout.shape[0]):
+            cout[c, C_MAX_IMPACT_VELOCITY] = np.nan

@@ -14,7 +14,14 @@ import numpy as np
 from pound_mc._jit import jit
 from pound_mc.integrators import outputs
 from pound_mc.integrators.fixed import NEWMARK_EXPLICIT
-from pound_mc.integrators.laws import episode_zeta, force, newton_scalar, phase_of, stored
+from pound_mc.integrators.laws import (
+    episode_damping,
+    episode_zeta,
+    force,
+    newton_scalar,
+    phase_of,
+    stored,
+)
 from pound_mc.integrators.toolkit import step_size, trapezoid
 
 
@@ -54,6 +61,15 @@ def newmark_pair(
     v0, v1 = v[0], v[1]
     e0 = 0.5 * (v0 * v0 + w0 * w0 * q0 * q0 + v1 * v1 + w1 * w1 * q1 * q1)
     zhd = 0.0
+    # restitution set per impact (Table 2 at the onset velocity; ``xi`` holds its quantile);
+    # before the first onset the range at the lowest measured velocity
+    per_impact = settings.rest_v.size > 0
+    _, vlog, _ = outputs.impact_log(1)
+    nlog = 0
+    v_ep = e_ep = peak_e = math.nan
+    if per_impact:
+        cd, zhd, _ = episode_damping(settings, model, relation, xi[0], settings.rest_v[0], b,
+                                     meff[0], cd, zhd)  # fmt: skip
     dpen = ps0 * q0 + ps1 * q1 - gp
     ddpen = ps0 * v0 + ps1 * v1
     fc = force(model, dpen, ddpen, b, cd, zhd, phase_of(dpen, ddpen))
@@ -87,6 +103,10 @@ def newmark_pair(
             if method == NEWMARK_EXPLICIT:
                 fn = fc  # lagged one step
             elif dstar > 0.0:
+                if per_impact and not was_in:
+                    # an episode starts in this step: its damping from the rate before it
+                    cd, zhd, e_ep = episode_damping(settings, model, relation, xi[0], ddpen, b,
+                                                    meff[0], cd, zhd)  # fmt: skip
                 fn, conv = newton_scalar(model, dstar, dpen, ddpen, gg, c2h, fc, b, cd, zhd)
                 if not conv:
                     status = outputs.STATUS_NOT_CONVERGED
@@ -105,10 +125,18 @@ def newmark_pair(
             dd1 = ps0 * v0 + ps1 * v1
             if d1 > 0.0 and not was_in:
                 pending = True  # an episode: an impact once it is deep enough
-                zhd = episode_zeta(model, relation, xi[0], dd1, zhd)
+                v_ep = dd1
+                if per_impact:
+                    # the prior-impact velocity: the rate at the last step point before contact
+                    v_ep = ddpen
+                    cd, zhd, e_ep = episode_damping(settings, model, relation, xi[0], ddpen, b,
+                                                    meff[0], cd, zhd)  # fmt: skip
+                else:
+                    zhd = episode_zeta(model, relation, xi[0], dd1, zhd)
             if pending and d1 > outputs.IMPACT_MIN_PENETRATION_M:
                 impacts += 1.0
                 pending = False
+                vlog, nlog = outputs.log_impact(vlog, nlog, v_ep)
             was_in = d1 > 0.0
             dpen = d1
             ddpen = dd1
@@ -125,6 +153,7 @@ def newmark_pair(
             if fn > peak_f:
                 peak_f = fn
                 peak_t = (i * m_sub + k + 1) * h
+                peak_e = e_ep
             pin_prev, pd_prev, pc_prev = pin1, pd1, pc1
             fc = fn
             x0 = abs(f0 * q0)
@@ -143,6 +172,7 @@ def newmark_pair(
     cout[0, outputs.C_IMPACTS] = impacts
     cout[0, outputs.C_MAX_PENETRATION] = maxpen
     cout[0, outputs.C_IMPULSE] = impulse
+    cout[0, outputs.C_MAX_IMPACT_VELOCITY] = vlog[:nlog].max() if nlog > 0 else 0.0
     peaks = np.empty(2)
     peaks[0] = pk0
     peaks[1] = pk1
@@ -153,3 +183,4 @@ def newmark_pair(
         phase[0] = 1
     outputs.finish(out, cout, peaks, side, phase, q, v, omega, e0, e_in, e_d, w_c, stored_energy,
                    peak_f, peak_t, steps, status)  # fmt: skip
+    outputs.finish_impacts(out, cout, vlog, nlog, peak_e)

@@ -34,6 +34,11 @@ so the right-hand side is smooth inside every segment.  Peak force and peak disp
 continuous-time maxima: the dense output of every segment is sampled finely and the best sample
 refined with :func:`scipy.optimize.minimize_scalar`.
 
+With ``restitution = "velocity"`` each impact's ``e`` is
+:func:`pound_mc.physics.materials.restitution_at` (the seed's Table 2) at the relative
+velocity at the onset event, and its damping (``xi`` by
+:func:`pound_mc.physics.relations.xi_from_e`, or ``zeta``) is fixed for that episode.
+
 This is slow (seconds for a 30 s SDOF-pair record) and meant for tests and checks only.
 """
 
@@ -47,7 +52,8 @@ from scipy.optimize import minimize_scalar
 
 from pound_mc.integrators.outputs import IMPACT_MIN_PENETRATION_M
 from pound_mc.motions import record_arrays
-from pound_mc.physics.relations import HERTZDAMP_RELATIONS
+from pound_mc.physics.materials import restitution_at
+from pound_mc.physics.relations import HERTZDAMP_RELATIONS, xi_from_e
 
 __all__ = ["reference_solution"]
 
@@ -122,7 +128,9 @@ def reference_solution(
     dict
         ``peak_force`` [N], ``impacts``, ``max_penetration`` [m] (0 without impacts),
         ``peak_disp_left``, ``peak_disp_right`` [m] (max over floors and time of ``|x|``),
-        ``impact_times`` (list [s]), ``peak_force_time`` [s], per-contact arrays
+        ``impact_times`` (list [s]), ``impact_velocities`` (list [m/s], the onset velocity of
+        every impact), ``peak_force_restitution`` (``e`` of the peak-force episode, NaN with
+        fixed restitution), ``peak_force_time`` [s], per-contact arrays
         ``contact_peak_force`` and ``contact_impacts``, ``x_end``, ``v_end`` (final state),
         ``segments`` (solver calls), ``wall_s``.
     """
@@ -137,17 +145,23 @@ def reference_solution(
     acc = np.asarray(acc, dtype=float)
     npts = acc.size
 
-    left, right = scene.left, scene.right
-    nl, nr = left.n_floors, right.n_floors
-    n = nl + nr
+    # a row of buildings (``scene.row``) or the two; the left one's floors first
+    buildings = getattr(scene, "row", None) or [scene.left, scene.right]
+    left = buildings[0]
+    starts = np.cumsum([0] + [b.n_floors for b in buildings])
+    nl = left.n_floors
+    n = int(starts[-1])
     m = np.zeros((n, n))
     k = np.zeros((n, n))
     c = np.zeros((n, n))
-    for sl, b in ((slice(0, nl), left), (slice(nl, n), right)):
+    for j, b in enumerate(buildings):
+        sl = slice(starts[j], starts[j + 1])
         m[sl, sl] = b.mass_matrix()
         k[sl, sl] = b.stiffness_matrix()
         c[sl, sl] = b.damping_matrix()
-    minv = np.linalg.inv(m)
+    # a wall (infinite mass) stays with the ground: no acceleration of its own
+    fixed = np.flatnonzero(~np.isfinite(np.diag(m)))
+    minv = np.linalg.inv(m) if fixed.size == 0 else np.diag(1.0 / np.diag(m))
     # first-order system y = [x, v]: y' = A y + b(t) + contact terms
     a_lin = np.zeros((2 * n, 2 * n))
     a_lin[:n, n:] = np.eye(n)
@@ -156,37 +170,65 @@ def reference_solution(
     masses = np.diag(m)
 
     nc = len(scene.contacts)
-    il = np.array([ct.left_floor for ct in scene.contacts], dtype=int)
-    ir = np.array([nl + ct.right_floor for ct in scene.contacts], dtype=int)
+    # penetration of contact j: w[j] @ x - gap (a floor, or a column interpolated between
+    # floors, of each building); its force acts on the floors by the same weights
+    w = np.zeros((nc, n))
+    for j, ct in enumerate(scene.contacts):
+        p = getattr(ct, "pair", 0)
+        w[j, starts[p] : starts[p + 1]] = ct.weights("left", buildings[p].n_floors)
+        w[j, starts[p + 1] : starts[p + 2]] -= ct.weights("right", buildings[p + 1].n_floors)
     meff = np.array([ct.m_eff for ct in scene.contacts], dtype=float)
     gap = np.broadcast_to(np.asarray(scene.gap_m, dtype=float), (nc,)).copy()
     beta = float(scene.stiffness)
+    velocity = getattr(scene, "restitution", "fixed") == "velocity"
     if model == "hertzdamp":
-        e_coef = float(scene.e)
-        xi = 0.0
+        e_coef = float(scene.e) if not velocity else 1.0
+        xi0 = 0.0
         zeta_of = HERTZDAMP_RELATIONS[scene.relation or "ye2009"]
     else:
         e_coef = 1.0
-        xi = float(scene.xi) if scene.xi is not None else 0.0
+        xi0 = float(scene.xi) if scene.xi is not None else 0.0
+    xi = np.full(nc, xi0)
     zhd = np.zeros(nc)
+    e_episode = np.full(nc, np.nan)
+    v_episode = np.zeros(nc)
+    impact_velocities: list[float] = []
+    peak_e = np.nan
+
+    def start_episode(j, vimp):
+        """Damping of an episode of contact ``j`` starting at velocity ``vimp`` [m/s]."""
+        v_episode[j] = vimp
+        if velocity:
+            e_episode[j] = restitution_at(
+                scene.material, max(vimp, 1e-12), scene.e_quantile, outside=scene.outside
+            )
+            if model == "hertzdamp":
+                zhd[j] = zeta_of(e_episode[j], max(vimp, 1e-12))
+            else:
+                xi[j] = xi_from_e(e_episode[j], scene.relation)
+        elif model == "hertzdamp":
+            zhd[j] = zeta_of(e_coef, max(vimp, 1e-12))
 
     # storeys: drift u_s = x[top] - x[bottom] (bottom -1: the ground); a bilinear storey resists
     # alpha k u + (1 - alpha) k z, i.e. k u less (1 - alpha) k u_p with u_p = u - z its plastic
     # drift; mode 0 elastic (u_p fixed), +1 / -1 yielding (z = +-u_y, u_p follows u)
-    s_top, s_bot, s_k, s_uy, s_alpha, s_side = [], [], [], [], [], []
-    for b, (bld, off) in enumerate(((left, 0), (right, nl))):
+    s_top, s_bot, s_k, s_uy, s_alpha, s_side, s_h = [], [], [], [], [], [], []
+    for b, bld in enumerate(buildings):
+        off = int(starts[b])
         for st in range(bld.n_floors):
             s_top.append(off + st)
             s_bot.append(off + st - 1 if st > 0 else -1)
             s_k.append(bld.storey_stiffness_N_per_m[st])
             s_uy.append(bld.yield_disp_m[st] if bld.inelastic else np.inf)
             s_alpha.append(bld.post_yield_ratio)
-            s_side.append(b)
+            s_side.append(min(b, 1))  # left, or one of the others
+            s_h.append(bld.storey_height_m[st])
     s_top, s_bot = np.array(s_top), np.array(s_bot)
     s_k, s_uy, s_alpha = np.array(s_k, float), np.array(s_uy, float), np.array(s_alpha, float)
     ns = s_top.size
     yielding = np.isfinite(s_uy)
     uy_finite = np.where(yielding, s_uy, 0.0)
+    k_plastic = np.where(yielding, (1.0 - s_alpha) * np.where(yielding, s_k, 0.0), 0.0)
     s_mode = np.zeros(ns, dtype=int)
     s_up = np.zeros(ns)
     e_hyst = 0.0
@@ -209,7 +251,7 @@ def reference_solution(
         y[n:] = np.asarray(v0, dtype=float)
 
     # tolerances
-    omega_all = np.r_[left.omega, right.omega]
+    omega_all = np.concatenate([b.omega for b in buildings])
     pga = float(np.max(np.abs(acc))) if npts else 0.0
     x_scale = max(pga / omega_all.min() ** 2, np.max(np.abs(y[:n])), 1e-300)
     x_scale = max(x_scale, np.max(np.abs(y[n:])) / omega_all.min())
@@ -220,12 +262,11 @@ def reference_solution(
     # phases at the start (already in contact: by the sign of delta_dot, not counted)
     phase = np.zeros(nc, dtype=int)
     for j in range(nc):
-        d = y[il[j]] - y[ir[j]] - gap[j]
+        d = w[j] @ y[:n] - gap[j]
         if d > 0.0:
-            dd = y[n + il[j]] - y[n + ir[j]]
+            dd = w[j] @ y[n:]
             phase[j] = _APPROACH if dd > 0.0 else _RESTITUTION
-            if model == "hertzdamp":
-                zhd[j] = zeta_of(e_coef, max(dd, 1e-12))
+            start_episode(j, dd)
 
     state = {"ag0": 0.0, "slope": 0.0, "t0": 0.0}
 
@@ -233,25 +274,26 @@ def reference_solution(
         f = np.zeros(nc)
         for j in range(nc):
             if phase[j] != _OPEN:
-                d = x[il[j]] - x[ir[j]] - gap[j]
-                dd = v[il[j]] - v[ir[j]]
-                f[j] = _contact_force(model, d, dd, beta, xi, meff[j], zhd[j], phase[j])
+                d = w[j] @ x - gap[j]
+                dd = w[j] @ v
+                f[j] = _contact_force(model, d, dd, beta, xi[j], meff[j], zhd[j], phase[j])
         return f
 
     def rhs(t, yy):
         dy = a_lin @ yy
         dy[n:] -= state["ag0"] + state["slope"] * (t - state["t0"])
+        dy[n + fixed] = 0.0
         if np.any(phase):
             f = forces(yy[:n], yy[n:])
-            np.subtract.at(dy, n + il, f / masses[il])
-            np.add.at(dy, n + ir, f / masses[ir])
+            dy[n:] -= (w.T @ f) / masses
         if yielding.any():
             # the plastic drifts' forces (1 - alpha) k u_p pull the floor above a storey back
             # and push the floor below
-            fp = (1.0 - s_alpha) * s_k * plastic_drift(drifts(yy[:n]))
+            fp = k_plastic * plastic_drift(drifts(yy[:n]))
             np.add.at(dy, n + s_top, fp / masses[s_top])
             below = s_bot >= 0
             np.subtract.at(dy, n + s_bot[below], fp[below] / masses[s_bot[below]])
+            dy[n + fixed] = 0.0
         return dy
 
     def make_storey_event(st, which, direction):
@@ -278,12 +320,12 @@ def reference_solution(
         if which == "d":
 
             def ev(_t, yy):
-                return yy[il[j]] - yy[ir[j]] - gap[j]
+                return w[j] @ yy[:n] - gap[j]
 
         else:
 
             def ev(_t, yy):
-                return yy[n + il[j]] - yy[n + ir[j]]
+                return w[j] @ yy[n:]
 
         ev.terminal = True
         ev.direction = direction
@@ -309,7 +351,7 @@ def reference_solution(
 
     def scan_segment(sol_t, dense):
         """Continuous-time maxima of |x| per floor and of the contact forces."""
-        nonlocal peak_f_time
+        nonlocal peak_f_time, peak_e
         tt = np.asarray(sol_t)
         if tt.size < 2:
             return
@@ -341,9 +383,9 @@ def reference_solution(
 
             def force_of(s, j=j):
                 # penetration and its rate from the state (displacements, then velocities)
-                d = s[il[j]] - s[ir[j]] - gap[j]
-                dd = s[n + il[j]] - s[n + ir[j]]
-                return _contact_force(model, d, dd, beta, xi, meff[j], zhd[j], phase[j])
+                d = w[j] @ s[:n] - gap[j]
+                dd = w[j] @ s[n:]
+                return _contact_force(model, d, dd, beta, xi[j], meff[j], zhd[j], phase[j])
 
             def force_at(t, force_of=force_of):
                 return force_of(dense(t))
@@ -369,6 +411,7 @@ def reference_solution(
                 peak_f[j] = val
                 if val >= peak_f.max():
                     peak_f_time = t_best
+                    peak_e = e_episode[j]
 
     for i in range(npts - 1):
         t_a = i * dt_rec
@@ -438,17 +481,16 @@ def reference_solution(
                     phase[j] = _APPROACH
                     pending[j] = True  # an impact once the penetration is deep enough
                     impact_times.append(t)
-                    if model == "hertzdamp":
-                        vimp = y[n + il[j]] - y[n + ir[j]]
-                        zhd[j] = zeta_of(e_coef, max(vimp, 1e-12))
+                    start_episode(j, w[j] @ y[n:])
                     h_last = None  # let the solver choose a step for the stiff contact
                 elif kind == "turn":
                     phase[j] = _RESTITUTION
-                    pen = y[il[j]] - y[ir[j]] - gap[j]  # a maximum of the penetration
+                    pen = w[j] @ y[:n] - gap[j]  # a maximum of the penetration
                     max_pen[j] = max(max_pen[j], pen)
                     if pending[j] and pen > IMPACT_MIN_PENETRATION_M:
                         impacts[j] += 1
                         pending[j] = False
+                        impact_velocities.append(float(v_episode[j]))
                 elif kind == "separation":
                     phase[j] = _OPEN
                 else:
@@ -458,17 +500,21 @@ def reference_solution(
     x_right = peak_x[nl:]
     u_end = drifts(y[:n])
     up_end = plastic_drift(u_end)
-    e_hyst += float(np.sum((1.0 - s_alpha) * s_k * uy_finite * np.abs(up_end - s_up)))
+    e_hyst += float(np.sum(k_plastic * uy_finite * np.abs(up_end - s_up)))
     side_of = np.array(s_side)
     storey_out = {}
+    # "right": the right building, or the largest over the others of a row
     for b, name in enumerate(("left", "right")):
-        mine = side_of == b
-        bld = left if b == 0 else right
-        duct = peak_u[mine] / s_uy[mine]
-        storey_out[f"peak_ductility_{name}"] = float(duct.max()) if bld.inelastic else np.nan
-        hs = bld.storey_height_m
-        storey_out[f"peak_drift_{name}"] = float(np.max(peak_u[mine] / hs))
-        storey_out[f"residual_drift_{name}"] = float(np.max(np.abs(u_end[mine]) / hs))
+        side = side_of == b
+        inelastic = any(bld.inelastic for bld in (buildings[:1] if b == 0 else buildings[1:]))
+        duct = peak_u[side] / s_uy[side]
+        storey_out[f"peak_ductility_{name}"] = float(duct.max()) if inelastic else np.nan
+        mine = side & (np.array(s_h) > 0.0)  # storeys of known height (not an SDOF without one)
+        hs = np.array(s_h)[mine]
+        storey_out[f"peak_drift_{name}"] = float(np.max(peak_u[mine] / hs)) if hs.size else np.nan
+        storey_out[f"residual_drift_{name}"] = (
+            float(np.max(np.abs(u_end[mine]) / hs)) if hs.size else np.nan
+        )
     total_impacts = int(impacts.sum())
     return {
         "peak_force": float(peak_f.max()) if nc else 0.0,
@@ -478,6 +524,8 @@ def reference_solution(
         "peak_disp_left": float(x_left.max()),
         "peak_disp_right": float(x_right.max()),
         "impact_times": impact_times,
+        "impact_velocities": impact_velocities,
+        "peak_force_restitution": float(peak_e),
         "contact_peak_force": peak_f.copy(),
         "contact_impacts": impacts.copy(),
         "x_end": y[:n].copy(),

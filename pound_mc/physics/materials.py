@@ -31,6 +31,9 @@ __all__ = [
     "restitution_range",
     "stiffness_range",
     "material_ranges",
+    "PER_IMPACT_OUTSIDE",
+    "restitution_rows",
+    "restitution_at",
 ]
 
 #: Materials of the seed's experiment, in the paper's order.
@@ -186,3 +189,65 @@ def material_ranges(material: str) -> dict[str, tuple[float, float]]:
         "e": (float(r2["e_min"].min()), float(r2["e_max"].max())),
         "beta": (float(r3["beta_min"].min()), float(r3["beta_max"].max())),
     }
+
+
+#: Policies outside Table 2's velocities for restitution set per impact: ``clamp`` (the nearest
+#: measured range held constant, as :func:`restitution_range`) or ``extrapolate`` (the end
+#: segments continued linearly, ``e`` kept within ``[E_FLOOR, 1]``).
+PER_IMPACT_OUTSIDE = ("clamp", "extrapolate")
+#: Lowest restitution an extrapolated range may reach [-].
+E_FLOOR = 0.05
+
+
+def restitution_rows(material: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Table 2 rows of one material: velocities [m/s], ``e_min`` and ``e_max`` [-], by velocity."""
+    t2 = table(2)
+    rows = t2[t2["material"] == _check_material(material)].sort_values("velocity_m_s")
+    return tuple(rows[c].to_numpy(dtype=float) for c in ("velocity_m_s", "e_min", "e_max"))
+
+
+def restitution_at(material: str, velocity_m_s, quantile, *, outside: str = "clamp"):
+    """Restitution at quantile ``quantile`` of the measured range at a prior-impact velocity.
+
+    ``e = e_min(v) + Q (e_max(v) - e_min(v))``, Table 2 linear in velocity between its rows;
+    outside them by ``outside`` (:data:`PER_IMPACT_OUTSIDE`).  Arrays broadcast.
+
+    Parameters
+    ----------
+    material : {"steel", "concrete", "timber", "ceramics"}
+        Material of both colliding bodies.
+    velocity_m_s : float or array_like
+        Prior-impact relative velocity [m/s].
+    quantile : float or array_like
+        Quantile ``Q`` of the measured range [-], in [0, 1].
+    outside : {"clamp", "extrapolate"}
+        Policy outside the tabulated velocities.
+
+    Returns
+    -------
+    float or numpy.ndarray
+        Coefficient of restitution [-].
+    """
+    if outside not in PER_IMPACT_OUTSIDE:
+        raise InputError(
+            f"unknown policy {outside!r}; choose one of {list(PER_IMPACT_OUTSIDE)}", key="outside"
+        )
+    v, lo, hi = restitution_rows(material)
+    x, q = np.broadcast_arrays(
+        np.asarray(velocity_m_s, dtype=float), np.asarray(quantile, dtype=float)
+    )
+    shape = x.shape
+    x, q = x.ravel(), q.ravel()
+    e_lo = np.interp(x, v, lo)
+    e_hi = np.interp(x, v, hi)
+    if outside == "extrapolate":
+        for end, (a, b) in (("low", (0, 1)), ("high", (-2, -1))):
+            sel = x < v[0] if end == "low" else x > v[-1]
+            for arr, col in ((e_lo, lo), (e_hi, hi)):
+                slope = (col[b] - col[a]) / (v[b] - v[a])
+                ref = 0 if end == "low" else -1
+                arr[...] = np.where(sel, col[ref] + slope * (x - v[ref]), arr)
+        e_lo = np.clip(e_lo, E_FLOOR, 1.0)
+        e_hi = np.clip(e_hi, E_FLOOR, 1.0)
+    e = (e_lo + q * (e_hi - e_lo)).reshape(shape)
+    return float(e) if e.ndim == 0 else e

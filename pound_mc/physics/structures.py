@@ -29,6 +29,7 @@ __all__ = [
     "building_from_dict",
     "contacts_between",
     "HYSTERESIS",
+    "wall",
 ]
 
 #: Hysteresis laws of a building's storeys (DESIGN.md section 9); the first is the default.
@@ -44,8 +45,9 @@ class Building:
 
     Attributes
     ----------
-    model : {"sdof", "shear"}
-        Kind of model.
+    model : {"sdof", "shear", "wall"}
+        Kind of model (``wall``: rigid and immovable, one "floor" of infinite mass and no
+        modes).
     storey_mass_kg : numpy.ndarray
         Floor masses, bottom to top [kg].
     storey_stiffness_N_per_m : numpy.ndarray
@@ -77,6 +79,11 @@ class Building:
     post_yield_ratio: float = 0.0
 
     def __post_init__(self):
+        if self.model == "wall":
+            object.__setattr__(self, "omega", np.zeros(0))
+            object.__setattr__(self, "phi", np.zeros((1, 0)))
+            object.__setattr__(self, "gamma", np.zeros(0))
+            return
         omega, phi = _modes(self.mass_matrix(), self.stiffness_matrix())
         gamma = phi.T @ self.storey_mass_kg
         object.__setattr__(self, "omega", omega)
@@ -119,6 +126,8 @@ class Building:
         k = self.storey_stiffness_N_per_m
         n = k.size
         mat = np.zeros((n, n))
+        if self.model == "wall":
+            return mat  # immovable: no storey spring
         for i in range(n):
             mat[i, i] += k[i]
             if i + 1 < n:
@@ -128,6 +137,8 @@ class Building:
 
     def damping_matrix(self) -> np.ndarray:
         """Classical damping matrix ``M phi diag(2 zeta omega) phi.T M`` [N s/m]."""
+        if self.model == "wall":
+            return np.zeros((1, 1))
         m = self.mass_matrix()
         return m @ self.phi @ np.diag(2.0 * self.damping_ratio * self.omega) @ self.phi.T @ m
 
@@ -291,6 +302,24 @@ def shear_building(
     return Building("shear", m, k, np.cumsum(h), z, *hyst)
 
 
+def wall(height_m: float | None = None, *, file=None, prefix: str = "") -> Building:
+    """A rigid, immovable wall (a moat wall, an abutment): infinite mass, no modes.
+
+    Its one "floor" stays at the ground's displacement; a contact with it has the effective
+    mass of the building's floor (``m_eff = m1``).
+
+    Parameters
+    ----------
+    height_m : float, optional
+        Height of the wall's top [m]: it meets the other building's floors at or below it
+        (default: only its lowest floor).
+    """
+    elevation = None
+    if height_m is not None:
+        elevation = _check_positive(height_m, key=f"{prefix}height_m", file=file)
+    return Building("wall", np.array([np.inf]), np.array([np.inf]), elevation, 0.0)
+
+
 def building_from_dict(spec: dict, *, file=None, side: str = "left") -> Building:
     """Build a :class:`Building` from a scene file's ``[left]`` or ``[right]`` table."""
     prefix = f"{side}."
@@ -365,7 +394,13 @@ class Contact:
     elevation_m : float or None
         Height of the contact [m] (``None`` for an SDOF pair without heights).
     m_left, m_right : float
-        Masses that meet [kg].
+        Masses that meet [kg]; on a column, its effective mass ``1 / sum(w_k^2 / m_k)`` (the
+        mass a point whose displacement is ``sum(w_k x_k)`` opposes to an impulse).
+    left_at, right_at : tuple
+        Where a floor of one building meets the other's column: ``((floor, weight), ...)``,
+        the floors (0-based, -1 the ground) whose displacements, so weighted, are the column's
+        at the contact height (linear between the floors below and above); empty for a floor.
+        ``left_floor`` / ``right_floor`` then name the floor below (-1: the ground).
     """
 
     left_floor: int
@@ -373,15 +408,75 @@ class Contact:
     elevation_m: float | None
     m_left: float
     m_right: float
+    left_at: tuple = ()
+    right_at: tuple = ()
+    #: In a row of buildings, the index of the pair's left building (0: the first two).
+    pair: int = 0
+
+    @property
+    def kind(self) -> str:
+        """``"floor"`` (floor against floor) or ``"column"`` (a floor against a column)."""
+        return "column" if self.left_at or self.right_at else "floor"
+
+    def weights(self, side: str, n_floors: int) -> np.ndarray:
+        """Weights of ``side``'s floors (``"left"`` / ``"right"``) in the contact's displacement."""
+        w = np.zeros(n_floors)
+        at = self.left_at if side == "left" else self.right_at
+        floor = self.left_floor if side == "left" else self.right_floor
+        for f, wf in at or ((floor, 1.0),):
+            if f >= 0:
+                w[f] += wf
+        return w
 
     @property
     def m_eff(self) -> float:
-        """Effective mass ``m1 m2 / (m1 + m2)`` [kg]."""
+        """Effective mass ``m1 m2 / (m1 + m2)`` [kg] (``m1`` against a wall's infinite mass)."""
+        if math.isinf(self.m_right):
+            return float(self.m_left)
         return self.m_left * self.m_right / (self.m_left + self.m_right)
 
 
-def contacts_between(left: Building, right: Building, *, file=None) -> list[Contact]:
-    """Pairs of floors that can pound: every pair at equal height (one for an SDOF pair)."""
+def _column(z: float, building: Building, tol: float):
+    """Where height ``z`` meets ``building``'s column: ``(floor below, at, effective mass)``.
+
+    None unless ``z`` lies between two of its floors (below the first floor or above the roof,
+    or within ``tol`` of a floor: a floor contact instead).
+    """
+    elev = building.elevation_m
+    if z >= elev[-1] - tol or z <= elev[0] + tol:
+        return None
+    j = int(np.searchsorted(elev, z))  # first floor above z
+    z_lo = elev[j - 1] if j > 0 else 0.0
+    w = (z - z_lo) / (elev[j] - z_lo)
+    at = ((j - 1, float(1.0 - w)), (j, float(w)))
+    compliance = sum(wf * wf / building.storey_mass_kg[f] for f, wf in at if f >= 0)
+    return j - 1, at, 1.0 / compliance
+
+
+def contacts_between(
+    left: Building, right: Building, *, file=None, level_tolerance_m: float = 0.0
+) -> list[Contact]:
+    """Pairs of floors that can pound: every pair at equal height (one for an SDOF pair).
+
+    Against a wall (``right``): the left building's floors at or below the wall's height, or
+    only its lowest floor where the wall has none.
+    """
+    if right.model == "wall":
+        if left.model == "wall":
+            raise InputError("a wall stands only on the right", file=file, key="left.model")
+        mr = right.storey_mass_kg[0]
+        if right.elevation_m is None or left.elevation_m is None:
+            z = None if left.elevation_m is None else float(left.elevation_m[0])
+            return [Contact(0, 0, z, left.storey_mass_kg[0], mr)]
+        out = [
+            Contact(i, 0, float(z), left.storey_mass_kg[i], mr)
+            for i, z in enumerate(left.elevation_m)
+            if z <= right.elevation_m[0] + HEIGHT_TOLERANCE_M
+        ]
+        if not out:
+            raise InputError("the wall is lower than the building's first floor", file=file,
+                             key="right.height_m")  # fmt: skip
+        return out
     if (
         left.model == "sdof"
         and right.model == "sdof"
@@ -395,13 +490,29 @@ def contacts_between(left: Building, right: Building, *, file=None) -> list[Cont
                 file=file,
                 key=f"{side}.height_m",
             )
+    tol = max(float(level_tolerance_m), HEIGHT_TOLERANCE_M)
     out = []
+    met_l, met_r = set(), set()
     for i, zl in enumerate(left.elevation_m):
         for j, zr in enumerate(right.elevation_m):
-            if abs(zl - zr) <= HEIGHT_TOLERANCE_M:
+            if abs(zl - zr) <= tol:
                 out.append(
                     Contact(i, j, float(zl), left.storey_mass_kg[i], right.storey_mass_kg[j])
                 )
+                met_l.add(i)
+                met_r.add(j)
+    # a floor between the other building's floors meets its column
+    for i, zl in enumerate(left.elevation_m):
+        col = None if i in met_l else _column(zl, right, tol)
+        if col is not None:
+            out.append(Contact(i, col[0], float(zl), left.storey_mass_kg[i], col[2],
+                               right_at=col[1]))  # fmt: skip
+    for j, zr in enumerate(right.elevation_m):
+        col = None if j in met_r else _column(zr, left, tol)
+        if col is not None:
+            out.append(Contact(col[0], j, float(zr), col[2], right.storey_mass_kg[j],
+                               left_at=col[1]))  # fmt: skip
+    out.sort(key=lambda c: c.elevation_m)  # stable: floor contacts keep their order
     if not out:
         raise InputError(
             "no floors of the two buildings are at equal height, so they cannot pound",

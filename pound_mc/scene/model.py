@@ -20,17 +20,29 @@ from pound_mc.integrators import run_kernel
 from pound_mc.integrators.outputs import INELASTIC_OUTPUTS
 from pound_mc.motions import load_record, record_arrays
 from pound_mc.physics.contact import CONTACT_MODELS, reported_xi
-from pound_mc.physics.structures import Building, Contact, contacts_between, sdof, shear_building
+from pound_mc.physics.structures import (
+    Building,
+    Contact,
+    contacts_between,
+    sdof,
+    shear_building,
+    wall,
+)
 from pound_mc.scene import schema
 
 __all__ = ["Scene", "SimulationResult", "scene_from_dict", "load_scene", "simulate"]
 
 #: Tables a study adds to a scene (checked by :mod:`pound_mc.study.definition`).
 _STUDY_TABLES = {"study", "grid", "sampling", "records"}
+#: A row of buildings (``[[buildings]]``, left to right) in place of ``[left]`` and ``[right]``.
+ROW_TABLE = "buildings"
 
 
 #: Fields of a :class:`Scene` the modal arrays depend on (the cache key holds their values).
-_MODAL_FIELDS = ("left", "right", "contacts", "contact_model", "stiffness", "xi", "e")
+_MODAL_FIELDS = (
+    "left", "right", "contacts", "contact_model", "stiffness", "xi", "e", "restitution",
+    "e_quantile",
+)  # fmt: skip
 
 
 @dataclass
@@ -58,6 +70,11 @@ class Scene:
     method: str = "adaptive"
     dt_s: float = 0.001
     substeps: int = 16
+    restitution: str = "fixed"
+    material: str | None = None
+    e_quantile: float | None = None
+    outside: str = "clamp"
+    row: list[Building] | None = None
     file: str | None = None
     base_dir: Path | None = None
     tail_s: float = 5.0
@@ -106,18 +123,26 @@ class Scene:
 
         A new set of arrays at every call; :func:`simulate` uses a cached one.
         """
+        if self.row is not None:
+            return self._row_arrays()
         nl, nr = self.left.omega.size, self.right.omega.size
         fl, fr = self.left.n_floors, self.right.n_floors
         phi = np.zeros((fl + fr, nl + nr))
         phi[:fl, :nl] = self.left.phi
         phi[fl:, nl:] = self.right.phi
         side = np.r_[np.zeros(fl, dtype=np.int64), np.ones(fr, dtype=np.int64)]
-        psi = np.array([phi[c.left_floor] - phi[fl + c.right_floor] for c in self.contacts])
+        psi = np.array([
+            c.weights("left", fl) @ phi[:fl] - c.weights("right", fr) @ phi[fl:]
+            if c.kind == "column" else phi[c.left_floor] - phi[fl + c.right_floor]
+            for c in self.contacts
+        ])  # fmt: skip
         nc = len(self.contacts)
         # the kernels' damping parameter: xi, or the restitution e for laws whose damping is set
         # per impact from e and the impact velocity (hertzdamp)
         per_impact = CONTACT_MODELS[self.contact_model].damping == "zeta"
         xi = self.e if per_impact else self.xi
+        if self.restitution == "velocity":
+            xi = self.e_quantile  # the kernels set e and the damping at every impact
         return {
             "omega": np.r_[self.left.omega, self.right.omega],
             "zeta": np.r_[
@@ -160,6 +185,71 @@ class Scene:
                              bld.storey_height_m[s], b])  # fmt: skip
             start += ns
         return dmat, np.array(rows, dtype=float)
+
+    def _row_arrays(self) -> dict[str, np.ndarray]:
+        """:meth:`modal_arrays` of a row: contacts between neighbours (``Contact.pair``).
+
+        ``side`` is 0 for the first building's floors and 1 for every other's, so that
+        ``peak_disp_left`` is the first building's and ``peak_disp_right`` the largest of
+        the others'.
+        """
+        row = self.row
+        floors = np.cumsum([0] + [b.n_floors for b in row])
+        modes = np.cumsum([0] + [b.omega.size for b in row])
+        phi = np.zeros((floors[-1], modes[-1]))
+        for k, b in enumerate(row):
+            phi[floors[k] : floors[k + 1], modes[k] : modes[k + 1]] = b.phi
+        psi = np.array([
+            c.weights("left", row[c.pair].n_floors) @ phi[floors[c.pair] : floors[c.pair + 1]]
+            - c.weights("right", row[c.pair + 1].n_floors)
+            @ phi[floors[c.pair + 1] : floors[c.pair + 2]]
+            for c in self.contacts
+        ])  # fmt: skip
+        nc = len(self.contacts)
+        return {
+            "omega": np.concatenate([b.omega for b in row]),
+            "zeta": np.concatenate([np.full(b.omega.size, b.damping_ratio) for b in row]),
+            "gamma": np.concatenate([b.gamma for b in row]),
+            "phi": phi,
+            "side": np.r_[np.zeros(row[0].n_floors, dtype=np.int64),
+                          np.ones(floors[-1] - row[0].n_floors, dtype=np.int64)],
+            "psi": psi.reshape(nc, modes[-1]),
+            "gap": np.asarray(self.gap_m, dtype=float),
+            "meff": np.array([c.m_eff for c in self.contacts]),
+            "beta": np.full(nc, float(self.stiffness)),
+            "xi": np.full(nc, float(self.xi if self.xi is not None else 0.0)),
+        }  # fmt: skip
+
+    def contact_lines(self) -> list[str]:
+        """One line per contact (height, floors or column weights, effective mass), or none.
+
+        Lines only where a contact meets a column (a floor between the other building's floors).
+        """
+        if all(c.kind == "floor" for c in self.contacts):
+            return []
+
+        def column(at):
+            return " + ".join(
+                f"{w:.4g} x " + ("ground" if f < 0 else f"floor {f + 1}") for f, w in at
+            )
+
+        lines = []
+        for k, c in enumerate(self.contacts):
+            if c.right_at:
+                what = f"left floor {c.left_floor + 1} on the right column ({column(c.right_at)})"
+            elif c.left_at:
+                what = f"right floor {c.right_floor + 1} on the left column ({column(c.left_at)})"
+            else:
+                what = f"left floor {c.left_floor + 1} - right floor {c.right_floor + 1}"
+            lines.append(f"contact {k + 1} at {c.elevation_m:g} m: {what}, "
+                         f"m_eff {c.m_eff:.6g} kg")  # fmt: skip
+        return lines
+
+    def restitution_rule(self) -> dict | None:
+        """The kernels' per-impact restitution (``restitution = "velocity"``), else None."""
+        if self.restitution != "velocity":
+            return None
+        return {"material": self.material, "outside": self.outside}
 
     def load_record(self):
         """The scene's record as an obspy Trace [m/s^2], preprocessed."""
@@ -234,14 +324,20 @@ class SimulationResult:
             "contact_model": self.scene.contact_model,
             "xi": num(self.scene.xi) if self.scene.xi is not None else None,
             "steps": int(o["steps"]),
+            "max_impact_velocity": num(o["max_impact_velocity"]),
+            "median_impact_velocity": num(o["median_impact_velocity"]),
+            "peak_force_restitution": num(o["peak_force_restitution"]),
             "contacts": [
                 {
+                    "kind": c.kind,
                     "left_floor": c.left_floor + 1,
                     "right_floor": c.right_floor + 1,
                     "elevation_m": c.elevation_m,
                     "gap_m": float(self.scene.gap_m[k]),
                     "peak_force_N": num(self.contacts["peak_force"][k]),
                     "impacts": int(self.contacts["impacts"][k]),
+                    "max_impact_velocity": num(self.contacts["max_impact_velocity"][k]),
+                    **({"pair": c.pair + 1} if self.scene.row is not None else {}),
                 }
                 for k, c in enumerate(self.scene.contacts)
             ],
@@ -249,8 +345,11 @@ class SimulationResult:
         }
 
 
-def _building(spec, side: str, file, errors: list) -> Building | None:
-    """Check ``[left]`` or ``[right]`` against its model's table and build it."""
+def _building(spec, side: str, file, errors: list, wall_ok: bool | None = None) -> Building | None:
+    """Check ``[left]`` or ``[right]`` against its model's table and build it.
+
+    ``wall_ok``: whether it may be a wall (default: on the right only).
+    """
     model = spec.get("model", "sdof")
     table = schema.BUILDINGS.get(model) if isinstance(model, str) else None
     if table is None:
@@ -262,7 +361,12 @@ def _building(spec, side: str, file, errors: list) -> Building | None:
     errors.extend(local)
     if local:
         return None
+    if model == "wall" and not (side == "right" if wall_ok is None else wall_ok):
+        errors.append(InputError("a wall stands only on the right", file=file, key=f"{side}.model"))
+        return None
     try:
+        if model == "wall":
+            return wall(v.get("height_m"), file=file, prefix=f"{side}.")
         if model == "sdof":
             return sdof(v["period_s"], v["mass_kg"], v["damping_ratio"], v.get("height_m"),
                         hysteresis=v["hysteresis"], yield_disp_m=v.get("yield_disp_m"),
@@ -295,6 +399,25 @@ def _contact(ct: dict, n_contacts: int | None, file, errors: list) -> dict:
                        key=f"contact.{other}")
         )  # fmt: skip
     v["stiffness"] = v.get(skey)
+    velocity = v.get("restitution") == "velocity"
+    if velocity:
+        for key in ("material", "e_quantile"):
+            if key not in ct:
+                errors.append(InputError("is needed with restitution = 'velocity'", file=file,
+                                         key=f"contact.{key}"))  # fmt: skip
+        for key in ("e", "xi"):
+            if key in ct:
+                errors.append(InputError("is set per impact with restitution = 'velocity'",
+                                         file=file, key=f"contact.{key}"))  # fmt: skip
+        if CONTACT_MODELS[model].damping is None:
+            errors.append(InputError(f"the {model!r} law has no damping to set per impact",
+                                     file=file, key="contact.restitution"))  # fmt: skip
+        v["relation"] = v.get("relation") or schema.default_relation(model)
+        return _contact_gaps(v, n_contacts, file, errors)
+    for key in ("material", "e_quantile"):
+        if key in ct:
+            errors.append(InputError("applies only with restitution = 'velocity'", file=file,
+                                     key=f"contact.{key}"))  # fmt: skip
     if "xi" in ct and "e" in ct:
         errors.append(InputError("give either xi or e, not both", file=file, key="contact.xi"))
     elif "e" not in ct and "xi" not in ct and model in ("jankowski", "kelvin"):
@@ -311,6 +434,11 @@ def _contact(ct: dict, n_contacts: int | None, file, errors: list) -> dict:
             errors.append(InputError(exc.message, file=file, key="contact.relation"))
     elif "relation" in ct:
         v.pop("relation", None)  # without e the relation says nothing
+    return _contact_gaps(v, n_contacts, file, errors)
+
+
+def _contact_gaps(v: dict, n_contacts: int | None, file, errors: list) -> dict:
+    """``contact.gap_m`` as one gap per contact."""
     if "gap_m" in v and n_contacts is not None:
         gaps = np.atleast_1d(np.asarray(v["gap_m"], dtype=float))
         if gaps.size == 1:
@@ -339,13 +467,24 @@ def scene_from_dict(data: dict, *, file: str | Path | None = None) -> Scene:
     file_s = None if file is None else str(file)
     base_dir = None if file is None else Path(file).parent
     errors: list[InputError] = []
-    extra = sorted(set(data) - set(schema.SCENE_TABLES) - _STUDY_TABLES)
+    extra = sorted(set(data) - set(schema.SCENE_TABLES) - _STUDY_TABLES - {ROW_TABLE})
     for key in extra:
         errors.append(
             InputError(f"unknown table; allowed: {', '.join(schema.SCENE_TABLES)}", file=file_s,
                        key=key)
         )  # fmt: skip
-    for table in ("record", "left", "right"):
+    is_row = ROW_TABLE in data
+    if is_row:
+        row_specs = data[ROW_TABLE]
+        if not (isinstance(row_specs, list) and len(row_specs) >= 2
+                and all(isinstance(b, dict) for b in row_specs)):  # fmt: skip
+            errors.append(InputError("must be two or more [[buildings]] tables, left to right",
+                                     file=file_s, key=ROW_TABLE))  # fmt: skip
+        for table in ("left", "right"):
+            if table in data:
+                errors.append(InputError(f"give [{table}] or [[buildings]], not both",
+                                         file=file_s, key=table))  # fmt: skip
+    for table in ("record",) if is_row else ("record", "left", "right"):
         if not isinstance(data.get(table), dict):
             errors.append(InputError("is required (a table)", file=file_s, key=table))
     for table in ("contact", "integrator"):
@@ -362,12 +501,28 @@ def scene_from_dict(data: dict, *, file: str | Path | None = None) -> Scene:
         problem = schema.source_problem(checked["source"], base_dir)
         if problem is not None:
             errors.append(InputError(problem, file=file_s, key="record.source"))
-    left = _building(data["left"], "left", file_s, errors)
-    right = _building(data["right"], "right", file_s, errors)
+    level = data.get("contact", {}).get("level_tolerance_m", 0.0)
+    level = level if isinstance(level, int | float) and level >= 0 else 0.0
+    row = None
+    if is_row:
+        row = [_building(b, f"{ROW_TABLE}[{k}]", file_s, errors, wall_ok=k == len(row_specs) - 1)
+               for k, b in enumerate(row_specs)]  # fmt: skip
+        left, right = row[0], row[-1]
+    else:
+        left = _building(data["left"], "left", file_s, errors)
+        right = _building(data["right"], "right", file_s, errors)
     contacts = None
-    if left is not None and right is not None:
+    if row is not None and all(b is not None for b in row):
+        contacts = []
+        for k in range(len(row) - 1):
+            try:
+                pair = contacts_between(row[k], row[k + 1], file=file_s, level_tolerance_m=level)
+                contacts += [replace(c, pair=k) for c in pair]
+            except InputError as exc:
+                errors.append(InputError(exc.message, file=file_s, key=f"{ROW_TABLE}[{k + 1}]"))
+    elif row is None and left is not None and right is not None:
         try:
-            contacts = contacts_between(left, right, file=file_s)
+            contacts = contacts_between(left, right, file=file_s, level_tolerance_m=level)
         except InputError as exc:
             errors.append(exc)
     ct = _contact(dict(data.get("contact", {})), None if contacts is None else len(contacts),
@@ -390,6 +545,11 @@ def scene_from_dict(data: dict, *, file: str | Path | None = None) -> Scene:
         dt_s=float(it["dt_s"]),
         substeps=it["substeps"],
         tail_s=float(it["tail_s"]),
+        restitution=ct.get("restitution", "fixed"),
+        material=ct.get("material"),
+        e_quantile=None if ct.get("e_quantile") is None else float(ct["e_quantile"]),
+        outside=ct.get("outside", "clamp"),
+        row=row,
         file=file_s,
         base_dir=base_dir,
     )
@@ -469,6 +629,7 @@ def simulate(
         substeps=substeps or scene.substeps,
         history=history,
         storeys=storeys,
+        restitution=scene.restitution_rule(),
     )
     if m != scene.method or dt_s or substeps:
         scene = replace(

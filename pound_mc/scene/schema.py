@@ -26,6 +26,7 @@ from pound_mc.integrators import METHODS
 from pound_mc.motions import UNITS, builtin_catalogue, suites, synthetic
 from pound_mc.physics import contact
 from pound_mc.physics.contact import CONTACT_MODELS
+from pound_mc.physics.materials import MATERIALS, PER_IMPACT_OUTSIDE
 from pound_mc.physics.structures import HYSTERESIS
 
 __all__ = [
@@ -371,7 +372,8 @@ SDOF = Table(
     "A single-degree-of-freedom building (`[left]` or `[right]` with `model = \"sdof\"`, the "
     "default).",
     (
-        Field("model", "string", "Building model.", default="sdof", choices=("sdof", "shear")),
+        Field("model", "string", "Building model.", default="sdof",
+              choices=("sdof", "shear", "wall")),
         Field("period_s", "number", "Natural period.", unit="s", required=True, minimum=0.0,
               exclusive_minimum=True, maximum=100.0, varied=True),
         Field("mass_kg", "number", "Mass.", unit="kg", required=True, minimum=0.0,
@@ -394,7 +396,8 @@ SHEAR = Table(
     "are computed once per study, so a study varies only `contact.*` keys and "
     "`integrator.dt_s` with it.",
     (
-        Field("model", "string", "Building model.", required=True, choices=("sdof", "shear")),
+        Field("model", "string", "Building model.", required=True,
+              choices=("sdof", "shear", "wall")),
         Field("storey_mass_kg", "numbers", "Floor masses, bottom to top.", unit="kg",
               required=True, minimum=0.0, exclusive_minimum=True, maximum=1.0e10),
         Field("storey_stiffness_N_per_m", "numbers", "Storey shear stiffnesses, bottom to top.",
@@ -412,8 +415,22 @@ SHEAR = Table(
     variant="model = 'shear'",
 )  # fmt: skip
 
+WALL = Table(
+    "wall",
+    "A rigid, immovable wall (`[right]` with `model = \"wall\"`): a moat wall or an abutment, "
+    "of infinite mass (a contact's effective mass is the building floor's mass).",
+    (
+        Field("model", "string", "Building model.", required=True,
+              choices=("sdof", "shear", "wall")),
+        Field("height_m", "number", "Height of the wall's top: it meets the other building's "
+              "floors at or below it (default: only its lowest floor).", unit="m", minimum=0.0,
+              exclusive_minimum=True),
+    ),
+    variant="model = 'wall'",
+)  # fmt: skip
+
 #: Building tables by ``model``.
-BUILDINGS = {"sdof": SDOF, "shear": SHEAR}
+BUILDINGS = {"sdof": SDOF, "shear": SHEAR, "wall": WALL}
 
 CONTACT = Table(
     "contact",
@@ -441,6 +458,25 @@ CONTACT = Table(
                   f"{name}: {', '.join(law.relations)}"
                   for name, law in contact.CONTACT_MODELS.items() if law.relations
               )),
+        Field("restitution", "string", "`fixed`: one restitution (`e` or `xi`) for every impact; "
+              "`velocity`: each impact's e from the seed's Table 2 at its prior-impact velocity "
+              "(the relative velocity at contact onset) for `material`, at quantile `e_quantile` "
+              "of the measured range, its damping from `relation`, fixed for that impact.",
+              default="fixed", choices=("fixed", "velocity")),
+        Field("material", "string", "Material of Table 2 (restitution = \"velocity\").",
+              choices=MATERIALS),
+        Field("e_quantile", "number", "Quantile of Table 2's measured range of e at each "
+              "impact's velocity (restitution = \"velocity\"): 0 its lower, 1 its upper bound.",
+              minimum=0.0, maximum=1.0, varied=True),
+        Field("outside", "string", "Restitution outside Table 2's velocities (restitution = "
+              "\"velocity\"): `clamp` holds the nearest measured range, `extrapolate` continues "
+              "the end segments linearly (e kept within [0.05, 1]).", default="clamp",
+              choices=PER_IMPACT_OUTSIDE),
+        Field("level_tolerance_m", "number", "Floors of the two buildings within this of equal "
+              "height meet floor to floor; any other floor between two floors of the other "
+              "building meets its column, whose displacement there is interpolated linearly "
+              "between those floors, with the column's effective mass 1 / sum(w^2 / m).",
+              unit="m", default=0.0, minimum=0.0),
     ),
 )  # fmt: skip
 

@@ -52,6 +52,18 @@ RESULT_VARIABLES = {
     "dissipated_energy": ("J", "energy dissipated in impacts", "f8"),
     "energy_residual": ("1", "energy balance residual relative to input energy", "f8"),
     "status": ("1", "simulation status", "i1"),
+    "max_impact_velocity": (
+        "m s-1",
+        "largest prior-impact velocity (relative velocity at contact onset) of the impacts",
+        "f8",
+    ),
+    "median_impact_velocity": ("m s-1", "median prior-impact velocity of the impacts", "f8"),
+    "peak_force_restitution": (
+        "1",
+        "coefficient of restitution of the impact that holds the "
+        "peak force (with one restitution for every impact: the one its law rebounds with)",
+        "f8",
+    ),
 }
 #: Per-simulation, per-contact outputs of studies with a shear building (an extra trailing
 #: ``contact`` dimension): name -> (units, long_name, dtype).
@@ -60,6 +72,7 @@ CONTACT_VARIABLES = {
     "contact_impacts": ("1", "number of impacts (contact episodes) at the contact", "i4"),
     "contact_max_penetration": ("m", "maximum penetration delta at the contact", "f8"),
     "contact_impulse": ("N s", "impulse of the impact force at the contact", "f8"),
+    "contact_max_impact_velocity": ("m s-1", "largest prior-impact velocity at the contact", "f8"),
 }
 #: Per-simulation outputs of studies with yielding buildings (DESIGN.md section 9): name ->
 #: (units, long_name, dtype).  Drift ratios are NaN for an SDOF without ``height_m``, the

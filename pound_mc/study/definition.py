@@ -592,7 +592,8 @@ def study_from_text(text: str, *, file: str | Path | None = None) -> Study:
     grid, labels = _grid(data.get("grid", {}), fname, errors)
     spec = check_table(SAMPLING, data.get("sampling", {}), file=fname, prefix="sampling.",
                        errors=errors)  # fmt: skip
-    variables, material_variables = _vary(spec.get("vary", {}), grid, labels, fname, errors)
+    vary = sampling.per_impact(spec.get("vary", {}), scene, fname, errors)
+    variables, material_variables = _vary(vary, grid, labels, fname, errors)
     variables = _fixed_structure(scene, grid, variables, fname, errors)
     study = Study(
         path=None if file is None else Path(file),

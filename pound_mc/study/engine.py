@@ -151,7 +151,9 @@ class StudyEngine:
         #: Whether a building is a shear building: then every simulation runs the modes of
         #: :attr:`arrays` (computed once) through the general batch, and the outputs include
         #: the per-contact arrays of :data:`~pound_mc.study.dataset.CONTACT_VARIABLES`.
-        self.mdof = any(scene_model(study.scene, side) == "shear" for side in ("left", "right"))
+        self.mdof = any(
+            scene_model(study.scene, side) in ("shear", "wall") for side in ("left", "right")
+        )
         self.arrays = self.scene.modal_arrays() if self.mdof else None
         #: Whether a building can yield: each simulation then runs its own scene (inelastic
         #: ``newmark``), and the dataset holds the storeys' outputs.
@@ -294,6 +296,10 @@ class StudyEngine:
         out["contact.model"] = scene.contact_model
         out["integrator.method"] = scene.method
         out["integrator.substeps"] = scene.substeps
+        if scene.restitution == "velocity":
+            # restitution set per impact: the kernels' damping parameter is its quantile
+            out["contact.e_quantile"] = scene.e_quantile
+            out["contact.restitution"] = scene.restitution_rule()
         return out
 
     def _values(self, key: str, varied: dict, size: int) -> np.ndarray | None:
@@ -319,6 +325,8 @@ class StudyEngine:
         The damping ratio ``xi`` from ``e`` through the study's relation; the Hertz-damp law
         takes ``e`` itself (its damping follows each impact's velocity).
         """
+        if "contact.restitution" in self._base:
+            return self._values("contact.e_quantile", varied, size), None
         e = None if "contact.xi" in varied else self._values("contact.e", varied, size)
         if e is not None:
             return np.asarray(self._reported_xi(e), float), e
@@ -407,6 +415,8 @@ class StudyEngine:
             "substeps": self._base["integrator.substeps"],
             "relation": self._base["contact.relation"] or None,
         }
+        if "contact.restitution" in self._base:
+            settings["restitution"] = self._base["contact.restitution"]
         # one batch per record and intensity (the intensity axis scales the record)
         group = p["record"]
         if self._intensity_axis is not None:

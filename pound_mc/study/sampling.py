@@ -47,6 +47,7 @@ __all__ = [
     "design",
     "parse_variable",
     "draw",
+    "per_impact",
 ]
 
 
@@ -148,6 +149,9 @@ VARY_TABLES = {
                   exclusive_minimum=True),
             Field("mass_kg", "number", "For `contact.beta`: the range at this ball mass "
                   "(default: all masses).", unit="kg", minimum=0.0, exclusive_minimum=True),
+            Field("per_impact", "boolean", "For `contact.e`: each impact's e from Table 2 at its "
+                  "own prior-impact velocity (`[contact] restitution = \"velocity\"` with this "
+                  "material), the quantile `contact.e_quantile` sampled uniform over [0, 1]."),
         ),
         variant="material",
     ),
@@ -218,6 +222,35 @@ def _material_variable(key: str, spec: dict, where: str, file, errors: list):
         errors.append(InputError(str(getattr(exc, "message", exc)), file=file, key=where))
         return None
     return RandomVariable(key, "uniform", lo, hi, f"uniform over {source}")
+
+
+def per_impact(vary: dict, scene: dict, file, errors: list) -> dict:
+    """``contact.e = { material = NAME, per_impact = true }``: restitution set per impact.
+
+    The scene's ``[contact]`` then takes ``restitution = "velocity"`` with that material, and
+    its quantile ``contact.e_quantile`` is sampled uniform over [0, 1].  Returns ``vary``
+    with that variable in place of ``contact.e``.
+    """
+    spec = vary.get("contact.e")
+    if not (isinstance(spec, dict) and "per_impact" in spec):
+        return vary
+    where = "sampling.vary.contact.e"
+    if spec["per_impact"] is not True:
+        errors.append(
+            InputError("must be true (or left out)", file=file, key=f"{where}.per_impact")
+        )
+        return {k: v for k, v in vary.items() if k != "contact.e"}
+    material = spec.get("material")
+    if material not in materials.MATERIALS or set(spec) != {"material", "per_impact"}:
+        errors.append(InputError(f"per_impact takes only material, one of "
+                                 f"{list(materials.MATERIALS)}", file=file, key=where))  # fmt: skip
+        return {k: v for k, v in vary.items() if k != "contact.e"}
+    contact = {k: v for k, v in scene.get("contact", {}).items() if k not in ("e", "xi")}
+    contact.update(restitution="velocity", material=material, e_quantile=0.5)
+    scene["contact"] = contact
+    out = {k: v for k, v in vary.items() if k != "contact.e"}
+    out["contact.e_quantile"] = {"distribution": "uniform", "low": 0.0, "high": 1.0}
+    return out
 
 
 def parse_variable(key: str, spec, *, file=None) -> tuple[RandomVariable | None, list]:

@@ -1,0 +1,65 @@
+"""Rows of buildings (``[[buildings]]``, left to right): contacts between neighbours, against
+the independent SciPy reference.
+"""
+
+import pytest
+
+from pound_mc.errors import InputError
+from pound_mc.integrators.reference import reference_solution
+from pound_mc.scene import scene_from_dict, simulate
+
+SDOF = {"model": "sdof", "damping_ratio": 0.05, "mass_kg": 1.0e6}
+RECORD = {"source": "builtin:knet-akt013", "duration_s": 6.0, "pga_g": 0.5}
+
+
+def row(*buildings, **contact):
+    return scene_from_dict(
+        {"record": RECORD, "buildings": list(buildings),
+         "contact": {"model": "jankowski", "beta": 2.75e9, "xi": 0.35, "gap_m": 0.003,
+                     **contact}}
+    )  # fmt: skip
+
+
+def test_contacts_between_neighbours():
+    # three SDOFs: contacts 1-2 and 2-3, each with m_eff = m m / (m + m) = 5e5 kg; a wall may
+    # close the row
+    s = row({**SDOF, "period_s": 0.5}, {**SDOF, "period_s": 1.0}, {**SDOF, "period_s": 0.7})
+    assert [(c.pair, c.m_eff) for c in s.contacts] == [(0, 5.0e5), (1, 5.0e5)]
+    a = s.kernel_arrays()
+    assert a["psi"].shape == (2, 3)
+    assert list(a["side"]) == [0, 1, 1]
+    s = row({**SDOF, "period_s": 0.5}, {**SDOF, "period_s": 1.0}, {"model": "wall"})
+    assert [(c.pair, c.m_eff) for c in s.contacts] == [(0, 5.0e5), (1, 1.0e6)]
+
+
+@pytest.mark.slow
+def test_three_buildings_against_reference():
+    # a 0.5 s, a 1.0 s and a 0.7 s SDOF 3 mm apart: both contacts pound; impacts per contact
+    # and peak forces as the SciPy reference (peak_disp_right: the largest of the others)
+    s = row({**SDOF, "period_s": 0.5}, {**SDOF, "period_s": 1.0}, {**SDOF, "period_s": 0.7})
+    record = s.record_arrays()
+    ref = reference_solution(s, record)
+    res = simulate(s, record=record)
+    assert list(res.contacts["impacts"]) == list(ref["contact_impacts"])
+    assert all(res.contacts["impacts"] > 0)
+    for k in range(2):
+        assert res.contacts["peak_force"][k] == pytest.approx(ref["contact_peak_force"][k],
+                                                              rel=1e-4)  # fmt: skip
+    for side in ("left", "right"):
+        assert res.outputs[f"peak_disp_{side}"] == pytest.approx(ref[f"peak_disp_{side}"],
+                                                                 rel=1e-4)  # fmt: skip
+    assert [c["pair"] for c in res.to_json()["contacts"]] == [1, 2]
+
+
+def test_row_validation():
+    base = {"record": RECORD, "contact": {"xi": 0.3}}
+    for data, key in (
+        ({"buildings": [{**SDOF, "period_s": 0.5}], }, "buildings"),
+        ({"buildings": [{**SDOF, "period_s": 0.5}, {**SDOF, "period_s": 1.0}],
+          "left": {**SDOF, "period_s": 0.5}}, "left"),
+        ({"buildings": [{**SDOF, "period_s": 0.5}, {"model": "wall"},
+                        {**SDOF, "period_s": 1.0}]}, "buildings[1].model"),
+    ):  # fmt: skip
+        with pytest.raises(InputError) as info:
+            scene_from_dict({**base, **data})
+        assert key in str(info.value)
