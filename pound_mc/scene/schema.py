@@ -374,8 +374,9 @@ SDOF = Table(
     (
         Field("model", "string", "Building model.", default="sdof",
               choices=("sdof", "shear", "wall")),
-        Field("period_s", "number", "Natural period.", unit="s", required=True, minimum=0.0,
-              exclusive_minimum=True, maximum=100.0, varied=True),
+        Field("period_s", "number", "Natural period (up to 1e6 s: a nearly free mass, as in "
+              "verification against closed forms).", unit="s", required=True, minimum=0.0,
+              exclusive_minimum=True, maximum=1.0e6, varied=True),
         Field("mass_kg", "number", "Mass.", unit="kg", required=True, minimum=0.0,
               exclusive_minimum=True, maximum=1.0e10, varied=True),
         _BUILDING_DAMPING,
