@@ -10,6 +10,9 @@ SDOF pairs run through :func:`~pound_mc.integrators.simulate_sdof_pairs`; a pair
 building through :func:`~pound_mc.integrators.simulate_scene_batch` with the modes of the
 study's one structure (:meth:`~pound_mc.scene.Scene.modal_arrays`, computed once), and then
 also gives the per-contact outputs of :data:`~pound_mc.study.dataset.CONTACT_VARIABLES`.
+A study that varies a shear building's keys, or whose buildings can yield, runs each
+simulation as its own scene (:meth:`StudyEngine.scene_of`, modes computed for it); the
+results are still a function of the study and the index only.
 """
 
 from __future__ import annotations
@@ -149,6 +152,11 @@ class StudyEngine:
         #: Whether a building can yield: each simulation then runs its own scene (inelastic
         #: ``newmark``), and the dataset holds the storeys' outputs.
         self.inelastic = self.scene.inelastic
+        #: Whether each simulation runs its own scene (:meth:`scene_of`, its modes computed
+        #: for it): with yielding buildings, and with a shear building whose keys vary.
+        self.per_scene = self.inelastic or (
+            self.mdof and any(key.split(".", 1)[0] in ("left", "right") for key in self._varied)
+        )
 
     def _intensities(self) -> None:
         """Each record's own PGA and Sa, and the factors that scale it to the intensity axis."""
@@ -337,11 +345,17 @@ class StudyEngine:
             out.update({name: ((), dtype) for name, (_, _, dtype) in INELASTIC_VARIABLES.items()})
         return out
 
-    def _run_inelastic(self, indices: np.ndarray, out: dict) -> dict:
-        """Run simulations ``indices`` with yielding buildings, each its own :meth:`scene_of`."""
+    @property
+    def _varied(self) -> list[str]:
+        """Scene keys the study varies (grid axes and sampled keys)."""
+        return [*self.study.grid, *(v.key for v in self.study.variables)]
+
+    def _run_scenes(self, indices: np.ndarray, out: dict) -> dict:
+        """Run simulations ``indices`` one by one, each its own :meth:`scene_of`."""
+        names = (*RESULT_VARIABLES, *(INELASTIC_VARIABLES if self.inelastic else ()))
         for k, index in enumerate(indices):
             res = simulate(self.scene_of(int(index)), record=self.record_of(int(index)))
-            for name in (*RESULT_VARIABLES, *INELASTIC_VARIABLES):
+            for name in names:
                 out[name][k] = res.outputs[name]
             if self.mdof:
                 for name in CONTACT_VARIABLES:
@@ -356,8 +370,8 @@ class StudyEngine:
             name: np.empty((n, *tail), dtype=dtype)
             for name, (tail, dtype) in self.result_layout().items()
         }
-        if self.inelastic:
-            return self._run_inelastic(indices, out)
+        if self.per_scene:
+            return self._run_scenes(indices, out)
         settings = {
             "method": self._base["integrator.method"],
             "contact_model": self._base["contact.model"],
