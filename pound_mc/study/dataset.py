@@ -117,6 +117,11 @@ _PARAMETER_ATTRS = {
     "pga_g": ("1", "peak ground acceleration in units of g"),
     "sa_g": ("1", "5 %-damped pseudo-spectral acceleration in units of g"),
     "duration_s": ("s", "record duration kept"),
+    "yield_disp_m": ("m", "displacement at yield"),
+    "post_yield_ratio": ("1", "post-yield over elastic stiffness"),
+    "storey_mass_kg": ("kg", "mass of every floor"),
+    "storey_stiffness_N_per_m": ("N m-1", "stiffness of every storey"),
+    "storey_yield_disp_m": ("m", "inter-storey drift at yield of every storey"),
 }
 
 
