@@ -211,15 +211,18 @@ def _check_inelastic(settings, history: bool) -> None:
         raise InputError("histories of inelastic buildings are not recorded", key="history")
 
 
-def _inelastic_run(storeys):
-    """A run of the inelastic kernel with the storeys bound (the signature of ``_RUNS``)."""
+def _inelastic_run(storeys, sout):
+    """A run of the inelastic kernel with the storeys bound (the signature of ``_RUNS``).
+
+    ``sout`` (storeys x 2) receives each storey's peak and final drift [m].
+    """
     dmat = np.ascontiguousarray(storeys[0], dtype=np.float64)
     store = np.ascontiguousarray(storeys[1], dtype=np.float64).reshape(-1, N_STOREY_COLUMNS)
 
     def run(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi, settings, q, v,
             out, cout, hx, hd, hf, pre):  # fmt: skip
         _run_inelastic(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi,
-                       settings, q, v, out, cout, dmat, store)  # fmt: skip
+                       settings, q, v, out, cout, dmat, store, sout)  # fmt: skip
 
     return run
 
@@ -227,14 +230,15 @@ def _inelastic_run(storeys):
 @jit
 def _run_inelastic(
     ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi, settings,
-    q, v, out, cout, dmat, store,
+    q, v, out, cout, dmat, store, sout,
 ):  # fmt: skip
     """One run of the inelastic ``newmark`` kernel; a step that could not end is not converged."""
     if _endless(ag, dt_rec, settings):
         fail(out, cout, STATUS_NOT_CONVERGED)
+        sout[:] = np.nan
         return
     newmark_hysteretic(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi,
-                       settings, q, v, out, cout, dmat, store)  # fmt: skip
+                       settings, q, v, out, cout, dmat, store, sout)  # fmt: skip
 
 
 #: One run of each method (same arguments), by method code: a run compiles only its method's
@@ -301,6 +305,7 @@ def run_kernel(
     v0=None,
     history: bool = False,
     storeys=None,
+    storey_out=None,
 ) -> KernelResult:
     """Run one simulation on prepared modal arrays.
 
@@ -323,6 +328,9 @@ def run_kernel(
     storeys : tuple (drift rows, storey table), optional
         Yielding storeys (:meth:`pound_mc.scene.Scene.storey_arrays`): run the inelastic
         kernel (``newmark`` or ``newmark-explicit``; no histories).
+    storey_out : numpy.ndarray, optional
+        ``(n_storeys, 2)`` float array that receives each yielding run's storey peak
+        ``|drift|`` and final drift [m] (rows as the storey table; NaN unless ok).
     """
     settings = kernel_settings(model, method, relation=relation, dt_s=dt_s, substeps=substeps)
     if storeys is not None:
@@ -343,7 +351,9 @@ def run_kernel(
     if run is _run_adaptive and _is_sdof_pair(omega, gap, phi):
         run = _run_adaptive_pair
     if storeys is not None:
-        run = _inelastic_run(storeys)
+        if storey_out is None:
+            storey_out = np.empty((np.size(storeys[1]) // N_STOREY_COLUMNS, 2))
+        run = _inelastic_run(storeys, storey_out)
     run(
         np.ascontiguousarray(ag, dtype=f8), f8(dt_rec),
         np.ascontiguousarray(omega, dtype=f8), np.ascontiguousarray(zeta, dtype=f8),

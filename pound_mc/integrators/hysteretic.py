@@ -115,13 +115,18 @@ def _nanmax(a, b):
 
 
 @jit
-def storey_outputs(out, store, peak_u, drift, peak_acc, side_f, e_h):
+def storey_outputs(out, store, peak_u, drift, peak_acc, side_f, e_h, sout):
     """Fill the inelastic output slots: ductility, drift ratios, floor accelerations, energy.
 
     Ductility is NaN for a building that cannot yield, drift ratios for one without heights;
-    every slot is NaN for a run that is not ok.
+    every slot is NaN for a run that is not ok.  ``sout`` (storeys x 2, or no rows) takes each
+    storey's peak |drift| and its drift at the end of the run [m].
     """
-    if out[STATUS] != STATUS_OK:
+    ok = out[STATUS] == STATUS_OK
+    for s in range(sout.shape[0]):
+        sout[s, 0] = peak_u[s] if ok else np.nan
+        sout[s, 1] = drift[s] if ok else np.nan
+    if not ok:
         for k in range(PEAK_DUCTILITY_LEFT, PEAK_FLOOR_ACCEL_RIGHT + 1):
             out[k] = np.nan
         return
@@ -152,13 +157,14 @@ def storey_outputs(out, store, peak_u, drift, peak_acc, side_f, e_h):
 @jit
 def newmark_hysteretic(
     ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi, settings,
-    q, v, out, cout, dmat, store,
+    q, v, out, cout, dmat, store, sout,
 ):  # fmt: skip
     """``newmark`` / ``newmark-explicit`` with bilinear storeys (module docstring).
 
     ``dmat``: drift rows of the storeys in modal coordinates (storeys x modes); ``store``: the
     storey table (columns ``S_*``: stiffness [N/m], yield drift [m] (inf: elastic), post-yield
-    ratio, height [m] (NaN: none), building 0 left / 1 right).  The step is made of the Newmark
+    ratio, height [m] (NaN: none), building 0 left / 1 right); ``sout``: the storeys' peak
+    and final drifts (:func:`storey_outputs`).  The step is made of the Newmark
     pieces of :mod:`pound_mc.integrators.fixed` (same arithmetic, so that storeys that never
     yield give its results bitwise) with the plastic fixed point around them.
     """
@@ -246,4 +252,4 @@ def newmark_hysteretic(
     # the plastic load's work enters the balance as a negative damping work
     finish(out, cout, peaks, side, phase, q, v, omega, e0, e_in, e_d - w_p, w_c, stored_energy,
            peak_f, peak_t, steps, status)  # fmt: skip
-    storey_outputs(out, store, peak_u, drift, peak_acc, side, e_h)
+    storey_outputs(out, store, peak_u, drift, peak_acc, side, e_h, sout)

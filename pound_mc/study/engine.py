@@ -34,7 +34,13 @@ from pound_mc.motions.intensity import sa_g
 from pound_mc.physics.contact import default_relation, reported_xi
 from pound_mc.physics.relations import restitution_of_xi
 from pound_mc.scene import Scene, scene_from_dict, simulate
-from pound_mc.study.dataset import CONTACT_VARIABLES, INELASTIC_VARIABLES, RESULT_VARIABLES
+from pound_mc.scene.model import storey_results
+from pound_mc.study.dataset import (
+    CONTACT_VARIABLES,
+    INELASTIC_VARIABLES,
+    RESULT_VARIABLES,
+    STOREY_VARIABLES,
+)
 from pound_mc.study.definition import INTENSITY_KEYS, MATERIAL_KEY, grid_dim_name, scene_model
 
 __all__ = ["StudyEngine", "load_records", "load_traces"]
@@ -52,6 +58,12 @@ _KERNEL_KEYS = (
     "contact.beta",
     "integrator.dt_s",
 )
+# Dataset variables of STOREY_VARIABLES: their key in a result's ``storeys``.
+_STOREY_KEYS = {
+    "storey_peak_drift": "peak_drift_ratio",
+    "storey_peak_ductility": "peak_ductility",
+    "storey_residual_drift": "residual_drift_ratio",
+}
 # Keys the batch of a pair with a shear building takes per simulation (its modes are fixed).
 _SCENE_KERNEL_KEYS = ("contact.gap_m", "contact.beta", "integrator.dt_s")
 
@@ -343,7 +355,15 @@ class StudyEngine:
             out.update({name: ((nc,), dtype) for name, (_, _, dtype) in CONTACT_VARIABLES.items()})
         if self.inelastic:
             out.update({name: ((), dtype) for name, (_, _, dtype) in INELASTIC_VARIABLES.items()})
+        if self.per_storey:
+            ns = self.scene.storey_arrays()[1].shape[0]
+            out.update({name: ((ns,), dtype) for name, (_, _, dtype) in STOREY_VARIABLES.items()})
         return out
+
+    @property
+    def per_storey(self) -> bool:
+        """Whether the dataset holds per-storey outputs (yielding buildings, one a shear one)."""
+        return self.inelastic and self.mdof
 
     @property
     def _varied(self) -> list[str]:
@@ -360,6 +380,9 @@ class StudyEngine:
             if self.mdof:
                 for name in CONTACT_VARIABLES:
                     out[name][k] = res.contacts[name.removeprefix("contact_")]
+            if self.per_storey:
+                for name, key in _STOREY_KEYS.items():
+                    out[name][k] = res.storeys[key]
         return out
 
     def run_indices(self, indices: np.ndarray) -> dict[str, np.ndarray]:
@@ -475,6 +498,13 @@ class StudyEngine:
             out["material"] = ((grid_dim_name(MATERIAL_KEY),), names)
         if self.mdof:
             out.update(self.contact_coordinates())
+        if self.per_storey:
+            table = self.scene.storey_arrays()[1]
+            which = storey_results(table, np.zeros((table.shape[0], 2)))
+            dims = ("storey",)
+            out["storey"] = (dims, np.arange(1, table.shape[0] + 1, dtype=np.int32))
+            out["storey_building"] = (dims, which["building"].astype(object))
+            out["storey_number"] = (dims, which["storey"])
         out.update(self.record_variables())
         return out
 
