@@ -20,6 +20,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
+from pound_mc.analysis.plot import inelastic_chart
 from pound_mc.errors import InputError
 from pound_mc.integrators import OUTPUTS, run_kernel
 from pound_mc.integrators.outputs import INELASTIC_OUTPUTS
@@ -264,3 +265,32 @@ def test_bilinear_shear_study_has_a_storey_dimension(make_shear_study, tmp_path)
                     continue
                 np.testing.assert_array_equal(per.values, ds[f"{scalar}_{side}"].values)
         assert (ds["peak_ductility_left"] > 1.0).all()
+
+
+def test_inelastic_chart_draws_the_elastic_line_as_displacement_over_the_yield_one(tmp_path):
+    """The chart of studies/inelastic_spectrum.toml on a hand-made dataset of its layout."""
+    rng = np.random.default_rng(1)
+    periods, yields = np.array([0.5, 1.0, 1.5]), np.array([0.02, 1000.0])
+    shape = (1, 3, 2, 5)
+    disp = rng.uniform(0.01, 0.1, shape)
+    duct = disp / yields[None, None, :, None]  # the 1,000 m building never yields
+    dims = ("record", "left_period_s", "left_yield_disp_m", "sample")
+    ds = xr.Dataset(
+        {
+            "peak_ductility_left": (dims, duct),
+            "peak_disp_left": (dims, disp),
+            "peak_force": (dims, rng.uniform(1e6, 2e6, shape)),
+        },
+        coords={"left_period_s": periods, "left_yield_disp_m": yields, "record": ["r"]},
+    )
+    fig = inelastic_chart(ds, tmp_path / "c.png")
+    assert (tmp_path / "c.png").stat().st_size > 0
+    ax_mu, ax_f = fig.axes
+    bilinear, elastic = ax_mu.get_lines()[:2]
+    # medians over the samples: ductility as is, and the elastic peak displacement / 0.02 m
+    np.testing.assert_allclose(bilinear.get_ydata(), np.median(duct[0, :, 0], axis=-1))
+    np.testing.assert_allclose(elastic.get_ydata(), np.median(disp[0, :, 1], axis=-1) / 0.02)
+    assert "elastic" in elastic.get_label() and "bilinear" in bilinear.get_label()
+    np.testing.assert_allclose(
+        ax_f.get_lines()[1].get_ydata(), np.median(ds["peak_force"][0, :, 1], axis=-1) / 1e6
+    )
