@@ -10,6 +10,10 @@
 
 They report maxima over their step points.  An SDOF pair with ``newmark`` or
 ``newmark-explicit`` runs through :mod:`pound_mc.integrators.pair` instead (same results).
+
+The pieces of the Newmark step (:func:`newmark_matrices`, :func:`newmark_solve`,
+:func:`contact_events`, ...) are public, inlined functions: the inelastic kernel
+(:mod:`pound_mc.integrators.hysteretic`) builds its step from the same ones.
 """
 
 from __future__ import annotations
