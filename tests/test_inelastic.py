@@ -20,6 +20,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
+from pound_mc.analysis.plot import inelastic_chart
 from pound_mc.errors import InputError
 from pound_mc.integrators import OUTPUTS, run_kernel
 from pound_mc.integrators.outputs import INELASTIC_OUTPUTS
@@ -192,11 +193,19 @@ def test_bilinear_shear_3_5_newmark_matches_the_reference():
     scene = scene_from_dict(data, file=ROOT / "studies" / "scenes" / "shear_3_5.toml")
     dt, acc = scene.record_arrays()
     ref = reference_solution(scene, record=(dt, with_tail(acc, dt, 1.0)))
-    out = simulate(scene).outputs
+    res = simulate(scene)
+    out = res.outputs
     assert out["impacts"] == ref["impacts"] > 0
     assert ref["peak_ductility_left"] > 3.0 and ref["peak_ductility_right"] > 5.0
     for name in ("peak_force", "peak_disp_left", "peak_disp_right", *INELASTIC_OUTPUTS[:7]):
         assert rel(out[name], ref[name]) < 1e-3, name
+    # per storey (left building's first): the reference's located peak drifts
+    heights = np.array([3.0] * 8)  # shear_3_5.toml: 3 m storeys
+    np.testing.assert_allclose(
+        res.storeys["peak_drift_ratio"], ref["peak_storey_drift"] / heights, rtol=1e-3
+    )
+    assert list(res.storeys["building"]) == ["left"] * 3 + ["right"] * 5
+    assert list(res.storeys["storey"]) == [1, 2, 3, 1, 2, 3, 4, 5]
 
 
 # --------------------------------------------------------------------------- studies
@@ -225,3 +234,63 @@ def test_bilinear_study_dataset_and_chunks(make_study, tmp_path):
         engine = StudyEngine(load_study(path))
         alone = simulate(engine.scene_of(0), record=engine.record_of(0)).outputs
         assert alone["peak_ductility_left"] == a["peak_ductility_left"].values.ravel()[0]
+
+
+@pytest.mark.slow  # four 3 + 5 storey bilinear simulations
+def test_bilinear_shear_study_has_a_storey_dimension(make_shear_study, tmp_path):
+    """Per-storey outputs along ``storey``; the scalar outputs are their maxima per building."""
+    path = make_shear_study(
+        study={"name": "bilinear_shear"},
+        record={"duration_s": 2.0},
+        left={"hysteresis": "bilinear", "storey_yield_disp_m": 0.004, "post_yield_ratio": 0.05},
+        integrator={"method": "newmark", "dt_s": 0.002, "tail_s": 0.5},
+        grid={"contact.gap_m": [0.01]},
+        sampling={"n": 2},
+    )
+    report = run_study(load_study(path), tmp_path / "out", chunk_size=2, progress=False)
+    with xr.open_dataset(report.path) as ds:
+        assert (ds["status"] == 0).all()
+        assert ds.sizes["storey"] == 8
+        assert list(ds["storey_building"].values) == ["left"] * 3 + ["right"] * 5
+        assert list(ds["storey_number"].values) == [1, 2, 3, 1, 2, 3, 4, 5]
+        assert ds["storey_peak_drift"].dims[-1] == "storey"
+        left = ds["storey_building"] == "left"
+        for name, scalar in (("storey_peak_ductility", "peak_ductility"),
+                             ("storey_peak_drift", "peak_drift"),
+                             ("storey_residual_drift", "residual_drift")):  # fmt: skip
+            for side, mine in (("left", left), ("right", ~left)):
+                per = ds[name].where(mine).max("storey")
+                if name == "storey_peak_ductility" and side == "right":
+                    assert ds[name].where(mine).isnull().all()  # the right building is elastic
+                    continue
+                np.testing.assert_array_equal(per.values, ds[f"{scalar}_{side}"].values)
+        assert (ds["peak_ductility_left"] > 1.0).all()
+
+
+def test_inelastic_chart_draws_the_elastic_line_as_displacement_over_the_yield_one(tmp_path):
+    """The chart of studies/inelastic_spectrum.toml on a hand-made dataset of its layout."""
+    rng = np.random.default_rng(1)
+    periods, yields = np.array([0.5, 1.0, 1.5]), np.array([0.02, 1000.0])
+    shape = (1, 3, 2, 5)
+    disp = rng.uniform(0.01, 0.1, shape)
+    duct = disp / yields[None, None, :, None]  # the 1,000 m building never yields
+    dims = ("record", "left_period_s", "left_yield_disp_m", "sample")
+    ds = xr.Dataset(
+        {
+            "peak_ductility_left": (dims, duct),
+            "peak_disp_left": (dims, disp),
+            "peak_force": (dims, rng.uniform(1e6, 2e6, shape)),
+        },
+        coords={"left_period_s": periods, "left_yield_disp_m": yields, "record": ["r"]},
+    )
+    fig = inelastic_chart(ds, tmp_path / "c.png")
+    assert (tmp_path / "c.png").stat().st_size > 0
+    ax_mu, ax_f = fig.axes
+    bilinear, elastic = ax_mu.get_lines()[:2]
+    # medians over the samples: ductility as is, and the elastic peak displacement / 0.02 m
+    np.testing.assert_allclose(bilinear.get_ydata(), np.median(duct[0, :, 0], axis=-1))
+    np.testing.assert_allclose(elastic.get_ydata(), np.median(disp[0, :, 1], axis=-1) / 0.02)
+    assert "elastic" in elastic.get_label() and "bilinear" in bilinear.get_label()
+    np.testing.assert_allclose(
+        ax_f.get_lines()[1].get_ydata(), np.median(ds["peak_force"][0, :, 1], axis=-1) / 1e6
+    )

@@ -70,6 +70,10 @@ def test_varied_keys_are_the_numeric_scene_keys():
         "right.damping_ratio", "right.mass_kg", "contact.gap_m", "contact.beta",
         "contact.k_N_per_m", "contact.xi", "contact.e", "integrator.dt_s",
         "contact.e_quantile",  # restitution set per impact (issue 14)
+        # the buildings' yield keys and a shear building's storey lists (issue #13)
+        *(f"{side}.{name}" for side in ("left", "right") for name in (
+            "yield_disp_m", "post_yield_ratio", "storey_mass_kg", "storey_stiffness_N_per_m",
+            "storey_yield_disp_m")),
     }  # fmt: skip
 
 

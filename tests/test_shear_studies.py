@@ -1,4 +1,4 @@
-"""Studies of shear buildings: modes once per study, per-contact outputs along ``contact``."""
+"""Studies of shear buildings: per-contact outputs along ``contact``, structural uncertainty."""
 
 from pathlib import Path
 
@@ -144,23 +144,20 @@ def test_sdof_pair_has_no_contact_dimension(tmp_path):
 
 
 @pytest.mark.parametrize(
-    ("grid", "vary", "key"),
+    ("left", "grid", "vary", "key"),
     [
+        (None, {"left.period_s": [0.3, 0.5]}, None, "grid.left.period_s"),
         (
-            {"left.damping_ratio": [0.02, 0.05]},
+            SDOF_6M,
             None,
-            "grid.left.damping_ratio",
-        ),
-        (
-            None,
-            {"right.damping_ratio": {"distribution": "uniform", "low": 0.02, "high": 0.05}},
-            "sampling.vary.right.damping_ratio",
+            {"left.storey_mass_kg": {"distribution": "uniform", "low": 1e6, "high": 2e6}},
+            "sampling.vary.left.storey_mass_kg",
         ),
     ],
 )
-def test_structural_keys_are_refused(tmp_path, capsys, grid, vary, key):
+def test_a_key_of_the_other_building_model_is_refused(tmp_path, capsys, left, grid, vary, key):
     path = tmp_path / "bad.toml"
-    path.write_text(_study_text(name="bad", grid=grid, vary=vary))
+    path.write_text(_study_text(name="bad", left=left, grid=grid, vary=vary))
     out = tmp_path / "out"
     assert main(["run", str(path), "--out", str(out), "--no-progress"]) == 2
     err = capsys.readouterr().err
@@ -168,11 +165,64 @@ def test_structural_keys_are_refused(tmp_path, capsys, grid, vary, key):
     assert not out.exists()
 
 
-def test_structural_key_of_the_sdof_beside_a_shear_building_is_refused(tmp_path, capsys):
-    path = tmp_path / "bad.toml"
-    path.write_text(_study_text(name="bad", left=SDOF_6M, grid={"left.period_s": [0.3, 0.5]}))
-    assert main(["check", str(path)]) == 2
-    assert "grid.left.period_s" in capsys.readouterr().err
+# Five and eight storeys of 3 m, 1,000 t a floor, every storey 1.0e9 N/m (left: T1 about
+# 0.55 s) and 1.5e9 N/m; storey stiffness lognormal with 10 % c.o.v. (sigma_ln =
+# sqrt(ln(1 + 0.1^2)) = 0.0998), the same draw for every storey of a building.
+SHEAR_5_8 = {
+    "left": {"model": "shear", "storey_mass_kg": [1.0e6] * 5,
+             "storey_stiffness_N_per_m": [1.0e9] * 5, "storey_height_m": [3.0] * 5},
+    "right": {"model": "shear", "storey_mass_kg": [1.0e6] * 8,
+              "storey_stiffness_N_per_m": [1.5e9] * 8, "storey_height_m": [3.0] * 8},
+}  # fmt: skip
+SIGMA_LN_10 = float(np.sqrt(np.log1p(0.1**2)))
+
+
+def _uncertain_5_8(tmp_path) -> Path:
+    vary = {
+        f"{side}.storey_stiffness_N_per_m": {
+            "distribution": "lognormal",
+            "median": SHEAR_5_8[side]["storey_stiffness_N_per_m"][0],
+            "sigma_ln": SIGMA_LN_10,
+        }
+        for side in ("left", "right")
+    }
+    text = study_text(
+        SMALL_SHEAR,
+        study={"name": "uncertain_5_8"},
+        record={"duration_s": 2.0},
+        left=Whole(SHEAR_5_8["left"]),
+        right=Whole(SHEAR_5_8["right"]),
+        grid={"contact.gap_m": [0.005]},
+        sampling=Whole({"n": 3, "method": "sobol", "vary": vary}),
+    )
+    path = tmp_path / "uncertain_5_8.toml"
+    path.write_text(text)
+    return path
+
+
+@pytest.mark.slow  # five 5 + 8 storey simulations, each run three times
+def test_storey_stiffness_uncertainty_is_reproducible_across_threads_and_chunks(tmp_path):
+    path = _uncertain_5_8(tmp_path)
+    study = study_from_text(path.read_text(), file=path)
+    engine = StudyEngine(study)
+    assert engine.per_scene and engine.n_contacts == 5
+    one = run_study(study, tmp_path / "a", threads=1, chunk_size=3, progress=False)
+    two = run_study(study, tmp_path / "b", threads=2, chunk_size=2, progress=False)
+    with xr.open_dataset(one.path) as a, xr.open_dataset(two.path) as b:
+        assert (a["status"] == 0).all()
+        for name in ("peak_force", "impacts", "peak_disp_left", "contact_peak_force"):
+            assert np.array_equal(a[name].values, b[name].values), name
+        k = a["left_storey_stiffness_N_per_m"].values
+        assert k.shape == (3,) and np.unique(k).size == 3
+        # simulation 1 is its own scene: every storey at the sampled stiffness
+        scene = engine.scene_of(1)
+        np.testing.assert_array_equal(scene.left.storey_stiffness_N_per_m, [k[1]] * 5)
+        alone = simulate(scene, record=engine.record_of(1))
+        point = a.isel(record=0, contact_gap_m=0, sample=1)
+        assert float(point["peak_disp_left"]) == alone.outputs["peak_disp_left"]
+        # the first mode follows the stiffness: T1 scales as 1 / sqrt(k) (a closed form)
+        t1 = [2 * np.pi / engine.scene_of(s).left.omega[0] for s in range(2)]
+        assert t1[0] / t1[1] == pytest.approx(np.sqrt(k[1] / k[0]), rel=1e-9)
 
 
 def test_shipped_shear_study_validates():

@@ -40,6 +40,7 @@ __all__ = [
     "restitution_ranges_chart",
     "droptest_chart",
     "spectrum_chart",
+    "inelastic_chart",
     "probability_chart",
     "distribution_chart",
     "spectrum_quantiles",
@@ -205,6 +206,62 @@ def spectrum_chart(
     )
     if line is not None:
         ax.get_legend().set_title(axis_label(ds, line), prop={"size": 8})
+    return save(fig, path)
+
+
+def inelastic_chart(ds, path: str | Path | None = None, *, side="left", record=0) -> Figure:
+    """Inelastic spectrum: median ductility demand and peak force against a grid axis.
+
+    The horizontal axis is the first grid axis, one line per value of the second (the yield
+    displacement ``{side}_yield_disp_m`` in ``studies/inelastic_spectrum.toml``); other grid
+    axes are held at their first value; 5-95 % bands over the samples.  A line whose building
+    never yields (ductility below 1 everywhere) is the elastic reference: its ductility demand
+    is its peak displacement over the smallest yield displacement of the line axis.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A dataset of a study with yielding buildings (``peak_ductility_left`` ...).
+    path : str or Path, optional
+        Where to write the PNG.
+    side : {"left", "right"}
+        The building whose ductility is drawn.
+    record : int
+        Which record (index).
+    """
+    x, line, others = _spectrum_selection(ds)
+    hold = {"record": record, **{d: 0 for d in others}}
+    duct = ds[f"peak_ductility_{side}"].isel(hold)
+    disp = ds[f"peak_disp_{side}"].isel(hold)
+    force = ds["peak_force"].isel(hold) / 1e6
+    values = [None] if line is None else list(ds[line].values)
+    u_ref = float(min(values)) if line == f"{side}_yield_disp_m" else np.nan
+    fig = Figure(figsize=(9.6, 4.2), layout="constrained")
+    ax_mu, ax_f = fig.subplots(1, 2, sharex=True)
+    xs = ds[x].values
+    for i, value in enumerate(values):
+        pick = {} if value is None else {line: value}
+        mu = duct.sel(pick)
+        label = "median" if value is None else _value_text(ds, line, i)
+        labels = (label, label)
+        elastic = not bool((mu > 1.0).any())
+        if elastic and np.isfinite(u_ref):
+            mu = disp.sel(pick) / u_ref
+            labels = (f"elastic: peak displacement / {u_ref:g} m", "elastic (never yields)")
+        elif np.isfinite(u_ref):
+            labels = (f"bilinear, yield displacement {value:g} m",) * 2
+        style = {"color": f"C{i % 10}", "ls": "--" if elastic else "-"}
+        for ax, data, text in ((ax_mu, mu, labels[0]), (ax_f, force.sel(pick), labels[1])):
+            q = data.quantile([0.05, 0.5, 0.95], dim="sample").values
+            ax.plot(xs, q[1], lw=1.6, label=text, **style)
+            ax.fill_between(xs, q[0], q[2], color=style["color"], alpha=0.18, lw=0)
+    xlabel = _axis_label(ds, x)
+    name = ds.attrs.get("study_name", "")
+    finish_axes(ax_mu, xlabel=xlabel, ylabel=f"ductility demand, {side} building [-]",
+                title=f"Ductility demand ({name}): median and 5-95 %")  # fmt: skip
+    ax_mu.axhline(1.0, color="k", lw=0.6, alpha=0.5)
+    finish_axes(ax_f, xlabel=xlabel, ylabel="peak impact force [MN]",
+                title=f"Peak impact force ({name}): median and 5-95 %")  # fmt: skip
     return save(fig, path)
 
 

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import xarray as xr
 
-from pound_mc.analysis.plot import distribution_chart, spectrum_chart
+from pound_mc.analysis.plot import distribution_chart, inelastic_chart, spectrum_chart
 from pound_mc.analysis.risk_chart import fragility_panels, required_gap_chart
 from pound_mc.errors import InputError
 from pound_mc.integrators import METHODS
@@ -108,6 +108,9 @@ def run_command(args) -> int:
 def _charts(study, path: Path, out: Path) -> list[Path]:
     """The charts ``run`` draws: the spectrum, or with an intensity axis two risk charts.
 
+    With yielding buildings and a yield-displacement axis, also the inelastic spectrum
+    (ductility demand and peak force, :func:`~pound_mc.analysis.plot.inelastic_chart`).
+
     With an intensity axis: the required gap against the rules (when the gap is on the grid)
     and the fragility curves.  A study without ``[grid]`` has no axis to draw a spectrum
     against: its chart is the distribution of the peak force over the samples.
@@ -124,6 +127,10 @@ def _charts(study, path: Path, out: Path) -> list[Path]:
         if study.intensity_key is None:
             written.append(out / f"{study.name}_spectrum.png")
             spectrum_chart(ds, written[-1])
+            sides = [s for s in ("left", "right") if f"{s}_yield_disp_m" in ds.dims]
+            if "peak_ductility_left" in ds and sides:
+                written.append(out / f"{study.name}_inelastic.png")
+                inelastic_chart(ds, written[-1], side=sides[0])
             return written
         if "contact.gap_m" in study.grid and len(study.grid["contact.gap_m"]) > 1:
             written.append(out / f"{study.name}_required_gap.png")

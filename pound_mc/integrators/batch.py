@@ -264,15 +264,18 @@ def _check_inelastic(settings, history: bool) -> None:
         raise InputError("histories of inelastic buildings are not recorded", key="history")
 
 
-def _inelastic_run(storeys):
-    """A run of the inelastic kernel with the storeys bound (the signature of ``_RUNS``)."""
+def _inelastic_run(storeys, sout):
+    """A run of the inelastic kernel with the storeys bound (the signature of ``_RUNS``).
+
+    ``sout`` (storeys x 2) receives each storey's peak and final drift [m].
+    """
     dmat = np.ascontiguousarray(storeys[0], dtype=np.float64)
     store = np.ascontiguousarray(storeys[1], dtype=np.float64).reshape(-1, N_STOREY_COLUMNS)
 
     def run(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi, settings, q, v,
             out, cout, hx, hd, hf, pre):  # fmt: skip
         _run_inelastic(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi,
-                       settings, q, v, out, cout, dmat, store)  # fmt: skip
+                       settings, q, v, out, cout, dmat, store, sout)  # fmt: skip
 
     return run
 
@@ -280,14 +283,15 @@ def _inelastic_run(storeys):
 @jit
 def _run_inelastic(
     ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi, settings,
-    q, v, out, cout, dmat, store,
+    q, v, out, cout, dmat, store, sout,
 ):  # fmt: skip
     """One run of the inelastic ``newmark`` kernel; a step that could not end is not converged."""
     if _endless(ag, dt_rec, settings):
         fail(out, cout, STATUS_NOT_CONVERGED)
+        sout[:] = np.nan
         return
     newmark_hysteretic(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi,
-                       settings, q, v, out, cout, dmat, store)  # fmt: skip
+                       settings, q, v, out, cout, dmat, store, sout)  # fmt: skip
 
 
 #: One run of each method (same arguments), by method code: a run compiles only its method's
@@ -378,6 +382,7 @@ def run_kernel(
     history: bool = False,
     storeys=None,
     restitution: dict | None = None,
+    storey_out=None,
 ) -> KernelResult:
     """Run one simulation on prepared modal arrays.
 
@@ -402,6 +407,9 @@ def run_kernel(
         kernel (``newmark`` or ``newmark-explicit``; no histories).
     restitution : dict, optional
         Restitution set per impact (:func:`kernel_settings`); ``xi`` then holds its quantile.
+    storey_out : numpy.ndarray, optional
+        ``(n_storeys, 2)`` float array that receives each yielding run's storey peak
+        ``|drift|`` and final drift [m] (rows as the storey table; NaN unless ok).
     """
     settings = kernel_settings(model, method, relation=relation, dt_s=dt_s, substeps=substeps,
                                restitution=restitution)  # fmt: skip
@@ -423,7 +431,9 @@ def run_kernel(
     if run is _run_adaptive and _is_sdof_pair(omega, gap, phi):
         run = _run_adaptive_pair
     if storeys is not None:
-        run = _inelastic_run(storeys)
+        if storey_out is None:
+            storey_out = np.empty((np.size(storeys[1]) // N_STOREY_COLUMNS, 2))
+        run = _inelastic_run(storeys, storey_out)
     run(
         np.ascontiguousarray(ag, dtype=f8), f8(dt_rec),
         np.ascontiguousarray(omega, dtype=f8), np.ascontiguousarray(zeta, dtype=f8),

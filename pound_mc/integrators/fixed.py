@@ -10,6 +10,10 @@
 
 They report maxima over their step points.  An SDOF pair with ``newmark`` or
 ``newmark-explicit`` runs through :mod:`pound_mc.integrators.pair` instead (same results).
+
+The pieces of the Newmark step (:func:`newmark_matrices`, :func:`newmark_solve`,
+:func:`contact_events`, ...) are public, inlined functions: the inelastic kernel
+(:mod:`pound_mc.integrators.hysteretic`) builds its step from the same ones.
 """
 
 from __future__ import annotations
@@ -101,7 +105,7 @@ def _newton_contacts(model, dtry, dstar, dpen, ddpen, g, c2h, beta, cd, zhd, fn,
 
 
 @jit(inline=True)
-def _implicit_forces(model, method, dstar, dtry, dpen, ddpen, g, c2h, fc, beta, cd, zhd, fn,
+def implicit_forces(model, method, dstar, dtry, dpen, ddpen, g, c2h, fc, beta, cd, zhd, fn,
                      jac, rhs):  # fmt: skip
     """Contact forces at the end of a Newmark step (lagged for ``newmark-explicit``).
 
@@ -129,6 +133,227 @@ def _implicit_forces(model, method, dstar, dtry, dpen, ddpen, g, c2h, fc, beta, 
     return _newton_contacts(model, dtry, dstar, dpen, ddpen, g, c2h, beta, cd, zhd, fn, jac, rhs)
 
 
+# -- pieces of the average-acceleration Newmark step, shared with the inelastic kernel -------
+
+
+@jit(inline=True)
+def newmark_matrices(omega, zeta, h, psi):
+    """Modal constants of the Newmark step ``h`` [s].
+
+    Returns the inverse effective stiffness ``1 / khat``, ``2 zeta omega`` and the contact
+    flexibility ``G = sum_j psi_c,j psi_c',j / khat_j``.
+    """
+    n = omega.size
+    nc = psi.shape[0]
+    khat = np.empty(n)
+    ikhat = np.empty(n)
+    zw2 = np.empty(n)
+    g = np.zeros((nc, nc))
+    for j in range(n):
+        khat[j] = omega[j] * omega[j] + 4.0 * zeta[j] * omega[j] / h + 4.0 / (h * h)
+        ikhat[j] = 1.0 / khat[j]
+        zw2[j] = 2.0 * zeta[j] * omega[j]
+    for c1 in range(nc):
+        for c2 in range(nc):
+            acc = 0.0
+            for j in range(n):
+                acc += psi[c1, j] * psi[c2, j] / khat[j]
+            g[c1, c2] = acc
+    return ikhat, zw2, g
+
+
+@jit(inline=True)
+def newmark_arrays(n, nc, nf):
+    """Work arrays of a Newmark run: modal, per contact (zeroed) and per floor (zeroed).
+
+    ``a``, ``qn``, ``vn``, ``an``, ``qs`` (modal: accelerations, end of step, predictor);
+    ``fc``, ``fn`` (contact forces at the start and end of a step), ``zhd`` (episode damping),
+    ``dpen``, ``ddpen`` (penetrations and rates), ``was_in``, ``pending`` (flags), ``jac``,
+    ``rhs``, ``dstar``, ``dtry`` (the contact solve's); ``peaks`` (floor displacements).
+    """
+    return (np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n),
+            np.zeros(nc), np.zeros(nc), np.zeros(nc), np.zeros(nc), np.zeros(nc),
+            np.zeros(nc, dtype=np.bool_), np.zeros(nc, dtype=np.bool_), np.zeros((nc, nc)),
+            np.zeros(nc), np.zeros(nc), np.zeros(nc), np.zeros(nf))  # fmt: skip
+
+
+@jit(inline=True)
+def initial_contacts(model, psi, q, v, gap, beta, cd, zhd, dpen, ddpen, fc, was_in):
+    """Penetrations, their rates, forces and contact flags of the initial state."""
+    for c in range(gap.size):
+        dpen[c] = rowdot(psi, c, q) - gap[c]
+        ddpen[c] = rowdot(psi, c, v)
+        fc[c] = force(model, dpen[c], ddpen[c], beta[c], cd[c], zhd[c],
+                      phase_of(dpen[c], ddpen[c]))  # fmt: skip
+        was_in[c] = dpen[c] > 0.0
+
+
+@jit(inline=True)
+def newmark_solve(model, method, q, v, a, ag1, gamma, zw2, ikhat, c2h, c4h, c4h2, load, loaded,
+                  psi, gap, g, dpen, ddpen, fc, beta, cd, zhd, qs, dstar, dtry, fn, jac, rhs,
+                  qn, settings, xi, meff, was_in, ep):  # fmt: skip
+    """Modal coordinates ``qn`` at the end of a Newmark step, the contact forces ``fn`` in it.
+
+    The predictor without contact (with the modal ``load`` added where ``loaded``), then the
+    contact forces (:func:`implicit_forces`) and their correction.  With restitution set per
+    impact (``settings.rest_v``), an episode that starts in the step takes its damping from
+    the rate before it (``ep``: the episode table).  Returns whether the contact solve
+    converged.
+    """
+    n = q.size
+    for j in range(n):
+        phat = -gamma[j] * ag1 + (c4h2 * q[j] + c4h * v[j] + a[j])
+        phat += zw2[j] * (c2h * q[j] + v[j])
+        if loaded:
+            phat += load[j]
+        qs[j] = phat * ikhat[j]
+    per_impact = settings.rest_v.size > 0
+    for c in range(gap.size):
+        dstar[c] = rowdot(psi, c, qs) - gap[c]
+        if per_impact and dstar[c] > 0.0 and not was_in[c]:
+            cd[c], zhd[c], ep[c, EP_E] = episode_damping(settings, model, settings.relation,
+                                                         xi[c], ddpen[c], beta[c], meff[c],
+                                                         cd[c], zhd[c])  # fmt: skip
+    conv = implicit_forces(model, method, dstar, dtry, dpen, ddpen, g, c2h, fc, beta, cd, zhd,
+                           fn, jac, rhs)  # fmt: skip
+    for j in range(n):
+        corr = 0.0
+        for c in range(gap.size):
+            corr += fn[c] * psi[c, j]
+        qn[j] = qs[j] - corr * ikhat[j]
+    return conv
+
+
+@jit(inline=True)
+def impact_start(settings, xi, beta, meff, cd, zhd):
+    """Episode table, impact-velocity log and peak-force ``e`` of a run (``impact_log``).
+
+    With restitution set per impact (Table 2 at the onset velocity; ``xi`` holds its
+    quantile), the damping before the first onset (a step into contact runs with the damping
+    it starts with) is the range's at the lowest measured velocity.
+    """
+    if settings.rest_v.size > 0:
+        for c in range(xi.size):
+            cd[c], zhd[c], _ = episode_damping(settings, settings.model, settings.relation,
+                                               xi[c], settings.rest_v[0], beta[c], meff[c],
+                                               cd[c], zhd[c])  # fmt: skip
+    return impact_log(xi.size)
+
+
+@jit(inline=True)
+def newmark_rates(q, v, a, qn, c2h, c4h, c4h2, vn, an):
+    """Velocities ``vn`` and accelerations ``an`` at the end of a Newmark step."""
+    for j in range(q.size):
+        dq = qn[j] - q[j]
+        vn[j] = c2h * dq - v[j]
+        an[j] = c4h2 * dq - c4h * v[j] - a[j]
+
+
+@jit(inline=True)
+def contact_events(model, relation, method, psi, qe, ve, gap, xi, beta, cd, zhd, was_in, pending,
+                   dpen, ddpen, fn, cout, settings, meff, ep, vlog, nlog):  # fmt: skip
+    """Contact bookkeeping at the end of a step (coordinates ``qe``, velocities ``ve``).
+
+    Opens an episode where a contact closes (its damping set: per impact from the rate at the
+    last step point before contact where ``settings.rest_v`` is set), counts it as an impact
+    once it is deep enough (its onset velocity logged), keeps the penetrations, the lagged
+    force of ``newmark-explicit`` and the deepest penetration.  Returns the impact-velocity
+    log and its count.
+    """
+    per_impact = settings.rest_v.size > 0
+    for c in range(gap.size):
+        d1 = rowdot(psi, c, qe) - gap[c]
+        dd1 = rowdot(psi, c, ve)
+        if d1 > 0.0 and not was_in[c]:
+            pending[c] = True  # an episode: an impact once it is deep enough
+            ep[c, EP_V0] = dd1
+            if per_impact:
+                # the prior-impact velocity: the rate at the last step point before contact
+                ep[c, EP_V0] = ddpen[c]
+                cd[c], zhd[c], ep[c, EP_E] = episode_damping(settings, model, relation, xi[c],
+                                                             ddpen[c], beta[c], meff[c], cd[c],
+                                                             zhd[c])  # fmt: skip
+            else:
+                zhd[c] = episode_zeta(model, relation, xi[c], dd1, zhd[c])
+        if pending[c] and d1 > IMPACT_MIN_PENETRATION_M:
+            cout[c, C_IMPACTS] += 1.0
+            pending[c] = False
+            vlog, nlog = log_impact(vlog, nlog, ep[c, EP_V0])
+            cout[c, C_MAX_IMPACT_VELOCITY] = max(cout[c, C_MAX_IMPACT_VELOCITY],
+                                                 ep[c, EP_V0])  # fmt: skip
+        was_in[c] = d1 > 0.0
+        dpen[c] = d1
+        ddpen[c] = dd1
+        if method == NEWMARK_EXPLICIT:
+            # the force the next (lagged) step uses, from this state
+            fn[c] = force(model, d1, dd1, beta[c], cd[c], zhd[c], phase_of(d1, dd1))
+        if d1 > cout[c, C_MAX_PENETRATION]:
+            cout[c, C_MAX_PENETRATION] = d1
+    return vlog, nlog
+
+
+@jit(inline=True)
+def contact_power(fn, ddpen):
+    """Power of the contact forces ``sum_c F_c d_dot_c`` [W]."""
+    pc = 0.0
+    for c in range(fn.size):
+        pc += fn[c] * ddpen[c]
+    return pc
+
+
+@jit(inline=True)
+def impulses(h, fc, fn, t1, cout, peak_f, peak_t, ep, peak_e):
+    """Add a step's impulses (trapezoidal) and peak forces; returns the peak and its time.
+
+    ``peak_e[0]`` takes the restitution of the episode of the peak force (``ep``).
+    """
+    for c in range(fn.size):
+        cout[c, C_IMPULSE] += 0.5 * h * (fc[c] + fn[c])
+        if fn[c] > cout[c, C_PEAK_FORCE]:
+            cout[c, C_PEAK_FORCE] = fn[c]
+        if fn[c] > peak_f:
+            peak_f = fn[c]
+            peak_t = t1
+            peak_e[0] = ep[c, EP_E]
+    return peak_f, peak_t
+
+
+@jit(inline=True)
+def advance(q, v, a, qn, vn, an, fc, fn):
+    """The end of the step becomes its start."""
+    for j in range(q.size):
+        q[j] = qn[j]
+        v[j] = vn[j]
+        a[j] = an[j]
+    for c in range(fc.size):
+        fc[c] = fn[c]
+
+
+@jit(inline=True)
+def diverged(phi, q, peaks):
+    """Update the floors' peak displacements; True where one passes the divergence limit."""
+    bad = False
+    for f in range(peaks.size):
+        x = abs(rowdot(phi, f, q))
+        if not x < DIVERGENCE_LIMIT_M:  # also true for NaN
+            bad = True
+        elif x > peaks[f]:
+            peaks[f] = x
+    return bad
+
+
+@jit(inline=True)
+def final_contacts(model, dpen, beta):
+    """Energy stored in the contacts still closed at the end, and their phase flags."""
+    stored_energy = 0.0
+    phase = np.zeros(dpen.size, dtype=np.int64)
+    for c in range(dpen.size):
+        if dpen[c] > 0.0:
+            stored_energy += stored(model, dpen[c], beta[c])
+            phase[c] = 1
+    return stored_energy, phase
+
+
 @jit
 def fixed(
     ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi, settings,
@@ -146,85 +371,34 @@ def fixed(
     n, nc, nf, npts, m_sub, h, cd = run_sizes(ag, dt_rec, phi, gap, meff, beta, xi, settings, q)
     n_steps = (npts - 1) * m_sub
     store = hx.shape[0] > 0
-    a = np.empty(n)
-    qn = np.empty(n)
-    vn = np.empty(n)
-    an = np.empty(n)
-    qs = np.empty(n)
+    (a, qn, vn, an, qs, fc, fn, zhd, dpen, ddpen, was_in, pending, jac, rhs, dstar, dtry,
+     peaks) = newmark_arrays(n, nc, nf)  # fmt: skip
     qprev = np.empty(n)
-    khat = np.empty(n)
-    fc = np.zeros(nc)
-    fn = np.zeros(nc)
     fprev = np.zeros(nc)
-    zhd = np.zeros(nc)
-    # restitution set per impact (Table 2 at the onset velocity; ``xi`` holds its quantile)
-    per_impact = settings.rest_v.size > 0
-    ep, vlog, peak_e = impact_log(nc)
+    ep, vlog, peak_e = impact_start(settings, xi, beta, meff, cd, zhd)
     nlog = 0
-    if per_impact:
-        # before the first onset (a step into contact runs with the damping it starts with):
-        # the range at the lowest measured velocity
-        for c in range(nc):
-            cd[c], zhd[c], _ = episode_damping(settings, model, relation, xi[c],
-                                               settings.rest_v[0], beta[c], meff[c], cd[c],
-                                               zhd[c])  # fmt: skip
-    dpen = np.zeros(nc)
-    ddpen = np.zeros(nc)
-    was_in = np.zeros(nc, dtype=np.bool_)
-    pending = np.zeros(nc, dtype=np.bool_)  # an episode not yet counted as an impact
-    g = np.zeros((nc, nc))
-    jac = np.zeros((nc, nc))
-    rhs = np.zeros(nc)
-    dstar = np.zeros(nc)
-    dtry = np.zeros(nc)
-    peaks = np.zeros(nf)
     e0 = mechanical_energy(q, v, omega)
     reset_contacts(cout)
     c2h = 2.0 / h
     c4h = 4.0 / h
     c4h2 = 4.0 / (h * h)
-    ikhat = np.empty(n)
-    zw2 = np.empty(n)
-    for j in range(n):
-        khat[j] = omega[j] * omega[j] + 4.0 * zeta[j] * omega[j] / h + 4.0 / (h * h)
-        ikhat[j] = 1.0 / khat[j]
-        zw2[j] = 2.0 * zeta[j] * omega[j]
-    for c1 in range(nc):
-        for c2 in range(nc):
-            acc = 0.0
-            for j in range(n):
-                acc += psi[c1, j] * psi[c2, j] / khat[j]
-            g[c1, c2] = acc
+    ikhat, zw2, g = newmark_matrices(omega, zeta, h, psi)
     # initial contact state and accelerations
-    for c in range(nc):
-        dpen[c] = rowdot(psi, c, q) - gap[c]
-        ddpen[c] = rowdot(psi, c, v)
-        fc[c] = force(model, dpen[c], ddpen[c], beta[c], cd[c], zhd[c],
-                      phase_of(dpen[c], ddpen[c]))  # fmt: skip
-        was_in[c] = dpen[c] > 0.0
+    initial_contacts(model, psi, q, v, gap, beta, cd, zhd, dpen, ddpen, fc, was_in)
     accel(q, v, ag[0], omega, zeta, gamma, psi, fc, a)
     if method == CENTRAL_DIFFERENCE:
         for j in range(n):
             qprev[j] = q[j] - h * v[j] + 0.5 * h * h * a[j]
-    e_in = 0.0
-    e_d = 0.0
-    w_c = 0.0
+    e_in = e_d = w_c = 0.0  # input, damping and contact work
     peak_f = 0.0
     peak_t = 0.0
     status = STATUS_OK
     pin_prev, pd_prev = powers(v, ag[0], omega, zeta, gamma)
-    pc_prev = 0.0
-    for c in range(nc):
-        pc_prev += fc[c] * ddpen[c]
+    pc_prev = contact_power(fc, ddpen)
     steps = 0
     inv_m = 1.0 / m_sub
-    i = 0
-    k = -1
     for step in range(n_steps):
-        k += 1
-        if k == m_sub:
-            k = 0
-            i += 1
+        i, k = divmod(step, m_sub)  # record interval, sub-step in it
         if store and k == 0:
             for f in range(nf):
                 hx[i, f] = rowdot(phi, f, q)
@@ -280,88 +454,30 @@ def fixed(
                 fn[c] = fc[c]
         else:
             # Newmark average acceleration, modal predictor without contact at n+1
-            for j in range(n):
-                phat = -gamma[j] * ag1 + (c4h2 * q[j] + c4h * v[j] + a[j])
-                phat += zw2[j] * (c2h * q[j] + v[j])
-                qs[j] = phat * ikhat[j]
-            for c in range(nc):
-                dstar[c] = rowdot(psi, c, qs) - gap[c]
-                if per_impact and dstar[c] > 0.0 and not was_in[c]:
-                    # an episode starts in this step: its damping from the rate before it
-                    cd[c], zhd[c], ep[c, EP_E] = episode_damping(settings, model, relation, xi[c],
-                                                                 ddpen[c], beta[c], meff[c], cd[c],
-                                                                 zhd[c])  # fmt: skip
-            if not _implicit_forces(model, method, dstar, dtry, dpen, ddpen, g, c2h, fc, beta,
-                                    cd, zhd, fn, jac, rhs):  # fmt: skip
+            if not newmark_solve(model, method, q, v, a, ag1, gamma, zw2, ikhat, c2h, c4h, c4h2,
+                                 qs, False, psi, gap, g, dpen, ddpen, fc, beta, cd, zhd, qs,
+                                 dstar, dtry, fn, jac, rhs, qn, settings, xi, meff, was_in,
+                                 ep):  # fmt: skip
                 status = STATUS_NOT_CONVERGED
-            for j in range(n):
-                corr = 0.0
-                for c in range(nc):
-                    corr += fn[c] * psi[c, j]
-                qn[j] = qs[j] - corr * ikhat[j]
-                dq = qn[j] - q[j]
-                vn[j] = c2h * dq - v[j]
-                an[j] = c4h2 * dq - c4h * v[j] - a[j]
+            newmark_rates(q, v, a, qn, c2h, c4h, c4h2, vn, an)
         # contact bookkeeping at n+1
-        for c in range(nc):
-            d1 = rowdot(psi, c, qn if method != CENTRAL_DIFFERENCE else q) - gap[c]
-            dd1 = rowdot(psi, c, vn)
-            if d1 > 0.0 and not was_in[c]:
-                pending[c] = True  # an episode: an impact once it is deep enough
-                ep[c, EP_V0] = dd1
-                if per_impact:
-                    # the prior-impact velocity: the rate at the last step point before contact
-                    ep[c, EP_V0] = ddpen[c]
-                    cd[c], zhd[c], ep[c, EP_E] = episode_damping(settings, model, relation, xi[c],
-                                                                 ddpen[c], beta[c], meff[c], cd[c],
-                                                                 zhd[c])  # fmt: skip
-                else:
-                    zhd[c] = episode_zeta(model, relation, xi[c], dd1, zhd[c])
-            if pending[c] and d1 > IMPACT_MIN_PENETRATION_M:
-                cout[c, C_IMPACTS] += 1.0
-                pending[c] = False
-                vlog, nlog = log_impact(vlog, nlog, ep[c, EP_V0])
-                cout[c, C_MAX_IMPACT_VELOCITY] = max(cout[c, C_MAX_IMPACT_VELOCITY],
-                                                     ep[c, EP_V0])  # fmt: skip
-            was_in[c] = d1 > 0.0
-            dpen[c] = d1
-            ddpen[c] = dd1
-            if method == NEWMARK_EXPLICIT:
-                # the force the next (lagged) step uses, from this state
-                fn[c] = force(model, d1, dd1, beta[c], cd[c], zhd[c], phase_of(d1, dd1))
-            if d1 > cout[c, C_MAX_PENETRATION]:
-                cout[c, C_MAX_PENETRATION] = d1
+        vlog, nlog = contact_events(model, relation, method, psi,
+                                    qn if method != CENTRAL_DIFFERENCE else q, vn, gap, xi, beta,
+                                    cd, zhd, was_in, pending, dpen, ddpen, fn, cout, settings,
+                                    meff, ep, vlog, nlog)  # fmt: skip
         if method != CENTRAL_DIFFERENCE:
             # energies (trapezoidal); contact work with the force acting over the step
             pin1, pd1 = powers(vn, ag1, omega, zeta, gamma)
-            pc1 = 0.0
-            for c in range(nc):
-                pc1 += fn[c] * ddpen[c]
+            pc1 = contact_power(fn, ddpen)
             e_in, e_d, w_c = trapezoid(h, e_in, e_d, w_c, pin_prev, pd_prev, pc_prev,
                                        pin1, pd1, pc1)  # fmt: skip
-            for c in range(nc):
-                cout[c, C_IMPULSE] += 0.5 * h * (fc[c] + fn[c])
-                if fn[c] > cout[c, C_PEAK_FORCE]:
-                    cout[c, C_PEAK_FORCE] = fn[c]
-                if fn[c] > peak_f:
-                    peak_f = fn[c]
-                    peak_t = t1
-                    peak_e[0] = ep[c, EP_E]
+            peak_f, peak_t = impulses(h, fc, fn, t1, cout, peak_f, peak_t, ep, peak_e)
             pin_prev, pd_prev, pc_prev = pin1, pd1, pc1
-            for j in range(n):
-                q[j] = qn[j]
-                v[j] = vn[j]
-                a[j] = an[j]
-        for c in range(nc):
-            fc[c] = fn[c]
-        bad = False
-        for f in range(nf):
-            x = abs(rowdot(phi, f, q))
-            if not x < DIVERGENCE_LIMIT_M:  # also true for NaN
-                bad = True
-            elif x > peaks[f]:
-                peaks[f] = x
-        if bad:
+            advance(q, v, a, qn, vn, an, fc, fn)
+        else:
+            for c in range(nc):
+                fc[c] = fn[c]
+        if diverged(phi, q, peaks):
             status = STATUS_UNSTABLE
             break
     if store and status != STATUS_UNSTABLE:
@@ -371,18 +487,13 @@ def fixed(
         for c in range(nc):
             hd[i, c] = dpen[c]
             hf[i, c] = fc[c]
-    stored_energy = 0.0
-    phase = np.zeros(nc, dtype=np.int64)
     if method == CENTRAL_DIFFERENCE:
         # energies were integrated up to the last step n with its central velocity
         for j in range(n):
             q[j] = qprev[j]
         for c in range(nc):
             dpen[c] = rowdot(psi, c, q) - gap[c]
-    for c in range(nc):
-        if dpen[c] > 0.0:
-            stored_energy += stored(model, dpen[c], beta[c])
-            phase[c] = 1
+    stored_energy, phase = final_contacts(model, dpen, beta)
     finish(out, cout, peaks, side, phase, q, v, omega, e0, e_in, e_d, w_c, stored_energy,
            peak_f, peak_t, steps, status)  # fmt: skip
     finish_impacts(out, cout, vlog, nlog, peak_e[0])

@@ -29,16 +29,22 @@ import math
 import numpy as np
 
 from pound_mc._jit import jit
-from pound_mc.integrators.fixed import NEWMARK_EXPLICIT, _implicit_forces
-from pound_mc.integrators.laws import episode_zeta, force, phase_of, stored
+from pound_mc.integrators.fixed import (
+    advance,
+    contact_events,
+    contact_power,
+    diverged,
+    final_contacts,
+    impact_start,
+    impulses,
+    initial_contacts,
+    newmark_arrays,
+    newmark_matrices,
+    newmark_rates,
+    newmark_solve,
+)
 from pound_mc.integrators.outputs import (
-    C_IMPACTS,
-    C_IMPULSE,
-    C_MAX_PENETRATION,
-    C_PEAK_FORCE,
-    DIVERGENCE_LIMIT_M,
     HYSTERETIC_ENERGY,
-    IMPACT_MIN_PENETRATION_M,
     PEAK_DRIFT_LEFT,
     PEAK_DUCTILITY_LEFT,
     PEAK_FLOOR_ACCEL_LEFT,
@@ -49,6 +55,7 @@ from pound_mc.integrators.outputs import (
     STATUS_OK,
     STATUS_UNSTABLE,
     finish,
+    finish_impacts,
     reset_contacts,
 )
 from pound_mc.integrators.toolkit import (
@@ -110,13 +117,18 @@ def _nanmax(a, b):
 
 
 @jit
-def storey_outputs(out, store, peak_u, drift, peak_acc, side_f, e_h):
+def storey_outputs(out, store, peak_u, drift, peak_acc, side_f, e_h, sout):
     """Fill the inelastic output slots: ductility, drift ratios, floor accelerations, energy.
 
     Ductility is NaN for a building that cannot yield, drift ratios for one without heights;
-    every slot is NaN for a run that is not ok.
+    every slot is NaN for a run that is not ok.  ``sout`` (storeys x 2, or no rows) takes each
+    storey's peak |drift| and its drift at the end of the run [m].
     """
-    if out[STATUS] != STATUS_OK:
+    ok = out[STATUS] == STATUS_OK
+    for s in range(sout.shape[0]):
+        sout[s, 0] = peak_u[s] if ok else np.nan
+        sout[s, 1] = drift[s] if ok else np.nan
+    if not ok:
         for k in range(PEAK_DUCTILITY_LEFT, PEAK_FLOOR_ACCEL_RIGHT + 1):
             out[k] = np.nan
         return
@@ -147,15 +159,16 @@ def storey_outputs(out, store, peak_u, drift, peak_acc, side_f, e_h):
 @jit
 def newmark_hysteretic(
     ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi, settings,
-    q, v, out, cout, dmat, store,
+    q, v, out, cout, dmat, store, sout,
 ):  # fmt: skip
     """``newmark`` / ``newmark-explicit`` with bilinear storeys (module docstring).
 
     ``dmat``: drift rows of the storeys in modal coordinates (storeys x modes); ``store``: the
     storey table (columns ``S_*``: stiffness [N/m], yield drift [m] (inf: elastic), post-yield
-    ratio, height [m] (NaN: none), building 0 left / 1 right).  Longer than 150 lines because it
-    is the Newmark loop of :func:`~pound_mc.integrators.fixed.fixed` (same arithmetic, so that
-    storeys that never yield give its results bitwise) with the plastic fixed point inside.
+    ratio, height [m] (NaN: none), building 0 left / 1 right); ``sout``: the storeys' peak
+    and final drifts (:func:`storey_outputs`).  The step is made of the Newmark
+    pieces of :mod:`pound_mc.integrators.fixed` (same arithmetic, so that storeys that never
+    yield give its results bitwise) with the plastic fixed point around them.
     """
     model = settings.model
     relation = settings.relation
@@ -163,25 +176,8 @@ def newmark_hysteretic(
     n, nc, nf, npts, m_sub, h, cd = run_sizes(ag, dt_rec, phi, gap, meff, beta, xi, settings, q)
     ns = store.shape[0]
     n_steps = (npts - 1) * m_sub
-    a = np.empty(n)
-    qn = np.empty(n)
-    vn = np.empty(n)
-    an = np.empty(n)
-    qs = np.empty(n)
-    khat = np.empty(n)
-    fc = np.zeros(nc)
-    fn = np.zeros(nc)
-    zhd = np.zeros(nc)
-    dpen = np.zeros(nc)
-    ddpen = np.zeros(nc)
-    was_in = np.zeros(nc, dtype=np.bool_)
-    pending = np.zeros(nc, dtype=np.bool_)
-    g = np.zeros((nc, nc))
-    jac = np.zeros((nc, nc))
-    rhs = np.zeros(nc)
-    dstar = np.zeros(nc)
-    dtry = np.zeros(nc)
-    peaks = np.zeros(nf)
+    (a, qn, vn, an, qs, fc, fn, zhd, dpen, ddpen, was_in, pending, jac, rhs, dstar, dtry,
+     peaks) = newmark_arrays(n, nc, nf)  # fmt: skip
     up_n = np.zeros(ns)
     up = np.zeros(ns)
     drift = np.empty(ns)
@@ -193,47 +189,24 @@ def newmark_hysteretic(
     c2h = 2.0 / h
     c4h = 4.0 / h
     c4h2 = 4.0 / (h * h)
-    ikhat = np.empty(n)
-    zw2 = np.empty(n)
-    for j in range(n):
-        khat[j] = omega[j] * omega[j] + 4.0 * zeta[j] * omega[j] / h + 4.0 / (h * h)
-        ikhat[j] = 1.0 / khat[j]
-        zw2[j] = 2.0 * zeta[j] * omega[j]
-    for c1 in range(nc):
-        for c2 in range(nc):
-            acc = 0.0
-            for j in range(n):
-                acc += psi[c1, j] * psi[c2, j] / khat[j]
-            g[c1, c2] = acc
-    for c in range(nc):
-        dpen[c] = rowdot(psi, c, q) - gap[c]
-        ddpen[c] = rowdot(psi, c, v)
-        fc[c] = force(model, dpen[c], ddpen[c], beta[c], cd[c], zhd[c],
-                      phase_of(dpen[c], ddpen[c]))  # fmt: skip
-        was_in[c] = dpen[c] > 0.0
+    ikhat, zw2, g = newmark_matrices(omega, zeta, h, psi)
+    ep, vlog, peak_e = impact_start(settings, xi, beta, meff, cd, zhd)
+    nlog = 0
+    initial_contacts(model, psi, q, v, gap, beta, cd, zhd, dpen, ddpen, fc, was_in)
     accel(q, v, ag[0], omega, zeta, gamma, psi, fc, a)
-    e_in = 0.0
-    e_d = 0.0
-    w_c = 0.0
+    e_in = e_d = w_c = 0.0  # input, damping and contact work
     w_p = 0.0  # work of the plastic load
     e_h = 0.0  # hysteretic dissipation
     peak_f = 0.0
     peak_t = 0.0
     status = STATUS_OK
     pin_prev, pd_prev = powers(v, ag[0], omega, zeta, gamma)
-    pc_prev = 0.0
-    for c in range(nc):
-        pc_prev += fc[c] * ddpen[c]
+    pc_prev = contact_power(fc, ddpen)
     pp_prev = 0.0
     steps = 0
     inv_m = 1.0 / m_sub
-    i = 0
-    k = -1
     for step in range(n_steps):
-        k += 1
-        if k == m_sub:
-            k = 0
-            i += 1
+        i, k = divmod(step, m_sub)  # record interval, sub-step in it
         t1 = (step + 1) * h
         ag1 = ag[i] + (ag[i + 1] - ag[i]) * ((k + 1) * inv_m)
         steps += 1
@@ -241,20 +214,10 @@ def newmark_hysteretic(
             up[s] = up_n[s]
         for _it in range(MAX_PLASTIC_ITERATIONS + 1):
             plastic_load(dmat, store, up, pl)
-            for j in range(n):
-                phat = -gamma[j] * ag1 + (c4h2 * q[j] + c4h * v[j] + a[j])
-                phat += zw2[j] * (c2h * q[j] + v[j])
-                phat += pl[j]
-                qs[j] = phat * ikhat[j]
-            for c in range(nc):
-                dstar[c] = rowdot(psi, c, qs) - gap[c]
-            conv = _implicit_forces(model, method, dstar, dtry, dpen, ddpen, g, c2h, fc, beta,
-                                    cd, zhd, fn, jac, rhs)  # fmt: skip
-            for j in range(n):
-                corr = 0.0
-                for c in range(nc):
-                    corr += fn[c] * psi[c, j]
-                qn[j] = qs[j] - corr * ikhat[j]
+            conv = newmark_solve(model, method, q, v, a, ag1, gamma, zw2, ikhat, c2h, c4h, c4h2,
+                                 pl, True, psi, gap, g, dpen, ddpen, fc, beta, cd, zhd, qs,
+                                 dstar, dtry, fn, jac, rhs, qn, settings, xi, meff, was_in,
+                                 ep)  # fmt: skip
             for s in range(ns):
                 drift[s] = rowdot(dmat, s, qn)
             if return_map(drift, store, up_n, up) <= PLASTIC_TOLERANCE:
@@ -263,10 +226,7 @@ def newmark_hysteretic(
                 status = STATUS_NOT_CONVERGED
         if not conv:
             status = STATUS_NOT_CONVERGED
-        for j in range(n):
-            dq = qn[j] - q[j]
-            vn[j] = c2h * dq - v[j]
-            an[j] = c4h2 * dq - c4h * v[j] - a[j]
+        newmark_rates(q, v, a, qn, c2h, c4h, c4h2, vn, an)
         for s in range(ns):
             z = drift[s] - up[s]
             e_h += (1.0 - store[s, S_ALPHA]) * store[s, S_K] * z * (up[s] - up_n[s])
@@ -277,63 +237,26 @@ def newmark_hysteretic(
             xa = abs(rowdot(phi, f, an) + ag1)
             if xa > peak_acc[f]:
                 peak_acc[f] = xa
-        for c in range(nc):
-            d1 = rowdot(psi, c, qn) - gap[c]
-            dd1 = rowdot(psi, c, vn)
-            if d1 > 0.0 and not was_in[c]:
-                pending[c] = True
-                zhd[c] = episode_zeta(model, relation, xi[c], dd1, zhd[c])
-            if pending[c] and d1 > IMPACT_MIN_PENETRATION_M:
-                cout[c, C_IMPACTS] += 1.0
-                pending[c] = False
-            was_in[c] = d1 > 0.0
-            dpen[c] = d1
-            ddpen[c] = dd1
-            if method == NEWMARK_EXPLICIT:
-                fn[c] = force(model, d1, dd1, beta[c], cd[c], zhd[c], phase_of(d1, dd1))
-            if d1 > cout[c, C_MAX_PENETRATION]:
-                cout[c, C_MAX_PENETRATION] = d1
+        vlog, nlog = contact_events(model, relation, method, psi, qn, vn, gap, xi, beta, cd,
+                                    zhd, was_in, pending, dpen, ddpen, fn, cout, settings, meff,
+                                    ep, vlog, nlog)  # fmt: skip
         pin1, pd1 = powers(vn, ag1, omega, zeta, gamma)
-        pc1 = 0.0
-        for c in range(nc):
-            pc1 += fn[c] * ddpen[c]
+        pc1 = contact_power(fn, ddpen)
         pp1 = 0.0
         for j in range(n):
             pp1 += pl[j] * vn[j]
         e_in, e_d, w_c = trapezoid(h, e_in, e_d, w_c, pin_prev, pd_prev, pc_prev,
                                    pin1, pd1, pc1)  # fmt: skip
         w_p += 0.5 * h * (pp_prev + pp1)
-        for c in range(nc):
-            cout[c, C_IMPULSE] += 0.5 * h * (fc[c] + fn[c])
-            if fn[c] > cout[c, C_PEAK_FORCE]:
-                cout[c, C_PEAK_FORCE] = fn[c]
-            if fn[c] > peak_f:
-                peak_f = fn[c]
-                peak_t = t1
+        peak_f, peak_t = impulses(h, fc, fn, t1, cout, peak_f, peak_t, ep, peak_e)
         pin_prev, pd_prev, pc_prev, pp_prev = pin1, pd1, pc1, pp1
-        for j in range(n):
-            q[j] = qn[j]
-            v[j] = vn[j]
-            a[j] = an[j]
-        for c in range(nc):
-            fc[c] = fn[c]
-        bad = False
-        for f in range(nf):
-            x = abs(rowdot(phi, f, q))
-            if not x < DIVERGENCE_LIMIT_M:
-                bad = True
-            elif x > peaks[f]:
-                peaks[f] = x
-        if bad:
+        advance(q, v, a, qn, vn, an, fc, fn)
+        if diverged(phi, q, peaks):
             status = STATUS_UNSTABLE
             break
-    stored_energy = 0.0
-    phase = np.zeros(nc, dtype=np.int64)
-    for c in range(nc):
-        if dpen[c] > 0.0:
-            stored_energy += stored(model, dpen[c], beta[c])
-            phase[c] = 1
+    stored_energy, phase = final_contacts(model, dpen, beta)
     # the plastic load's work enters the balance as a negative damping work
     finish(out, cout, peaks, side, phase, q, v, omega, e0, e_in, e_d - w_p, w_c, stored_energy,
            peak_f, peak_t, steps, status)  # fmt: skip
-    storey_outputs(out, store, peak_u, drift, peak_acc, side, e_h)
+    finish_impacts(out, cout, vlog, nlog, peak_e[0])
+    storey_outputs(out, store, peak_u, drift, peak_acc, side, e_h, sout)

@@ -30,7 +30,15 @@ from pound_mc.physics.structures import (
 )
 from pound_mc.scene import schema
 
-__all__ = ["Scene", "SimulationResult", "scene_from_dict", "load_scene", "simulate"]
+__all__ = [
+    "Scene",
+    "SimulationResult",
+    "scene_from_dict",
+    "load_scene",
+    "simulate",
+    "STOREY_KEYS",
+    "storey_results",
+]
 
 #: Tables a study adds to a scene (checked by :mod:`pound_mc.study.definition`).
 _STUDY_TABLES = {"study", "grid", "sampling", "records"}
@@ -273,6 +281,12 @@ class SimulationResult:
         Per-contact arrays (``peak_force``, ``impacts``, ``max_penetration``, ``impulse``).
     time_s, disp_left_m, disp_right_m, penetration_m, force_N : numpy.ndarray or None
         Histories at the record's samples (only with ``history=True``).
+    storeys : dict or None
+        With yielding buildings, per storey (left building's first, bottom to top):
+        ``building`` ("left" / "right"), ``storey`` (1-based within it), ``peak_drift_ratio``
+        and ``residual_drift_ratio`` (|drift| over storey height, NaN without heights),
+        ``peak_ductility`` (peak |drift| over yield drift, NaN for a storey that cannot yield);
+        the scalar outputs ``peak_drift_left`` ... are their maxima over a building's storeys.
     """
 
     outputs: dict[str, float]
@@ -284,6 +298,7 @@ class SimulationResult:
     penetration_m: np.ndarray | None = None
     force_N: np.ndarray | None = None
     extra: dict = field(default_factory=dict)
+    storeys: dict | None = None
 
     @property
     def status(self) -> str:
@@ -342,6 +357,24 @@ class SimulationResult:
                 for k, c in enumerate(self.scene.contacts)
             ],
             **inelastic,
+            **(
+                {
+                    "storeys": [
+                        {
+                            "building": str(b),
+                            "storey": int(n),
+                            "peak_drift_ratio": num(d),
+                            "peak_ductility": num(mu),
+                            "residual_drift_ratio": num(r),
+                        }
+                        for b, n, d, mu, r in zip(
+                            *(self.storeys[k] for k in STOREY_KEYS), strict=True
+                        )
+                    ]
+                }
+                if self.storeys is not None and self.scene.inelastic
+                else {}
+            ),
         }
 
 
@@ -564,6 +597,32 @@ def with_tail(acc, dt_rec: float, tail_s: float) -> np.ndarray:
     return np.r_[np.asarray(acc, dtype=float), np.zeros(n_tail)]
 
 
+#: Keys of :attr:`SimulationResult.storeys`, in the order ``simulate --json`` lists them.
+STOREY_KEYS = ("building", "storey", "peak_drift_ratio", "peak_ductility", "residual_drift_ratio")
+
+
+def storey_results(table: np.ndarray, storey_out: np.ndarray) -> dict[str, np.ndarray]:
+    """Per-storey outputs (:attr:`SimulationResult.storeys`) from the storey table.
+
+    ``table``: :meth:`Scene.storey_arrays`'s (stiffness, yield drift, post-yield ratio,
+    height, building 0/1 per row); ``storey_out``: the kernel's peak and final drifts [m].
+    """
+    side = table[:, 4].astype(int)
+    number = np.empty(side.size, dtype=np.int32)
+    for b in (0, 1):
+        number[side == b] = np.arange(1, np.count_nonzero(side == b) + 1)
+    uy = table[:, 1]
+    with np.errstate(invalid="ignore"):
+        ductility = np.where(np.isfinite(uy), storey_out[:, 0] / uy, np.nan)
+    return {
+        "building": np.where(side == 0, "left", "right"),
+        "storey": number,
+        "peak_drift_ratio": storey_out[:, 0] / table[:, 3],
+        "peak_ductility": ductility,
+        "residual_drift_ratio": np.abs(storey_out[:, 1]) / table[:, 3],
+    }
+
+
 def load_scene(path: str | Path) -> Scene:
     """Read and validate a scene file (TOML)."""
     path = Path(path)
@@ -616,8 +675,10 @@ def simulate(
     arrays = scene.kernel_arrays()
     m = method or scene.method
     storeys = scene.storey_arrays()
+    storey_out = None
     if storeys is not None:
         acc = with_tail(acc, dt_rec, scene.tail_s)
+        storey_out = np.empty((storeys[1].shape[0], 2))
     outputs, contacts, hist = run_kernel(
         acc,
         dt_rec,
@@ -630,12 +691,15 @@ def simulate(
         history=history,
         storeys=storeys,
         restitution=scene.restitution_rule(),
+        storey_out=storey_out,
     )
     if m != scene.method or dt_s or substeps:
         scene = replace(
             scene, method=m, dt_s=dt_s or scene.dt_s, substeps=substeps or scene.substeps
         )
     res = SimulationResult(outputs, contacts, scene)
+    if storey_out is not None:
+        res.storeys = storey_results(np.asarray(storeys[1], dtype=float), storey_out)
     if hist is not None:
         hx, hd, hf = hist
         fl = scene.left.n_floors

@@ -365,6 +365,7 @@ _HYSTERESIS = Field(
 _POST_YIELD = Field(
     "post_yield_ratio", "number", "Post-yield over elastic storey stiffness alpha (bilinear; "
     "default 0, elastic-perfectly-plastic).", minimum=0.0, maximum=1.0, exclusive_maximum=True,
+    varied=True,
 )  # fmt: skip
 
 SDOF = Table(
@@ -384,7 +385,7 @@ SDOF = Table(
               "building's floors.", unit="m", minimum=0.0, exclusive_minimum=True),
         _HYSTERESIS,
         Field("yield_disp_m", "number", "Displacement at yield (required for bilinear).",
-              unit="m", minimum=0.0, exclusive_minimum=True),
+              unit="m", minimum=0.0, exclusive_minimum=True, varied=True),
         _POST_YIELD,
     ),
     variant="model = 'sdof'",
@@ -393,16 +394,17 @@ SDOF = Table(
 SHEAR = Table(
     "shear",
     "A shear building (`[left]` or `[right]` with `model = \"shear\"`): storey lists bottom to "
-    "top, of equal length; floors of the two buildings at equal height can pound.  Its modes "
-    "are computed once per study, so a study varies only `contact.*` keys and "
-    "`integrator.dt_s` with it.",
+    "top, of equal length; floors of the two buildings at equal height can pound.  A study "
+    "may vary its masses, stiffnesses, yield drifts (a number: every storey the same), "
+    "damping ratio and post-yield ratio; its modes are then computed per simulation.",
     (
         Field("model", "string", "Building model.", required=True,
               choices=("sdof", "shear", "wall")),
         Field("storey_mass_kg", "numbers", "Floor masses, bottom to top.", unit="kg",
-              required=True, minimum=0.0, exclusive_minimum=True, maximum=1.0e10),
+              required=True, minimum=0.0, exclusive_minimum=True, maximum=1.0e10, varied=True),
         Field("storey_stiffness_N_per_m", "numbers", "Storey shear stiffnesses, bottom to top.",
-              unit="N/m", required=True, minimum=0.0, exclusive_minimum=True, maximum=1.0e14),
+              unit="N/m", required=True, minimum=0.0, exclusive_minimum=True, maximum=1.0e14,
+              varied=True),
         Field("storey_height_m", "numbers", "Storey heights, bottom to top (floor elevations "
               "are their cumulative sums).", unit="m", required=True, minimum=0.0,
               exclusive_minimum=True),
@@ -410,7 +412,7 @@ SHEAR = Table(
         _HYSTERESIS,
         Field("storey_yield_disp_m", "numbers", "Inter-storey drift at yield, bottom to top, "
               "or one for every storey (required for bilinear).", unit="m", minimum=0.0,
-              exclusive_minimum=True),
+              exclusive_minimum=True, varied=True),
         _POST_YIELD,
     ),
     variant="model = 'shear'",
@@ -504,10 +506,14 @@ SCENE_TABLES = {"record": RECORD, "left": BUILDINGS, "right": BUILDINGS, "contac
 
 
 def varied_keys() -> tuple[str, ...]:
-    """Scene keys a study may vary (``"left.period_s"``): the numeric fields marked ``varied``."""
+    """Scene keys a study may vary (``"left.period_s"``): the numeric fields marked ``varied``.
+
+    A shear building's storey lists are among them: a varied number stands for every storey.
+    """
     out = []
     for side in ("left", "right"):
         out += [f"{side}.{f.name}" for f in SDOF.fields if f.varied]
+        out += [f"{side}.{f.name}" for f in SHEAR.fields if f.varied and f not in SDOF.fields]
     for table in (CONTACT, INTEGRATOR):
         out += [f"{table.name}.{f.name}" for f in table.fields if f.varied]
     return tuple(out)

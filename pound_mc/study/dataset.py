@@ -91,6 +91,22 @@ INELASTIC_VARIABLES = {
     "peak_floor_accel_right": ("m s-2", "peak absolute floor acceleration, right building",
                                "f8"),
 }  # fmt: skip
+#: Per-storey outputs of studies with yielding shear buildings (an extra trailing ``storey``
+#: dimension over the storeys of both buildings, the left building's first; the coordinate
+#: ``storey_building`` says whose): name -> (units, long_name, dtype).  The scalar
+#: ``peak_drift_left`` ... are their maxima over a building's storeys.
+STOREY_VARIABLES = {
+    "storey_peak_drift": ("1", "peak inter-storey drift ratio of the storey", "f8"),
+    "storey_peak_ductility": ("1", "peak storey drift over yield drift of the storey", "f8"),
+    "storey_residual_drift": ("1", "inter-storey drift ratio of the storey after the "
+                              "free-vibration tail", "f8"),
+}  # fmt: skip
+#: Coordinates of the ``storey`` dimension: name -> (units, long_name); text ones have none.
+STOREY_COORDINATES = {
+    "storey": ("1", "storey index over both buildings (left building's first), 1-based"),
+    "storey_building": (None, "building of the storey (left or right)"),
+    "storey_number": ("1", "storey within its building, bottom to top, 1-based"),
+}
 #: Coordinates of the ``contact`` dimension: name -> (units, long_name).
 CONTACT_COORDINATES = {
     "contact": ("1", "contact index (pair of floors at equal height), 1-based"),
@@ -131,6 +147,11 @@ _PARAMETER_ATTRS = {
     "pga_g": ("1", "peak ground acceleration in units of g"),
     "sa_g": ("1", "5 %-damped pseudo-spectral acceleration in units of g"),
     "duration_s": ("s", "record duration kept"),
+    "yield_disp_m": ("m", "displacement at yield"),
+    "post_yield_ratio": ("1", "post-yield over elastic stiffness"),
+    "storey_mass_kg": ("kg", "mass of every floor"),
+    "storey_stiffness_N_per_m": ("N m-1", "stiffness of every storey"),
+    "storey_yield_disp_m": ("m", "inter-storey drift at yield of every storey"),
 }
 
 
@@ -156,11 +177,13 @@ def build_dataset(
         The validated study (axes, names, text, hash, seed).
     results : dict
         Per-simulation outputs, each an array of shape ``study.shape``; the names of
-        :data:`CONTACT_VARIABLES` (optional) of shape ``(*study.shape, n_contacts)``.
+        :data:`CONTACT_VARIABLES` (optional) of shape ``(*study.shape, n_contacts)``, those of
+        :data:`STOREY_VARIABLES` (optional) of shape ``(*study.shape, n_storeys)``.
     parameters : dict
         Contact and sampled parameters: ``{name: (dims, values)}`` (e.g. ``"e": (("sample",),
         array)``); names of :data:`CONTACT_COORDINATES` become coordinates (kept only with
-        the contact variables).
+        the contact variables), as are those of :data:`STOREY_COORDINATES` (kept only with the
+        storey variables).
     provenance : dict, optional
         Extra global attributes.
     """
@@ -193,7 +216,18 @@ def build_dataset(
         units, long_name, dtype = CONTACT_VARIABLES[name]
         values = np.asarray(results[name]).astype(dtype, copy=False)
         data_vars[name] = ((*dims, "contact"), values, {"units": units, "long_name": long_name})
+    per_storey = [name for name in STOREY_VARIABLES if name in results]
+    for name in per_storey:
+        units, long_name, dtype = STOREY_VARIABLES[name]
+        values = np.asarray(results[name]).astype(dtype, copy=False)
+        data_vars[name] = ((*dims, "storey"), values, {"units": units, "long_name": long_name})
     for name, (pdims, values) in parameters.items():
+        if name in STOREY_COORDINATES:
+            if per_storey:
+                units, long_name = STOREY_COORDINATES[name]
+                attrs = {"long_name": long_name, **({"units": units} if units else {})}
+                coords[name] = (pdims, values, attrs)
+            continue
         if name in CONTACT_COORDINATES:
             if per_contact:
                 units, long_name = CONTACT_COORDINATES[name]

@@ -32,9 +32,11 @@ A study is a scene (``[record]`` or ``[[records]]``, ``[left]``, ``[right]``, ``
     default ``sobol``), optional ``seed`` (default: the study's), and ``[sampling.vary]``
     (:mod:`pound_mc.study.sampling`).
 
-With a shear building (``model = "shear"`` in ``[left]`` or ``[right]``) the modes are
-computed once per study, so its grid axes and sampled keys are ``contact.*`` keys and
-``integrator.dt_s`` only; a ``left.*`` or ``right.*`` key there is refused.
+A building's keys may be varied as its model allows (``left.period_s`` of an SDOF building,
+``left.storey_stiffness_N_per_m`` of a shear building: a number stands for every storey; yield
+keys and ``post_yield_ratio`` of both); a key of the other model is refused.  A study that
+varies a shear building's keys computes its modes per simulation
+(:class:`~pound_mc.study.engine.StudyEngine`), others once per study.
 
 Every key is declared once, with its type, bounds, default, unit and description, in
 :mod:`pound_mc.scene.schema` (scene tables) and :mod:`pound_mc.study.schema` (study tables);
@@ -58,7 +60,7 @@ import numpy as np
 from pound_mc.errors import InputError, InputErrors
 from pound_mc.physics import materials
 from pound_mc.scene import scene_from_dict
-from pound_mc.scene.schema import check_table
+from pound_mc.scene.schema import BUILDINGS, check_table
 from pound_mc.study import records as records_mod
 from pound_mc.study import sampling
 from pound_mc.study.schema import (
@@ -220,9 +222,16 @@ class Study:
 
 
 def set_key(data: dict, key: str, value) -> None:
-    """Set ``"table.key"`` in a scene dict, dropping the key it replaces (``e`` <-> ``xi``)."""
+    """Set ``"table.key"`` in a scene dict, dropping the key it replaces (``e`` <-> ``xi``).
+
+    A number for a key the scene gives as a list (a shear building's storey lists) stands for
+    every element: ``[value] * len(list)``.
+    """
     table, name = key.split(".", 1)
-    data.setdefault(table, {})[name] = value
+    current = data.setdefault(table, {}).get(name)
+    if isinstance(current, list) and not isinstance(value, list):
+        value = [value] * len(current)
+    data[table][name] = value
     other = _EXCLUSIVE.get(key)
     if other is not None:
         t2, n2 = other.split(".", 1)
@@ -476,27 +485,31 @@ def _vary(vary: dict, grid: dict, labels: dict, file, errors: list) -> tuple[lis
     return variables, material_variables
 
 
-def _fixed_structure(scene: dict, grid: dict, variables: list, file, errors: list) -> list:
-    """A study with a shear building computes the modes once: no structural grid or variable."""
-    shear = [side for side in ("left", "right") if scene_model(scene, side) == "shear"]
-    if not shear:
-        return variables
+def _structure_keys(scene: dict, grid: dict, variables: list, file, errors: list) -> list:
+    """A varied ``left.*`` / ``right.*`` key must be one its building's model may vary."""
     varied = [(f"grid.{k}", k) for k in grid] + [
         (f"sampling.vary.{v.key}", v.key) for v in variables
     ]
+    refused = set()
     for where, key in varied:
-        if key.split(".", 1)[0] in ("left", "right"):
+        side, _, name = key.partition(".")
+        if side not in ("left", "right"):
+            continue
+        model = scene_model(scene, side)
+        table = BUILDINGS.get(model)
+        allowed = sorted(f"{side}.{f.name}" for f in table.fields if f.varied) if table else []
+        if table is not None and key not in allowed:
             errors.append(
                 InputError(
-                    f"cannot vary the structural key {key!r} in a study with a shear "
-                    f"building ([{shear[0]}] model = 'shear'): the modes are computed once "
-                    "per study; vary contact.* keys or integrator.dt_s",
+                    f"not a structural key of a {model} building ([{side}] model = "
+                    f"'{model}'); vary one of {allowed}",
                     file=file,
                     key=where,
                 )
             )
             grid.pop(key, None)
-    return [v for v in variables if v.key.split(".", 1)[0] not in ("left", "right")]
+            refused.add(key)
+    return [v for v in variables if v.key not in refused]
 
 
 def _scene_errors(data: dict, file) -> list[InputError]:
@@ -594,7 +607,7 @@ def study_from_text(text: str, *, file: str | Path | None = None) -> Study:
                        errors=errors)  # fmt: skip
     vary = sampling.per_impact(spec.get("vary", {}), scene, fname, errors)
     variables, material_variables = _vary(vary, grid, labels, fname, errors)
-    variables = _fixed_structure(scene, grid, variables, fname, errors)
+    variables = _structure_keys(scene, grid, variables, fname, errors)
     study = Study(
         path=None if file is None else Path(file),
         name=head["name"],

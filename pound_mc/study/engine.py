@@ -10,6 +10,9 @@ SDOF pairs run through :func:`~pound_mc.integrators.simulate_sdof_pairs`; a pair
 building through :func:`~pound_mc.integrators.simulate_scene_batch` with the modes of the
 study's one structure (:meth:`~pound_mc.scene.Scene.modal_arrays`, computed once), and then
 also gives the per-contact outputs of :data:`~pound_mc.study.dataset.CONTACT_VARIABLES`.
+A study that varies a shear building's keys, or whose buildings can yield, runs each
+simulation as its own scene (:meth:`StudyEngine.scene_of`, modes computed for it); the
+results are still a function of the study and the index only.
 """
 
 from __future__ import annotations
@@ -31,7 +34,13 @@ from pound_mc.motions.intensity import sa_g
 from pound_mc.physics.contact import default_relation, reported_xi
 from pound_mc.physics.relations import restitution_of_xi
 from pound_mc.scene import Scene, scene_from_dict, simulate
-from pound_mc.study.dataset import CONTACT_VARIABLES, INELASTIC_VARIABLES, RESULT_VARIABLES
+from pound_mc.scene.model import storey_results
+from pound_mc.study.dataset import (
+    CONTACT_VARIABLES,
+    INELASTIC_VARIABLES,
+    RESULT_VARIABLES,
+    STOREY_VARIABLES,
+)
 from pound_mc.study.definition import INTENSITY_KEYS, MATERIAL_KEY, grid_dim_name, scene_model
 
 __all__ = ["StudyEngine", "load_records", "load_traces", "STEP_BUDGET"]
@@ -55,6 +64,12 @@ _KERNEL_KEYS = (
     "contact.beta",
     "integrator.dt_s",
 )
+# Dataset variables of STOREY_VARIABLES: their key in a result's ``storeys``.
+_STOREY_KEYS = {
+    "storey_peak_drift": "peak_drift_ratio",
+    "storey_peak_ductility": "peak_ductility",
+    "storey_residual_drift": "residual_drift_ratio",
+}
 # Keys the batch of a pair with a shear building takes per simulation (its modes are fixed).
 _SCENE_KERNEL_KEYS = ("contact.gap_m", "contact.beta", "integrator.dt_s")
 
@@ -158,6 +173,11 @@ class StudyEngine:
         #: Whether a building can yield: each simulation then runs its own scene (inelastic
         #: ``newmark``), and the dataset holds the storeys' outputs.
         self.inelastic = self.scene.inelastic
+        #: Whether each simulation runs its own scene (:meth:`scene_of`, its modes computed
+        #: for it): with yielding buildings, and with a shear building whose keys vary.
+        self.per_scene = self.inelastic or (
+            self.mdof and any(key.split(".", 1)[0] in ("left", "right") for key in self._varied)
+        )
 
     def _intensities(self) -> None:
         """Each record's own PGA and Sa, and the factors that scale it to the intensity axis."""
@@ -386,17 +406,34 @@ class StudyEngine:
             out.update({name: ((nc,), dtype) for name, (_, _, dtype) in CONTACT_VARIABLES.items()})
         if self.inelastic:
             out.update({name: ((), dtype) for name, (_, _, dtype) in INELASTIC_VARIABLES.items()})
+        if self.per_storey:
+            ns = self.scene.storey_arrays()[1].shape[0]
+            out.update({name: ((ns,), dtype) for name, (_, _, dtype) in STOREY_VARIABLES.items()})
         return out
 
-    def _run_inelastic(self, indices: np.ndarray, out: dict) -> dict:
-        """Run simulations ``indices`` with yielding buildings, each its own :meth:`scene_of`."""
+    @property
+    def per_storey(self) -> bool:
+        """Whether the dataset holds per-storey outputs (yielding buildings, one a shear one)."""
+        return self.inelastic and self.mdof
+
+    @property
+    def _varied(self) -> list[str]:
+        """Scene keys the study varies (grid axes and sampled keys)."""
+        return [*self.study.grid, *(v.key for v in self.study.variables)]
+
+    def _run_scenes(self, indices: np.ndarray, out: dict) -> dict:
+        """Run simulations ``indices`` one by one, each its own :meth:`scene_of`."""
+        names = (*RESULT_VARIABLES, *(INELASTIC_VARIABLES if self.inelastic else ()))
         for k, index in enumerate(indices):
             res = simulate(self.scene_of(int(index)), record=self.record_of(int(index)))
-            for name in (*RESULT_VARIABLES, *INELASTIC_VARIABLES):
+            for name in names:
                 out[name][k] = res.outputs[name]
             if self.mdof:
                 for name in CONTACT_VARIABLES:
                     out[name][k] = res.contacts[name.removeprefix("contact_")]
+            if self.per_storey:
+                for name, key in _STOREY_KEYS.items():
+                    out[name][k] = res.storeys[key]
         return out
 
     def run_indices(self, indices: np.ndarray) -> dict[str, np.ndarray]:
@@ -407,8 +444,8 @@ class StudyEngine:
             name: np.empty((n, *tail), dtype=dtype)
             for name, (tail, dtype) in self.result_layout().items()
         }
-        if self.inelastic:
-            return self._run_inelastic(indices, out)
+        if self.per_scene:
+            return self._run_scenes(indices, out)
         settings = {
             "method": self._base["integrator.method"],
             "contact_model": self._base["contact.model"],
@@ -521,6 +558,13 @@ class StudyEngine:
             out["material"] = ((grid_dim_name(MATERIAL_KEY),), names)
         if self.mdof:
             out.update(self.contact_coordinates())
+        if self.per_storey:
+            table = self.scene.storey_arrays()[1]
+            which = storey_results(table, np.zeros((table.shape[0], 2)))
+            dims = ("storey",)
+            out["storey"] = (dims, np.arange(1, table.shape[0] + 1, dtype=np.int32))
+            out["storey_building"] = (dims, which["building"].astype(object))
+            out["storey_number"] = (dims, which["storey"])
         out.update(self.record_variables())
         return out
 
