@@ -189,17 +189,22 @@ def initial_contacts(model, psi, q, v, gap, beta, cd, zhd, dpen, ddpen, fc, was_
 
 
 @jit(inline=True)
-def newmark_solve(model, method, q, v, a, ag1, gamma, zw2, ikhat, c2h, c4h, c4h2, load, loaded,
-                  psi, gap, g, dpen, ddpen, fc, beta, cd, zhd, qs, dstar, dtry, fn, jac, rhs,
-                  qn, settings, xi, meff, was_in, ep):  # fmt: skip
-    """Modal coordinates ``qn`` at the end of a Newmark step, the contact forces ``fn`` in it.
+def newmark_solve(settings, q, v, a, ag1, gamma, zw2, ikhat, h, load, psi, gap, g, dpen, ddpen,
+                  fc, beta, cd, zhd, qs, dstar, dtry, fn, jac, rhs, qn, xi, meff, was_in,
+                  ep):  # fmt: skip
+    """Modal coordinates ``qn`` at the end of a Newmark step ``h``, the contact forces ``fn``.
 
-    The predictor without contact (with the modal ``load`` added where ``loaded``), then the
+    The predictor without contact (with the modal ``load`` added unless it is empty), then the
     contact forces (:func:`implicit_forces`) and their correction.  With restitution set per
     impact (``settings.rest_v``), an episode that starts in the step takes its damping from
     the rate before it (``ep``: the episode table).  Returns whether the contact solve
-    converged.
+    converged.  (At most 30 arguments: numba inlines no function with more.)
     """
+    model = settings.model
+    c2h = 2.0 / h
+    c4h = 4.0 / h
+    c4h2 = 4.0 / (h * h)
+    loaded = load.size > 0
     n = q.size
     for j in range(n):
         phat = -gamma[j] * ag1 + (c4h2 * q[j] + c4h * v[j] + a[j])
@@ -214,8 +219,8 @@ def newmark_solve(model, method, q, v, a, ag1, gamma, zw2, ikhat, c2h, c4h, c4h2
             cd[c], zhd[c], ep[c, EP_E] = episode_damping(settings, model, settings.relation,
                                                          xi[c], ddpen[c], beta[c], meff[c],
                                                          cd[c], zhd[c])  # fmt: skip
-    conv = implicit_forces(model, method, dstar, dtry, dpen, ddpen, g, c2h, fc, beta, cd, zhd,
-                           fn, jac, rhs)  # fmt: skip
+    conv = implicit_forces(model, settings.method, dstar, dtry, dpen, ddpen, g, c2h, fc, beta,
+                           cd, zhd, fn, jac, rhs)  # fmt: skip
     for j in range(n):
         corr = 0.0
         for c in range(gap.size):
@@ -377,6 +382,7 @@ def fixed(
     fprev = np.zeros(nc)
     ep, vlog, peak_e = impact_start(settings, xi, beta, meff, cd, zhd)
     nlog = 0
+    no_load = np.zeros(0)
     e0 = mechanical_energy(q, v, omega)
     reset_contacts(cout)
     c2h = 2.0 / h
@@ -454,10 +460,9 @@ def fixed(
                 fn[c] = fc[c]
         else:
             # Newmark average acceleration, modal predictor without contact at n+1
-            if not newmark_solve(model, method, q, v, a, ag1, gamma, zw2, ikhat, c2h, c4h, c4h2,
-                                 qs, False, psi, gap, g, dpen, ddpen, fc, beta, cd, zhd, qs,
-                                 dstar, dtry, fn, jac, rhs, qn, settings, xi, meff, was_in,
-                                 ep):  # fmt: skip
+            if not newmark_solve(settings, q, v, a, ag1, gamma, zw2, ikhat, h, no_load, psi,
+                                 gap, g, dpen, ddpen, fc, beta, cd, zhd, qs, dstar, dtry, fn,
+                                 jac, rhs, qn, xi, meff, was_in, ep):  # fmt: skip
                 status = STATUS_NOT_CONVERGED
             newmark_rates(q, v, a, qn, c2h, c4h, c4h2, vn, an)
         # contact bookkeeping at n+1

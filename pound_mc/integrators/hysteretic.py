@@ -214,10 +214,9 @@ def newmark_hysteretic(
             up[s] = up_n[s]
         for _it in range(MAX_PLASTIC_ITERATIONS + 1):
             plastic_load(dmat, store, up, pl)
-            conv = newmark_solve(model, method, q, v, a, ag1, gamma, zw2, ikhat, c2h, c4h, c4h2,
-                                 pl, True, psi, gap, g, dpen, ddpen, fc, beta, cd, zhd, qs,
-                                 dstar, dtry, fn, jac, rhs, qn, settings, xi, meff, was_in,
-                                 ep)  # fmt: skip
+            conv = newmark_solve(settings, q, v, a, ag1, gamma, zw2, ikhat, h, pl, psi, gap, g,
+                                 dpen, ddpen, fc, beta, cd, zhd, qs, dstar, dtry, fn, jac, rhs,
+                                 qn, xi, meff, was_in, ep)  # fmt: skip
             for s in range(ns):
                 drift[s] = rowdot(dmat, s, qn)
             if return_map(drift, store, up_n, up) <= PLASTIC_TOLERANCE:
