@@ -40,9 +40,15 @@ import numpy as np
 from pound_mc._jit import jit
 from pound_mc.errors import InputError
 from pound_mc.integrators.adaptive import adaptive
+from pound_mc.integrators.adaptive_bilinear import adaptive_bilinear, branch_supported
 from pound_mc.integrators.adaptive_pair import adaptive_pair
 from pound_mc.integrators.fixed import CENTRAL_DIFFERENCE, NEWMARK, NEWMARK_EXPLICIT, fixed
-from pound_mc.integrators.hysteretic import N_STOREY_COLUMNS, newmark_hysteretic
+from pound_mc.integrators.hysteretic import (
+    N_STOREY_COLUMNS,
+    S_ALPHA,
+    S_YIELD,
+    newmark_hysteretic,
+)
 from pound_mc.integrators.laws import LAW_CODES, RELATION_CODES
 from pound_mc.integrators.outputs import (
     CONTACT_OUTPUTS,
@@ -199,12 +205,27 @@ def _run_fixed(
               q, v, out, cout, hx, hd, hf)  # fmt: skip
 
 
-def _check_inelastic(settings, history: bool) -> None:
-    """Refuse what the inelastic kernel does not do, naming the key."""
-    if settings.method not in (NEWMARK, NEWMARK_EXPLICIT):
+def _check_inelastic(settings, history: bool, pair: bool = False, store=None, zeta=None) -> None:
+    """Refuse what the inelastic kernels do not do, naming the key.
+
+    ``pair``: an SDOF pair (``adaptive`` runs it when its yielding branches are underdamped,
+    :func:`~pound_mc.integrators.adaptive_bilinear.branch_supported`).
+    """
+    if settings.method == _ADAPTIVE and pair:
+        for j, side in enumerate(("left", "right")):
+            alpha = store[j, S_ALPHA]
+            if math.isfinite(store[j, S_YIELD]) and not branch_supported(alpha, zeta[j]):
+                raise InputError(
+                    f"method 'adaptive' needs post_yield_ratio above damping_ratio^2 "
+                    f"({zeta[j] ** 2:g}), got {alpha:g}; raise it or set integrator.method = "
+                    "'newmark' and a step dt_s (1e-3 s or less)",
+                    key=f"{side}.post_yield_ratio",
+                )
+    elif settings.method not in (NEWMARK, NEWMARK_EXPLICIT):
         raise InputError(
             "buildings with hysteresis other than 'elastic' run with method = 'newmark' (or "
-            "'newmark-explicit'); set it and a step dt_s (1e-3 s or less)",
+            "'newmark-explicit'), or 'adaptive' for two SDOF buildings; set it and a step "
+            "dt_s (1e-3 s or less)",
             key="integrator.method",
         )
     if history:
@@ -222,6 +243,31 @@ def _inelastic_run(storeys):
                        settings, q, v, out, cout, dmat, store)  # fmt: skip
 
     return run
+
+
+def _adaptive_bilinear_run(storeys):
+    """A run of ``adaptive`` for a bilinear SDOF pair (the signature of ``_RUNS``)."""
+    store = np.ascontiguousarray(storeys[1], dtype=np.float64).reshape(-1, N_STOREY_COLUMNS)
+
+    def run(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi, settings, q, v,
+            out, cout, hx, hd, hf, pre):  # fmt: skip
+        _run_adaptive_bilinear(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta,
+                               xi, settings, q, v, out, cout, store)  # fmt: skip
+
+    return run
+
+
+@jit
+def _run_adaptive_bilinear(
+    ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi, settings,
+    q, v, out, cout, store,
+):  # fmt: skip
+    """One run of ``adaptive`` on a bilinear SDOF pair; a step bound that cannot end fails."""
+    if _endless(ag, dt_rec, settings):
+        fail(out, cout, STATUS_NOT_CONVERGED)
+        return
+    adaptive_bilinear(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi,
+                      settings, q, v, out, cout, store)  # fmt: skip
 
 
 @jit
@@ -325,8 +371,9 @@ def run_kernel(
         kernel (``newmark`` or ``newmark-explicit``; no histories).
     """
     settings = kernel_settings(model, method, relation=relation, dt_s=dt_s, substeps=substeps)
+    pair = _is_sdof_pair(omega, gap, phi)
     if storeys is not None:
-        _check_inelastic(settings, history)
+        _check_inelastic(settings, history, pair, np.asarray(storeys[1]), np.asarray(zeta))
     n = omega.size
     nc = gap.size
     nf = phi.shape[0]
@@ -340,10 +387,14 @@ def run_kernel(
     hf = np.zeros((nh, nc))
     f8 = np.float64
     run = _RUNS[settings.method]
-    if run is _run_adaptive and _is_sdof_pair(omega, gap, phi):
+    if run is _run_adaptive and pair:
         run = _run_adaptive_pair
     if storeys is not None:
-        run = _inelastic_run(storeys)
+        run = (
+            _adaptive_bilinear_run(storeys)
+            if run is _run_adaptive_pair
+            else _inelastic_run(storeys)
+        )
     run(
         np.ascontiguousarray(ag, dtype=f8), f8(dt_rec),
         np.ascontiguousarray(omega, dtype=f8), np.ascontiguousarray(zeta, dtype=f8),
