@@ -209,12 +209,15 @@ def adaptive_bilinear(
     tail_min = TAIL_MIN_POT if pot else TAIL_MIN
     status = STATUS_OK
     changed = True  # the branches changed: their frequencies and shifts are due
+    fsal = False
+    fc_end = 0.0
     gpe = gp
     for i in range(npts - 1):
         ag0 = ag[i]
         slope = (ag[i + 1] - ag[i]) * inv_dt
         s = 0.0
         k_grid = 0
+        fsal = False  # a new interval: new load, the next sub-step starts afresh
         while s < dt_rec * (1.0 - 1e-12):
             steps += 1
             if steps > budget:
@@ -225,6 +228,12 @@ def adaptive_bilinear(
                 for j in range(2):
                     w_b[j], z_b[j], sh[j], dg = _branch(j, br, up, ww, zw2, ff, kk, uy, al, ps)
                     gpe -= dg
+                c = cf[0, 0 if br[0] == 0 else 1]
+                a00, a01, a02, a03 = c[0, 0], c[0, 1], c[0, 2], c[0, 3]
+                b00, b01, b02, b03 = c[1, 0], c[1, 1], c[1, 2], c[1, 3]
+                c = cf[1, 0 if br[1] == 0 else 1]
+                a10, a11, a12, a13 = c[0, 0], c[0, 1], c[0, 2], c[0, 3]
+                b10, b11, b12, b13 = c[1, 0], c[1, 1], c[1, 2], c[1, 3]
                 changed = False
             for j in range(2):
                 qs[j] = q[j] - sh[j]
@@ -237,15 +246,17 @@ def adaptive_bilinear(
                 hh = s_next - s
                 p0s = ag0 + slope * s
                 p1s = ag0 + slope * s_next
-                regular = abs(hh - h) <= 1e-12 * h
-                for j in range(2):
-                    if regular:
-                        c = cf[j, 0 if br[j] == 0 else 1]
-                        p0 = -g[j] * p0s
-                        p1 = -g[j] * p1s
-                        nq[j] = c[0, 0] * qs[j] + c[0, 1] * v[j] + c[0, 2] * p0 + c[0, 3] * p1
-                        nv[j] = c[1, 0] * qs[j] + c[1, 1] * v[j] + c[1, 2] * p0 + c[1, 3] * p1
-                    else:
+                if abs(hh - h) <= 1e-12 * h:
+                    p0 = -g[0] * p0s
+                    p1 = -g[0] * p1s
+                    nq[0] = a00 * qs[0] + a01 * v[0] + a02 * p0 + a03 * p1
+                    nv[0] = b00 * qs[0] + b01 * v[0] + b02 * p0 + b03 * p1
+                    p0 = -g[1] * p0s
+                    p1 = -g[1] * p1s
+                    nq[1] = a10 * qs[1] + a11 * v[1] + a12 * p0 + a13 * p1
+                    nv[1] = b10 * qs[1] + b11 * v[1] + b12 * p0 + b13 * p1
+                else:
+                    for j in range(2):
                         nq[j], nv[j] = advance(qs[j], v[j], -g[j] * p0s, -g[j] * p1s, w_b[j],
                                                z_b[j], hh)  # fmt: skip
                 w0, z0, w1, z1 = w_b[0], z_b[0], w_b[1], z_b[1]
@@ -343,6 +354,7 @@ def adaptive_bilinear(
                 s_end = s + hh
                 if kind == 0:
                     k_grid += 1
+                fsal = False
             else:
                 # ---------------- contact sub-step (RK4) with located switches
                 hs = min(hc, max(ramp_k * (i * dt_rec + s - t_onset), hc * ramp_0))
@@ -355,8 +367,12 @@ def adaptive_bilinear(
                     hs = dt_rec - s
                 hh, fc0, fc1, kind, ac0, ac1, de = _contact_substep(
                     qs, v, nq, nv, a_end, s, hs, ag0, slope, w_b, zw2, g, ps, gpe, b, cd, zhd,
-                    phase, model, pot, kpot, br, up, ff, sh, uy,
+                    phase, model, pot, kpot, br, up, ff, sh, uy, fsal, fc_end,
                 )  # fmt: skip
+                fc_end = fc1
+                # the force and accelerations at the end start the next sub-step (first same
+                # as last) unless something switched there
+                fsal = kind == 0
                 e_in += de[0]
                 e_d += de[1]
                 w_c += de[2]
@@ -468,8 +484,10 @@ def adaptive_bilinear(
 
 @jit
 def _contact_substep(qs, v, nq, nv, a_end, s, hs, ag0, slope, w_b, zw2, g, ps, gpe, b, cd, zhd,
-                     phase, model, pot, kpot, br, up, ff, sh, uy):  # fmt: skip
+                     phase, model, pot, kpot, br, up, ff, sh, uy, fsal, fc_prev):  # fmt: skip
     """One RK4 sub-step in shifted coordinates, cut at the first switch inside it.
+
+    ``fsal``: ``fc_prev`` and ``a_end`` hold the force and accelerations at the start.
 
     Switches: of the contact law (returned kind 4: onset or approach -> restitution, 5:
     restitution -> approach, 6: separation) and of a building's branch (kind 2 + j), located
@@ -481,7 +499,11 @@ def _contact_substep(qs, v, nq, nv, a_end, s, hs, ag0, slope, w_b, zw2, g, ps, g
     de = np.empty(4)
     hh = hs
     kind = 0
-    ac0 = ac1 = fc0 = fc1 = 0.0
+    fc0 = fc_prev
+    ac0 = a_end[0]
+    ac1 = a_end[1]
+    have = fsal
+    fc1 = 0.0
     for attempt in range(2):
         ww0 = w_b[0] * w_b[0]
         ww1 = w_b[1] * w_b[1]
@@ -493,9 +515,10 @@ def _contact_substep(qs, v, nq, nv, a_end, s, hs, ag0, slope, w_b, zw2, g, ps, g
         else:
             (nq[0], nq[1], nv[0], nv[1], de[0], de[1], de[2], de[3], fc0, ac0, ac1) = _rk4_pair(
                 qs[0], qs[1], v[0], v[1], s, hh, ag0, slope, -zw2[0], ww0, g[0], -zw2[1], ww1,
-                g[1], zw2[0], zw2[1], ps[0], ps[1], gpe, b, cd, zhd, phase, model, False, 0.0,
-                0.0, 0.0,
+                g[1], zw2[0], zw2[1], ps[0], ps[1], gpe, b, cd, zhd, phase, model, have, fc0,
+                ac0, ac1,
             )  # fmt: skip
+        have = True  # a sub-step taken again starts where this one did
         fc1, _, a_end[0], a_end[1] = _stage(nq[0], nq[1], nv[0], nv[1], ag0 + slope * (s + hh),
                                             -zw2[0], ww0, g[0], -zw2[1], ww1, g[1], ps[0], ps[1],
                                             gpe, b, cd, zhd, phase, model)  # fmt: skip

@@ -84,10 +84,18 @@ class Scene:
 
     def kernel_arrays(self) -> dict[str, np.ndarray]:
         """The cached :meth:`modal_arrays` (read them, do not modify them)."""
+        return self._cached("modal", self.modal_arrays)
+
+    def kernel_storeys(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """The cached :meth:`storey_arrays` (read them, do not modify them)."""
+        return self._cached("storeys", self.storey_arrays)
+
+    def _cached(self, name, make):
+        """``make()``, cached under ``name`` while the buildings and contacts stay the same."""
         key = self._modal_key()
-        hit = self._cache.get("modal")
+        hit = self._cache.get(name)
         if hit is None or hit[0] != key:
-            hit = self._cache["modal"] = (key, self.modal_arrays())
+            hit = self._cache[name] = (key, make())
         return hit[1]
 
     def record_arrays(self) -> tuple[float, np.ndarray]:
@@ -399,7 +407,7 @@ def with_tail(acc, dt_rec: float, tail_s: float) -> np.ndarray:
     The ground acceleration falls linearly from the last sample to zero over one interval.
     """
     n_tail = int(round(tail_s / dt_rec))
-    return np.r_[np.asarray(acc, dtype=float), np.zeros(n_tail)]
+    return np.concatenate((np.asarray(acc, dtype=float), np.zeros(n_tail)))
 
 
 def load_scene(path: str | Path) -> Scene:
@@ -448,7 +456,7 @@ def simulate(
     dt_rec, acc = record
     arrays = scene.kernel_arrays()
     m = method or scene.method
-    storeys = scene.storey_arrays()
+    storeys = scene.kernel_storeys()
     if storeys is not None:
         acc = with_tail(acc, dt_rec, scene.tail_s)
     outputs, contacts, hist = run_kernel(
