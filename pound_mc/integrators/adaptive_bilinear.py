@@ -153,10 +153,7 @@ def adaptive_bilinear(
     yield drift inf: elastic).  Longer than 150 lines because the linear steps and the contact
     sub-steps share the branch state and its events in one loop.
     """
-    model = settings.model
-    relation = settings.relation
-    substeps = settings.substeps
-    npts = ag.size
+    model, relation, substeps, npts = settings.model, settings.relation, settings.substeps, ag.size
     m_sub, h = step_size(dt_rec, settings.dt_s)
     inv_dt = 1.0 / dt_rec
     ww = omega * omega
@@ -203,10 +200,11 @@ def adaptive_bilinear(
     in_contact = False
     pot = model == _JANKOWSKI
     kpot = 0.8 * cd
-    ramp_0 = RAMP_START_POT if pot else RAMP_START
-    ramp_k = RAMP_GROWTH_POT if pot else RAMP_GROWTH
-    tail = TAIL_POT if pot else TAIL
-    tail_min = TAIL_MIN_POT if pot else TAIL_MIN
+    ramp_0, ramp_k, tail, tail_min = (
+        (RAMP_START_POT, RAMP_GROWTH_POT, TAIL_POT, TAIL_MIN_POT)
+        if pot
+        else (RAMP_START, RAMP_GROWTH, TAIL, TAIL_MIN)
+    )
     status = STATUS_OK
     changed = True  # the branches changed: their frequencies and shifts are due
     fsal = False
@@ -240,9 +238,7 @@ def adaptive_bilinear(
             kind = 0  # 1 onset, 2 / 3 a branch switch of building 0 / 1
             if not in_contact:
                 # ---------------- exact linear step to the next grid point (or an event)
-                s_next = (k_grid + 1) * h
-                if k_grid + 1 == m_sub:
-                    s_next = dt_rec
+                s_next = dt_rec if k_grid + 1 == m_sub else (k_grid + 1) * h
                 hh = s_next - s
                 p0s = ag0 + slope * s
                 p1s = ag0 + slope * s_next
@@ -466,12 +462,9 @@ def adaptive_bilinear(
                 break
         if status != 0:
             break
-    cout[0, C_PEAK_FORCE] = peak_f
-    cout[0, C_IMPACTS] = impacts
-    cout[0, C_MAX_PENETRATION] = maxpen
-    cout[0, C_IMPULSE] = impulse
-    ph = np.zeros(1, dtype=np.int64)
-    ph[0] = phase
+    cout[0, C_PEAK_FORCE], cout[0, C_IMPACTS] = peak_f, impacts
+    cout[0, C_MAX_PENETRATION], cout[0, C_IMPULSE] = maxpen, impulse
+    ph = np.full(1, phase, dtype=np.int64)
     stored_energy = 0.0
     if phase != 0:
         stored_energy = stored(model, ps[0] * q[0] + ps[1] * q[1] - gp, b)

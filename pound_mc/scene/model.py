@@ -88,7 +88,7 @@ class Scene:
 
     def kernel_storeys(self) -> tuple[np.ndarray, np.ndarray] | None:
         """The cached :meth:`storey_arrays` (read them, do not modify them)."""
-        return self._cached("storeys", self.storey_arrays)
+        return self._cached("storeys", self.storey_arrays) if self.inelastic else None
 
     def _cached(self, name, make):
         """``make()``, cached under ``name`` while the buildings and contacts stay the same."""
