@@ -147,7 +147,7 @@ class StudyEngine:
         self.mdof = any(scene_model(study.scene, side) == "shear" for side in ("left", "right"))
         self.arrays = self.scene.modal_arrays() if self.mdof else None
         #: Whether a building can yield: each simulation then runs its own scene (inelastic
-        #: ``newmark``), and the dataset holds the storeys' outputs.
+        #: ``newmark``, or ``adaptive`` for SDOF pairs), and the dataset holds the storeys' outputs.
         self.inelastic = self.scene.inelastic
 
     def _intensities(self) -> None:
