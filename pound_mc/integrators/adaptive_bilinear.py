@@ -36,6 +36,7 @@ import math
 import numpy as np
 
 from pound_mc._jit import jit
+from pound_mc.errors import InputError
 from pound_mc.integrators.adaptive_pair import (
     ONSET_TOL,
     RAMP_GROWTH,
@@ -74,7 +75,7 @@ from pound_mc.integrators.toolkit import (
     step_size,
 )
 
-__all__ = ["adaptive_bilinear", "branch_supported"]
+__all__ = ["adaptive_bilinear", "branch_supported", "refuse_unsupported"]
 
 _INF = math.inf
 _TWELFTH = 1.0 / 12.0
@@ -92,6 +93,22 @@ def branch_supported(post_yield_ratio: float, damping_ratio: float) -> bool:
     no stiffness after yield, runs with ``newmark``).
     """
     return post_yield_ratio > damping_ratio * damping_ratio
+
+
+def refuse_unsupported(store, zeta) -> None:
+    """Raise :class:`~pound_mc.errors.InputError` for a branch ``adaptive`` cannot step.
+
+    ``store``: the storey table (row ``j``: building ``j``), ``zeta``: the damping ratios.
+    """
+    for j, side in enumerate(("left", "right")):
+        alpha = store[j, S_ALPHA]
+        if math.isfinite(store[j, S_YIELD]) and not branch_supported(alpha, zeta[j]):
+            raise InputError(
+                f"method 'adaptive' needs post_yield_ratio above damping_ratio^2 "
+                f"({zeta[j] ** 2:g}), got {alpha:g}; raise it or set integrator.method = "
+                "'newmark' and a step dt_s (1e-3 s or less)",
+                key=f"{side}.post_yield_ratio",
+            )
 
 
 @jit

@@ -40,15 +40,10 @@ import numpy as np
 from pound_mc._jit import jit
 from pound_mc.errors import InputError
 from pound_mc.integrators.adaptive import adaptive
-from pound_mc.integrators.adaptive_bilinear import adaptive_bilinear, branch_supported
+from pound_mc.integrators.adaptive_bilinear import adaptive_bilinear, refuse_unsupported
 from pound_mc.integrators.adaptive_pair import adaptive_pair
 from pound_mc.integrators.fixed import CENTRAL_DIFFERENCE, NEWMARK, NEWMARK_EXPLICIT, fixed
-from pound_mc.integrators.hysteretic import (
-    N_STOREY_COLUMNS,
-    S_ALPHA,
-    S_YIELD,
-    newmark_hysteretic,
-)
+from pound_mc.integrators.hysteretic import N_STOREY_COLUMNS, newmark_hysteretic
 from pound_mc.integrators.laws import LAW_CODES, RELATION_CODES
 from pound_mc.integrators.outputs import (
     CONTACT_OUTPUTS,
@@ -208,19 +203,11 @@ def _run_fixed(
 def _check_inelastic(settings, history: bool, pair: bool = False, store=None, zeta=None) -> None:
     """Refuse what the inelastic kernels do not do, naming the key.
 
-    ``pair``: an SDOF pair (``adaptive`` runs it when its yielding branches are underdamped,
-    :func:`~pound_mc.integrators.adaptive_bilinear.branch_supported`).
+    ``pair``: an SDOF pair (``adaptive`` runs it where
+    :func:`~pound_mc.integrators.adaptive_bilinear.refuse_unsupported` lets it).
     """
     if settings.method == _ADAPTIVE and pair:
-        for j, side in enumerate(("left", "right")):
-            alpha = store[j, S_ALPHA]
-            if math.isfinite(store[j, S_YIELD]) and not branch_supported(alpha, zeta[j]):
-                raise InputError(
-                    f"method 'adaptive' needs post_yield_ratio above damping_ratio^2 "
-                    f"({zeta[j] ** 2:g}), got {alpha:g}; raise it or set integrator.method = "
-                    "'newmark' and a step dt_s (1e-3 s or less)",
-                    key=f"{side}.post_yield_ratio",
-                )
+        refuse_unsupported(store, zeta)
     elif settings.method not in (NEWMARK, NEWMARK_EXPLICIT):
         raise InputError(
             "buildings with hysteresis other than 'elastic' run with method = 'newmark' (or "
@@ -232,27 +219,22 @@ def _check_inelastic(settings, history: bool, pair: bool = False, store=None, ze
         raise InputError("histories of inelastic buildings are not recorded", key="history")
 
 
-def _inelastic_run(storeys):
-    """A run of the inelastic kernel with the storeys bound (the signature of ``_RUNS``)."""
+def _inelastic_run(storeys, pair=False):
+    """A run of an inelastic kernel with the storeys bound (the signature of ``_RUNS``).
+
+    ``pair``: ``adaptive`` on a bilinear SDOF pair, else the inelastic ``newmark``.
+    """
     dmat = np.ascontiguousarray(storeys[0], dtype=np.float64)
     store = np.ascontiguousarray(storeys[1], dtype=np.float64).reshape(-1, N_STOREY_COLUMNS)
 
     def run(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi, settings, q, v,
             out, cout, hx, hd, hf, pre):  # fmt: skip
+        if pair:
+            _run_adaptive_bilinear(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff,
+                                   beta, xi, settings, q, v, out, cout, store)  # fmt: skip
+            return
         _run_inelastic(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi,
                        settings, q, v, out, cout, dmat, store)  # fmt: skip
-
-    return run
-
-
-def _adaptive_bilinear_run(storeys):
-    """A run of ``adaptive`` for a bilinear SDOF pair (the signature of ``_RUNS``)."""
-    store = np.ascontiguousarray(storeys[1], dtype=np.float64).reshape(-1, N_STOREY_COLUMNS)
-
-    def run(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi, settings, q, v,
-            out, cout, hx, hd, hf, pre):  # fmt: skip
-        _run_adaptive_bilinear(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta,
-                               xi, settings, q, v, out, cout, store)  # fmt: skip
 
     return run
 
@@ -390,11 +372,7 @@ def run_kernel(
     if run is _run_adaptive and pair:
         run = _run_adaptive_pair
     if storeys is not None:
-        run = (
-            _adaptive_bilinear_run(storeys)
-            if run is _run_adaptive_pair
-            else _inelastic_run(storeys)
-        )
+        run = _inelastic_run(storeys, run is _run_adaptive_pair)
     run(
         np.ascontiguousarray(ag, dtype=f8), f8(dt_rec),
         np.ascontiguousarray(omega, dtype=f8), np.ascontiguousarray(zeta, dtype=f8),
