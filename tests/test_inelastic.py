@@ -92,10 +92,19 @@ def test_bad_hysteresis_keys_are_named(left, key, words):
     assert key in str(err.value) and words in str(err.value)
 
 
-def test_adaptive_refuses_yielding_buildings_naming_the_method():
+def test_adaptive_refuses_yielding_shear_buildings_naming_the_method():
+    shear = {
+        "model": "shear",
+        "storey_mass_kg": [1e6] * 2,
+        "storey_height_m": [3.0] * 2,
+        "storey_stiffness_N_per_m": [1e9] * 2,
+    }
+    data = _scene({**shear, "hysteresis": "bilinear", "storey_yield_disp_m": [0.01, 0.01]},
+                  shear)  # fmt: skip
+    data["integrator"] = {"method": "adaptive"}
     scene, rec = _b1_window(n=10)
     with pytest.raises(InputError, match="integrator.method.*newmark"):
-        simulate(_bilinear_b1(scene), record=rec)
+        simulate(scene_from_dict(data), record=rec)
 
 
 # --------------------------------------------------------------------------- closed form

@@ -10,15 +10,9 @@ each mode ``q'' + 2 zeta omega q' + omega^2 q = -gamma a_g(t) - sum_c F_c psi_c`
 ``c`` is ``delta_c = psi_c . q - gap_c`` and its force pushes the floors apart.  The ground
 acceleration is the record's samples linearly interpolated (``../shared/DESIGN.md`` section 2).
 
-Methods (names pinned by DESIGN.md section 4): ``adaptive`` (default,
-:mod:`~pound_mc.integrators.adaptive`), ``newmark``, ``newmark-explicit`` and
-``central-difference`` (:mod:`~pound_mc.integrators.fixed`, and
-:mod:`~pound_mc.integrators.pair` for SDOF pairs).
-
-Batches run on Python threads (as many as numba's thread count, see
-:func:`~pound_mc.integrators.numba_threads`), each calling a serial ``nogil`` kernel over a
-slice of the simulations; there is one such kernel per method family (``adaptive``, the
-fixed-step methods) and per structure (SDOF pairs, any pair of buildings), so that a run
+Methods and their codes: :mod:`~pound_mc.integrators.settings`.  Batches run on Python
+threads (:func:`~pound_mc.integrators.numba_threads`), each calling a serial ``nogil`` kernel
+over a slice of the simulations, one kernel per method family and structure, so that a run
 compiles only the method it uses.
 
 Every run returns the outputs of :data:`OUTPUTS` and a status: 0 ok, 1 unstable (non-finite or
@@ -30,7 +24,6 @@ Fixed-step methods report maxima over their step points.
 from __future__ import annotations
 
 import math
-from collections import namedtuple
 from concurrent.futures import ThreadPoolExecutor
 from typing import NamedTuple
 
@@ -41,20 +34,22 @@ from pound_mc._jit import jit
 from pound_mc.errors import InputError
 from pound_mc.integrators.accuracy import flag_inaccurate, shortest_contact_s
 from pound_mc.integrators.adaptive import adaptive
+from pound_mc.integrators.adaptive_bilinear import adaptive_bilinear, refuse_unsupported
 from pound_mc.integrators.adaptive_pair import adaptive_pair
 from pound_mc.integrators.fixed import CENTRAL_DIFFERENCE, NEWMARK, NEWMARK_EXPLICIT, fixed
 from pound_mc.integrators.hysteretic import N_STOREY_COLUMNS, newmark_hysteretic
-from pound_mc.integrators.laws import LAW_CODES, RELATION_CODES
 from pound_mc.integrators.outputs import (
+    C_MAX_IMPACT_VELOCITY,
     C_MAX_PENETRATION,
     CONTACT_OUTPUTS,
     IMPACTS,
+    MAX_IMPACT_VELOCITY,
     MAX_PENETRATION,
+    MEDIAN_IMPACT_VELOCITY,
     N_COUT,
     N_OUT,
     OUTPUTS,
     PEAK_FORCE,
-    PEAK_FORCE_RESTITUTION,
     PRE_MODE,
     PRE_RESUME,
     PRE_RUN_TO_CONTACT,
@@ -65,10 +60,14 @@ from pound_mc.integrators.outputs import (
     pre_size,
 )
 from pound_mc.integrators.pair import newmark_pair
+from pound_mc.integrators.settings import (
+    ADAPTIVE,
+    METHODS,
+    KernelSettings,
+    fixed_restitution,
+    kernel_settings,
+)
 from pound_mc.integrators.toolkit import MAX_STEPS
-from pound_mc.physics.contact import CONTACT_MODELS, check_relation, reported_xi
-from pound_mc.physics.materials import E_FLOOR, PER_IMPACT_OUTSIDE, restitution_rows
-from pound_mc.physics.relations import exact_table, restitution_of_xi
 
 __all__ = [
     "METHODS",
@@ -83,59 +82,6 @@ __all__ = [
     "simulate_scene_batch",
 ]
 
-_ADAPTIVE = 0
-_METHOD_CODES = {
-    "adaptive": _ADAPTIVE,
-    "newmark": NEWMARK,
-    "newmark-explicit": NEWMARK_EXPLICIT,
-    "central-difference": CENTRAL_DIFFERENCE,
-}
-#: Integration methods by name (DESIGN.md section 4); the first is the default.
-METHODS = tuple(_METHOD_CODES)
-
-#: Settings of one kernel run, as the kernels take them: codes of the contact law, of its
-#: damping relation and of the method, the step bound ``dt_s`` [s] and the contact sub-steps
-#: per contact duration (``adaptive``), then the restitution set per impact (empty arrays:
-#: fixed restitution): the policy outside the measured velocities (0 clamp, 1 extrapolate) and
-#: the lowest restitution it may reach, the table of the relation's ``xi`` on a uniform grid of
-#: ``e`` (start, spacing), the seed's Table 2 rows (velocities [m/s], ``e_min``, ``e_max``)
-#: and that ``xi`` table.  Build it with :func:`kernel_settings`.
-KernelSettings = namedtuple(
-    "KernelSettings",
-    "model relation method dt_s substeps outside rest_floor xi_e0 xi_de rest_v rest_lo rest_hi "
-    "xi_tab",
-)
-#: Largest damping ratio of the ``exact`` table [-].
-_XI_MAX = float(exact_table()["xi"].max())
-#: Spacing of the ``e`` grid of a relation's ``xi`` table [-] (linear interpolation in it is
-#: within 2e-8 of the relation for e >= 0.3).
-XI_TABLE_DE = 1e-4
-
-
-def _restitution_arrays(model: str, relation: str | None, restitution: dict | None) -> tuple:
-    """Settings fields of per-impact restitution (:data:`KernelSettings`), empty without."""
-    empty = np.zeros(0)
-    if restitution is None:
-        return 0, 0.0, 0.0, 1.0, empty, empty, empty, empty
-    outside = restitution.get("outside", "clamp")
-    if outside not in PER_IMPACT_OUTSIDE:
-        raise InputError(
-            f"unknown policy {outside!r}; choose one of {list(PER_IMPACT_OUTSIDE)}",
-            key="contact.outside",
-        )
-    if CONTACT_MODELS[model].damping is None:
-        raise InputError(
-            f"the {model!r} law has no damping to set per impact", key="contact.restitution"
-        )
-    v, lo, hi = restitution_rows(restitution["material"])
-    e_grid = np.linspace(E_FLOOR, 1.0, int(round((1.0 - E_FLOOR) / XI_TABLE_DE)) + 1)
-    xi_tab = (
-        empty if CONTACT_MODELS[model].damping == "zeta"
-        else np.asarray(reported_xi(model, e_grid, relation), dtype=np.float64)
-    )  # fmt: skip
-    de = float(e_grid[1] - e_grid[0])
-    return (PER_IMPACT_OUTSIDE.index(outside), E_FLOOR, E_FLOOR, de, v, lo, hi, xi_tab)
-
 
 class KernelResult(NamedTuple):
     """Outputs of one kernel run, by name.
@@ -148,38 +94,6 @@ class KernelResult(NamedTuple):
     outputs: dict
     contacts: dict
     history: tuple | None
-
-
-def kernel_settings(
-    model: str = "jankowski",
-    method: str = "adaptive",
-    *,
-    relation: str | None = None,
-    dt_s: float = 0.001,
-    substeps: int = 16,
-    restitution: dict | None = None,
-) -> KernelSettings:
-    """Kernel settings from names (``relation`` None: the law's default).
-
-    ``restitution``: ``{"material": NAME, "outside": "clamp" | "extrapolate"}`` sets each
-    impact's restitution from the seed's Table 2 at its onset velocity (the kernels' ``xi``
-    then holds the quantile of the measured range); None: fixed.
-
-    Raises
-    ------
-    InputError
-        For an unknown law or method, or a relation the law does not accept.
-    """
-    relation = check_relation(model, relation)
-    if method not in _METHOD_CODES:
-        raise InputError(
-            f"unknown method {method!r}; allowed: {', '.join(METHODS)}", key="integrator.method"
-        )
-    rel = RELATION_CODES[model][relation] if relation is not None else 0
-    return KernelSettings(
-        LAW_CODES[model], rel, _METHOD_CODES[method], float(dt_s), float(substeps),
-        *_restitution_arrays(model, relation, restitution),
-    )  # fmt: skip
 
 
 @jit(inline=True)
@@ -252,32 +166,67 @@ def _run_fixed(
               q, v, out, cout, hx, hd, hf)  # fmt: skip
 
 
-def _check_inelastic(settings, history: bool) -> None:
-    """Refuse what the inelastic kernel does not do, naming the key."""
-    if settings.method not in (NEWMARK, NEWMARK_EXPLICIT):
+def _check_inelastic(settings, history: bool, pair: bool = False, store=None, zeta=None) -> None:
+    """Refuse what the inelastic kernels do not do, naming the key.
+
+    ``pair``: an SDOF pair (``adaptive`` runs it where
+    :func:`~pound_mc.integrators.adaptive_bilinear.refuse_unsupported` lets it).
+    """
+    if settings.method == ADAPTIVE and pair:
+        refuse_unsupported(store, zeta)
+        if settings.rest_v.size > 0:
+            raise InputError(
+                "restitution = 'velocity' with yielding buildings runs with method = 'newmark'",
+                key="integrator.method",
+            )
+    elif settings.method not in (NEWMARK, NEWMARK_EXPLICIT):
         raise InputError(
             "buildings with hysteresis other than 'elastic' run with method = 'newmark' (or "
-            "'newmark-explicit'); set it and a step dt_s (1e-3 s or less)",
+            "'newmark-explicit'), or 'adaptive' for two SDOF buildings; set it and a step "
+            "dt_s (1e-3 s or less)",
             key="integrator.method",
         )
     if history:
         raise InputError("histories of inelastic buildings are not recorded", key="history")
 
 
-def _inelastic_run(storeys, sout):
-    """A run of the inelastic kernel with the storeys bound (the signature of ``_RUNS``).
+def _inelastic_run(storeys, sout, pair=False):
+    """A run of an inelastic kernel with the storeys bound (the signature of ``_RUNS``).
 
-    ``sout`` (storeys x 2) receives each storey's peak and final drift [m].
+    ``sout`` (storeys x 2) receives each storey's peak and final drift [m] (the inelastic
+    ``newmark``; NaN from ``adaptive``).  ``pair``: ``adaptive`` on a bilinear SDOF pair, else
+    the inelastic ``newmark``.
     """
     dmat = np.ascontiguousarray(storeys[0], dtype=np.float64)
     store = np.ascontiguousarray(storeys[1], dtype=np.float64).reshape(-1, N_STOREY_COLUMNS)
 
     def run(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi, settings, q, v,
             out, cout, hx, hd, hf, pre):  # fmt: skip
+        if pair:
+            _run_adaptive_bilinear(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff,
+                                   beta, xi, settings, q, v, out, cout, store)  # fmt: skip
+            sout[:] = np.nan
+            # impact velocities are not logged by this kernel
+            out[MAX_IMPACT_VELOCITY] = out[MEDIAN_IMPACT_VELOCITY] = np.nan
+            cout[:, C_MAX_IMPACT_VELOCITY] = np.nan
+            return
         _run_inelastic(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi,
                        settings, q, v, out, cout, dmat, store, sout)  # fmt: skip
 
     return run
+
+
+@jit
+def _run_adaptive_bilinear(
+    ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi, settings,
+    q, v, out, cout, store,
+):  # fmt: skip
+    """One run of ``adaptive`` on a bilinear SDOF pair; a step bound that cannot end fails."""
+    if _endless(ag, dt_rec, settings):
+        fail(out, cout, STATUS_NOT_CONVERGED)
+        return
+    adaptive_bilinear(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi,
+                      settings, q, v, out, cout, store)  # fmt: skip
 
 
 @jit
@@ -297,7 +246,7 @@ def _run_inelastic(
 #: One run of each method (same arguments), by method code: a run compiles only its method's
 #: kernel (numba compiles a kernel with everything it calls, on first use).
 _RUNS = {
-    _ADAPTIVE: _run_adaptive,
+    ADAPTIVE: _run_adaptive,
     NEWMARK: _run_fixed,
     NEWMARK_EXPLICIT: _run_fixed,
     CENTRAL_DIFFERENCE: _run_fixed,
@@ -324,29 +273,6 @@ def _threaded(kernel, n: int, *args) -> None:
         ]
         for future in done:
             future.result()
-
-
-def _fixed_restitution(out, settings, xi) -> None:
-    """``peak_force_restitution`` of runs with one restitution for every impact (ok runs).
-
-    The restitution the law rebounds with for its damping parameter: ``xi`` by the exact
-    single impact (Jankowski), ``exp(-pi xi / sqrt(1 - xi^2))`` (Kelvin), ``e`` itself
-    (Hertz-damp, whose ``xi`` holds it), 1 for the undamped laws.
-    """
-    if settings.rest_v.size > 0:
-        return  # set per impact by the kernels
-    law = CONTACT_MODELS[next(k for k, v in LAW_CODES.items() if v == settings.model)]
-    xi = np.broadcast_to(np.asarray(xi, dtype=float), out.shape[:-1])
-    if law.damping is None:
-        e = np.ones_like(xi)
-    elif law.damping == "zeta":
-        e = xi
-    elif law.name == "kelvin":
-        e = np.exp(-math.pi * xi / np.sqrt(np.maximum(1.0 - xi * xi, 1e-300)))
-    else:
-        e = np.asarray(restitution_of_xi(np.clip(xi, 0.0, _XI_MAX)), dtype=float)
-    ok = out[..., STATUS] == 0
-    out[..., PEAK_FORCE_RESTITUTION] = np.where(ok, e, out[..., PEAK_FORCE_RESTITUTION])
 
 
 def _named(out):
@@ -413,8 +339,9 @@ def run_kernel(
     """
     settings = kernel_settings(model, method, relation=relation, dt_s=dt_s, substeps=substeps,
                                restitution=restitution)  # fmt: skip
+    pair = _is_sdof_pair(omega, gap, phi)
     if storeys is not None:
-        _check_inelastic(settings, history)
+        _check_inelastic(settings, history, pair, np.asarray(storeys[1]), np.asarray(zeta))
     n = omega.size
     nc = gap.size
     nf = phi.shape[0]
@@ -428,12 +355,12 @@ def run_kernel(
     hf = np.zeros((nh, nc))
     f8 = np.float64
     run = _RUNS[settings.method]
-    if run is _run_adaptive and _is_sdof_pair(omega, gap, phi):
+    if run is _run_adaptive and pair:
         run = _run_adaptive_pair
     if storeys is not None:
         if storey_out is None:
             storey_out = np.empty((np.size(storeys[1]) // N_STOREY_COLUMNS, 2))
-        run = _inelastic_run(storeys, storey_out)
+        run = _inelastic_run(storeys, storey_out, run is _run_adaptive_pair)
     run(
         np.ascontiguousarray(ag, dtype=f8), f8(dt_rec),
         np.ascontiguousarray(omega, dtype=f8), np.ascontiguousarray(zeta, dtype=f8),
@@ -443,8 +370,8 @@ def run_kernel(
         np.ascontiguousarray(beta, dtype=f8), np.ascontiguousarray(xi, dtype=f8),
         settings, q, v, out, cout, hx, hd, hf, np.zeros(0),
     )  # fmt: skip
-    _fixed_restitution(out, settings, xi[0] if np.size(xi) else 0.0)
-    if settings.method != _ADAPTIVE:
+    fixed_restitution(out, settings, xi[0] if np.size(xi) else 0.0)
+    if settings.method != ADAPTIVE:
         t_c = shortest_contact_s(model, cout[:, C_MAX_PENETRATION], beta, meff).min()
         out[STATUS] = flag_inaccurate(out[STATUS], out[IMPACTS], t_c, dt_s)
     outputs = {name: float(out[k]) for k, name in enumerate(OUTPUTS)}
@@ -582,9 +509,9 @@ def simulate_sdof_pairs(
     out = np.empty((nsim, N_OUT))
     acc = np.ascontiguousarray(acc, dtype=np.float64)
     dt_rec = float(dt_rec)
-    if settings.method != _ADAPTIVE:
+    if settings.method != ADAPTIVE:
         _threaded(_sdof_fixed, nsim, acc, dt_rec, *arrays, settings, out)
-        _fixed_restitution(out, settings, arrays[8])
+        fixed_restitution(out, settings, arrays[8])
         half = np.empty_like(out)  # step doubling (pound_mc.integrators.accuracy)
         _threaded(_sdof_fixed, nsim, acc, dt_rec, *arrays[:9], arrays[9] / 2, settings, half)
         ml, mr, beta_k, dt_k = arrays[2], arrays[5], arrays[7], arrays[9]
@@ -602,7 +529,7 @@ def simulate_sdof_pairs(
     group = group.ravel().astype(np.int64)
     _threaded(_sdof_groups, first.size, acc, dt_rec, *arrays, settings, first, shared)
     _threaded(_sdof_adaptive, nsim, acc, dt_rec, *arrays, settings, out, group, shared)
-    _fixed_restitution(out, settings, arrays[8])
+    fixed_restitution(out, settings, arrays[8])
     return _named(out)
 
 
@@ -695,7 +622,7 @@ def simulate_scene_batch(
     out = np.empty((nsim, N_OUT))
     cout = np.empty((nsim, nc, N_COUT))
     f8 = np.float64
-    kernel = _scene_adaptive if settings.method == _ADAPTIVE else _scene_fixed
+    kernel = _scene_adaptive if settings.method == ADAPTIVE else _scene_fixed
     pair = (
         np.ascontiguousarray(acc, dtype=f8),
         f8(dt_rec),
@@ -708,7 +635,7 @@ def simulate_scene_batch(
         xi,
     )  # fmt: skip
     _threaded(kernel, nsim, *pair, dt_s, settings, out, cout)
-    if settings.method != _ADAPTIVE:
+    if settings.method != ADAPTIVE:
         half = np.empty_like(out)  # step doubling (pound_mc.integrators.accuracy)
         _threaded(kernel, nsim, *pair, dt_s / 2, settings, half, np.empty_like(cout))
         meff = np.asarray(arrays["meff"], dtype=f8)[None, :]
@@ -718,5 +645,5 @@ def simulate_scene_batch(
                                          out[:, PEAK_FORCE], half[:, PEAK_FORCE])  # fmt: skip
     contacts = {name: cout[:, :, k] for k, name in enumerate(CONTACT_OUTPUTS)}
     contacts["impacts"] = contacts["impacts"].astype(np.int32)
-    _fixed_restitution(out, settings, xi)
+    fixed_restitution(out, settings, xi)
     return _named(out), contacts

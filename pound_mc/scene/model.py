@@ -3,6 +3,10 @@
 A scene holds ``[record]``, ``[left]``, ``[right]``, ``[contact]`` and ``[integrator]``
 (``../shared/DESIGN.md`` section 6), declared in :mod:`pound_mc.scene.schema`.
 :func:`simulate` runs it through the compiled kernels of :mod:`pound_mc.integrators`.
+
+Longer than 600 lines because a scene has several shapes that share its validation and its
+cached kernel arrays: two buildings, a building against a wall, a row of buildings, and
+yielding storeys (their storey tables and free-vibration tail).
 """
 
 from __future__ import annotations
@@ -109,10 +113,18 @@ class Scene:
 
     def kernel_arrays(self) -> dict[str, np.ndarray]:
         """The cached :meth:`modal_arrays` (read them, do not modify them)."""
+        return self._cached("modal", self.modal_arrays)
+
+    def kernel_storeys(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """The cached :meth:`storey_arrays` (read them, do not modify them)."""
+        return self._cached("storeys", self.storey_arrays) if self.inelastic else None
+
+    def _cached(self, name, make):
+        """``make()``, cached under ``name`` while the buildings and contacts stay the same."""
         key = self._modal_key()
-        hit = self._cache.get("modal")
+        hit = self._cache.get(name)
         if hit is None or hit[0] != key:
-            hit = self._cache["modal"] = (key, self.modal_arrays())
+            hit = self._cache[name] = (key, make())
         return hit[1]
 
     def record_arrays(self) -> tuple[float, np.ndarray]:
@@ -594,7 +606,7 @@ def with_tail(acc, dt_rec: float, tail_s: float) -> np.ndarray:
     The ground acceleration falls linearly from the last sample to zero over one interval.
     """
     n_tail = int(round(tail_s / dt_rec))
-    return np.r_[np.asarray(acc, dtype=float), np.zeros(n_tail)]
+    return np.concatenate((np.asarray(acc, dtype=float), np.zeros(n_tail)))
 
 
 #: Keys of :attr:`SimulationResult.storeys`, in the order ``simulate --json`` lists them.
@@ -674,7 +686,7 @@ def simulate(
     dt_rec, acc = record
     arrays = scene.kernel_arrays()
     m = method or scene.method
-    storeys = scene.storey_arrays()
+    storeys = scene.kernel_storeys()
     storey_out = None
     if storeys is not None:
         acc = with_tail(acc, dt_rec, scene.tail_s)

@@ -25,8 +25,7 @@ A study is a scene (``[record]`` or ``[[records]]``, ``[left]``, ``[right]``, ``
     or a glob (``"records/*.AT2"``, relative to the study file) stands for one record per
     component or file (sorted), each with the table's other keys
     (:func:`pound_mc.study.records.expand_records`).
-    Validation counts a suite's components from its metadata and a glob's files; the records
-    themselves are read by the engine.
+    Validation counts a suite's components from its metadata and a glob's files.
 ``[sampling]``
     ``n`` samples per grid point and record, ``method`` (``random`` | ``lhs`` | ``sobol``,
     default ``sobol``), optional ``seed`` (default: the study's), and ``[sampling.vary]``

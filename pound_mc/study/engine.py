@@ -171,7 +171,7 @@ class StudyEngine:
         )
         self.arrays = self.scene.modal_arrays() if self.mdof else None
         #: Whether a building can yield: each simulation then runs its own scene (inelastic
-        #: ``newmark``), and the dataset holds the storeys' outputs.
+        #: ``newmark``, or ``adaptive`` for SDOF pairs), and the dataset holds the storeys' outputs.
         self.inelastic = self.scene.inelastic
         #: Whether each simulation runs its own scene (:meth:`scene_of`, its modes computed
         #: for it): with yielding buildings, and with a shear building whose keys vary.

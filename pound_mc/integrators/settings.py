@@ -1,0 +1,139 @@
+"""Kernel settings: the names of a run (law, relation, method, restitution) as kernel codes.
+
+:func:`kernel_settings` turns names into the :data:`KernelSettings` the compiled kernels take
+(integer codes, the step bound, and the tables of restitution set per impact);
+:func:`fixed_restitution` reports the restitution of runs with one restitution for every
+impact.
+
+Methods (names pinned by DESIGN.md section 4): ``adaptive`` (default,
+:mod:`~pound_mc.integrators.adaptive`, :mod:`~pound_mc.integrators.adaptive_pair` and
+:mod:`~pound_mc.integrators.adaptive_bilinear` for SDOF pairs), ``newmark``,
+``newmark-explicit`` and ``central-difference`` (:mod:`~pound_mc.integrators.fixed`,
+:mod:`~pound_mc.integrators.pair` for SDOF pairs, :mod:`~pound_mc.integrators.hysteretic`
+for yielding buildings).
+"""
+
+from __future__ import annotations
+
+import math
+from collections import namedtuple
+
+import numpy as np
+
+from pound_mc.errors import InputError
+from pound_mc.integrators.fixed import CENTRAL_DIFFERENCE, NEWMARK, NEWMARK_EXPLICIT
+from pound_mc.integrators.laws import LAW_CODES, RELATION_CODES
+from pound_mc.integrators.outputs import PEAK_FORCE_RESTITUTION, STATUS
+from pound_mc.physics.contact import CONTACT_MODELS, check_relation, reported_xi
+from pound_mc.physics.materials import E_FLOOR, PER_IMPACT_OUTSIDE, restitution_rows
+from pound_mc.physics.relations import exact_table, restitution_of_xi
+
+__all__ = ["METHODS", "KernelSettings", "kernel_settings", "fixed_restitution"]
+
+ADAPTIVE = 0
+_METHOD_CODES = {
+    "adaptive": ADAPTIVE,
+    "newmark": NEWMARK,
+    "newmark-explicit": NEWMARK_EXPLICIT,
+    "central-difference": CENTRAL_DIFFERENCE,
+}
+#: Integration methods by name (DESIGN.md section 4); the first is the default.
+METHODS = tuple(_METHOD_CODES)
+
+#: Settings of one kernel run, as the kernels take them: codes of the contact law, of its
+#: damping relation and of the method, the step bound ``dt_s`` [s] and the contact sub-steps
+#: per contact duration (``adaptive``), then the restitution set per impact (empty arrays:
+#: fixed restitution): the policy outside the measured velocities (0 clamp, 1 extrapolate) and
+#: the lowest restitution it may reach, the table of the relation's ``xi`` on a uniform grid of
+#: ``e`` (start, spacing), the seed's Table 2 rows (velocities [m/s], ``e_min``, ``e_max``)
+#: and that ``xi`` table.  Build it with :func:`kernel_settings`.
+KernelSettings = namedtuple(
+    "KernelSettings",
+    "model relation method dt_s substeps outside rest_floor xi_e0 xi_de rest_v rest_lo rest_hi "
+    "xi_tab",
+)
+#: Largest damping ratio of the ``exact`` table [-].
+_XI_MAX = float(exact_table()["xi"].max())
+#: Spacing of the ``e`` grid of a relation's ``xi`` table [-] (linear interpolation in it is
+#: within 2e-8 of the relation for e >= 0.3).
+XI_TABLE_DE = 1e-4
+
+
+def _restitution_arrays(model: str, relation: str | None, restitution: dict | None) -> tuple:
+    """Settings fields of per-impact restitution (:data:`KernelSettings`), empty without."""
+    empty = np.zeros(0)
+    if restitution is None:
+        return 0, 0.0, 0.0, 1.0, empty, empty, empty, empty
+    outside = restitution.get("outside", "clamp")
+    if outside not in PER_IMPACT_OUTSIDE:
+        raise InputError(
+            f"unknown policy {outside!r}; choose one of {list(PER_IMPACT_OUTSIDE)}",
+            key="contact.outside",
+        )
+    if CONTACT_MODELS[model].damping is None:
+        raise InputError(
+            f"the {model!r} law has no damping to set per impact", key="contact.restitution"
+        )
+    v, lo, hi = restitution_rows(restitution["material"])
+    e_grid = np.linspace(E_FLOOR, 1.0, int(round((1.0 - E_FLOOR) / XI_TABLE_DE)) + 1)
+    xi_tab = (
+        empty if CONTACT_MODELS[model].damping == "zeta"
+        else np.asarray(reported_xi(model, e_grid, relation), dtype=np.float64)
+    )  # fmt: skip
+    de = float(e_grid[1] - e_grid[0])
+    return (PER_IMPACT_OUTSIDE.index(outside), E_FLOOR, E_FLOOR, de, v, lo, hi, xi_tab)
+
+
+def kernel_settings(
+    model: str = "jankowski",
+    method: str = "adaptive",
+    *,
+    relation: str | None = None,
+    dt_s: float = 0.001,
+    substeps: int = 16,
+    restitution: dict | None = None,
+) -> KernelSettings:
+    """Kernel settings from names (``relation`` None: the law's default).
+
+    ``restitution``: ``{"material": NAME, "outside": "clamp" | "extrapolate"}`` sets each
+    impact's restitution from the seed's Table 2 at its onset velocity (the kernels' ``xi``
+    then holds the quantile of the measured range); None: fixed.
+
+    Raises
+    ------
+    InputError
+        For an unknown law or method, or a relation the law does not accept.
+    """
+    relation = check_relation(model, relation)
+    if method not in _METHOD_CODES:
+        raise InputError(
+            f"unknown method {method!r}; allowed: {', '.join(METHODS)}", key="integrator.method"
+        )
+    rel = RELATION_CODES[model][relation] if relation is not None else 0
+    return KernelSettings(
+        LAW_CODES[model], rel, _METHOD_CODES[method], float(dt_s), float(substeps),
+        *_restitution_arrays(model, relation, restitution),
+    )  # fmt: skip
+
+
+def fixed_restitution(out, settings, xi) -> None:
+    """``peak_force_restitution`` of runs with one restitution for every impact (ok runs).
+
+    The restitution the law rebounds with for its damping parameter: ``xi`` by the exact
+    single impact (Jankowski), ``exp(-pi xi / sqrt(1 - xi^2))`` (Kelvin), ``e`` itself
+    (Hertz-damp, whose ``xi`` holds it), 1 for the undamped laws.
+    """
+    if settings.rest_v.size > 0:
+        return  # set per impact by the kernels
+    law = CONTACT_MODELS[next(k for k, v in LAW_CODES.items() if v == settings.model)]
+    xi = np.broadcast_to(np.asarray(xi, dtype=float), out.shape[:-1])
+    if law.damping is None:
+        e = np.ones_like(xi)
+    elif law.damping == "zeta":
+        e = xi
+    elif law.name == "kelvin":
+        e = np.exp(-math.pi * xi / np.sqrt(np.maximum(1.0 - xi * xi, 1e-300)))
+    else:
+        e = np.asarray(restitution_of_xi(np.clip(xi, 0.0, _XI_MAX)), dtype=float)
+    ok = out[..., STATUS] == 0
+    out[..., PEAK_FORCE_RESTITUTION] = np.where(ok, e, out[..., PEAK_FORCE_RESTITUTION])
