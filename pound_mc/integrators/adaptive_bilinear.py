@@ -160,7 +160,7 @@ def _branch(j, br, up, ww, zw2, ff, kk, uy, al, ps):
 @jit
 def adaptive_bilinear(
     ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi, settings,
-    q, v, out, cout, store,
+    q, v, out, cout, store, sout,
 ):  # fmt: skip
     """``adaptive`` for an SDOF pair with bilinear buildings (module docstring).
 
@@ -489,7 +489,7 @@ def adaptive_bilinear(
     finish(out, cout, peaks, side, ph, q, v, omega, e0, e_in, e_d - w_p, w_c, stored_energy,
            peak_f, peak_t, steps, status)  # fmt: skip
     drift = np.array([ff[0] * q[0], ff[1] * q[1]])
-    storey_outputs(out, store, peaks, drift, peak_acc, side, e_h)
+    storey_outputs(out, store, peaks, drift, peak_acc, side, e_h, sout)
 
 
 @jit

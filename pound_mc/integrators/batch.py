@@ -193,9 +193,8 @@ def _check_inelastic(settings, history: bool, pair: bool = False, store=None, ze
 def _inelastic_run(storeys, sout, pair=False):
     """A run of an inelastic kernel with the storeys bound (the signature of ``_RUNS``).
 
-    ``sout`` (storeys x 2) receives each storey's peak and final drift [m] (the inelastic
-    ``newmark``; NaN from ``adaptive``).  ``pair``: ``adaptive`` on a bilinear SDOF pair, else
-    the inelastic ``newmark``.
+    ``sout`` (storeys x 2) receives each storey's peak and final drift [m].  ``pair``:
+    ``adaptive`` on a bilinear SDOF pair, else the inelastic ``newmark``.
     """
     dmat = np.ascontiguousarray(storeys[0], dtype=np.float64)
     store = np.ascontiguousarray(storeys[1], dtype=np.float64).reshape(-1, N_STOREY_COLUMNS)
@@ -204,8 +203,7 @@ def _inelastic_run(storeys, sout, pair=False):
             out, cout, hx, hd, hf, pre):  # fmt: skip
         if pair:
             _run_adaptive_bilinear(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff,
-                                   beta, xi, settings, q, v, out, cout, store)  # fmt: skip
-            sout[:] = np.nan
+                                   beta, xi, settings, q, v, out, cout, store, sout)  # fmt: skip
             # impact velocities are not logged by this kernel
             out[MAX_IMPACT_VELOCITY] = out[MEDIAN_IMPACT_VELOCITY] = np.nan
             cout[:, C_MAX_IMPACT_VELOCITY] = np.nan
@@ -219,14 +217,15 @@ def _inelastic_run(storeys, sout, pair=False):
 @jit
 def _run_adaptive_bilinear(
     ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi, settings,
-    q, v, out, cout, store,
+    q, v, out, cout, store, sout,
 ):  # fmt: skip
     """One run of ``adaptive`` on a bilinear SDOF pair; a step bound that cannot end fails."""
     if _endless(ag, dt_rec, settings):
         fail(out, cout, STATUS_NOT_CONVERGED)
+        sout[:] = np.nan
         return
     adaptive_bilinear(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi,
-                      settings, q, v, out, cout, store)  # fmt: skip
+                      settings, q, v, out, cout, store, sout)  # fmt: skip
 
 
 @jit
