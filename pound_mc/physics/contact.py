@@ -34,6 +34,7 @@ from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from pound_mc._jit import jit
 from pound_mc.errors import InputError
@@ -227,7 +228,7 @@ def hertzdamp_force(
     return f if f > 0.0 else 0.0
 
 
-def max_penetration_elastic(v0, beta, m_eff):
+def max_penetration_elastic(v0: ArrayLike, beta: ArrayLike, m_eff: ArrayLike) -> float | np.ndarray:
     """Peak penetration of an elastic Hertz impact [m], Jankowski (2008) eq. (2.5).
 
     ``delta_max = (5 m_eff v0^2 / (4 beta))^(2/5)``.
@@ -250,7 +251,7 @@ def max_penetration_elastic(v0, beta, m_eff):
 HERTZ_DURATION_INTEGRAL = 0.4 * math.gamma(0.4) * math.gamma(0.5) / math.gamma(0.9)
 
 
-def contact_duration_hertz(v0, beta, m_eff):
+def contact_duration_hertz(v0: ArrayLike, beta: ArrayLike, m_eff: ArrayLike) -> float | np.ndarray:
     """Duration of an elastic Hertz impact [s]: ``t_c = 2.943 delta_max / v0``.
 
     Equivalent to ``t_c = 3.218 (m_eff / beta)^0.4 v0^-0.2`` (DESIGN.md section 4).

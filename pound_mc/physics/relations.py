@@ -32,6 +32,7 @@ from importlib import resources
 
 import numpy as np
 import pandas as pd
+from numpy.typing import ArrayLike
 from scipy.integrate import solve_ivp
 from scipy.interpolate import PchipInterpolator
 
@@ -198,7 +199,7 @@ def xi_exact(e):
     return _scalar_or_array(np.maximum(xi, 0.0))
 
 
-def restitution_of_xi(xi):
+def restitution_of_xi(xi: ArrayLike) -> float | np.ndarray:
     """Restitution the Jankowski law really produces for impact damping ratio ``xi``.
 
     Interpolated in the ``exact`` table (accurate to better than 1e-6); independent of mass,
@@ -225,7 +226,7 @@ RELATIONS = {
 }
 
 
-def xi_from_e(e, relation: str = "jankowski2008"):
+def xi_from_e(e: ArrayLike, relation: str = "jankowski2008") -> float | np.ndarray:
     """Impact damping ratio for a coefficient of restitution, by relation name.
 
     Parameters
@@ -244,7 +245,7 @@ def xi_from_e(e, relation: str = "jankowski2008"):
     return func(e)
 
 
-def effective_restitution(e, relation: str = "jankowski2008"):
+def effective_restitution(e: ArrayLike, relation: str = "jankowski2008") -> float | np.ndarray:
     """Restitution the Jankowski law really produces when ``xi`` comes from ``relation``.
 
     Parameters
@@ -275,7 +276,7 @@ def _zeta_ye2009(e, v0):
 HERTZDAMP_RELATIONS = {"ye2009": _zeta_ye2009, "muthukumar2006": _zeta_muthukumar2006}
 
 
-def hertzdamp_zeta(e, v0, relation: str = "ye2009"):
+def hertzdamp_zeta(e: ArrayLike, v0: ArrayLike, relation: str = "ye2009") -> float | np.ndarray:
     """Damping constant ``zeta`` [s/m] of the Hertz-damp law for restitution ``e``.
 
     ``muthukumar2006``: ``zeta = 3 (1 - e^2) / (4 v0)`` (Muthukumar & DesRoches 2006);
