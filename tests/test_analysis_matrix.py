@@ -337,5 +337,5 @@ def test_worst_and_to_dataframe(datasets):
     worst = ds.pound.worst("contact_peak_force")
     assert float(worst["contact_peak_force"].max()) == float(ds["contact_peak_force"].max())
     counts = ds.pound.status_counts()
-    assert counts.index.tolist() == ["ok", "unstable", "not_converged"]
+    assert counts.index.tolist() == ["ok", "unstable", "not_converged", "inaccurate"]
     assert int(counts.sum()) == ds["status"].size
