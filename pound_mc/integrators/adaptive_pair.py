@@ -83,6 +83,14 @@ RAMP_START_POT, RAMP_GROWTH_POT = 1e-2, 2.0
 #: to 1e-6 with 38 sub-steps fewer).
 TAIL, TAIL_MIN = 0.5, 0.25
 TAIL_POT, TAIL_MIN_POT = 1.0, 0.5
+#: A contact sub-step spans at most ``1 / substeps`` of the contact's local period at the
+#: current penetration (secant stiffness of the law, :func:`_local_bound`): ``pi sqrt(2)``.
+#: The sub-step from the onset velocity (``duration / substeps``) fails where an episode starts
+#: at a near-zero velocity (zero gap, a building resting against the other) and the contact
+#: then carries load: the onset duration is long, the stiff contact is stepped at ``dt_s``
+#: (extreme drill: peak forces off by up to 270 times).  For one impact the bound is loose:
+#: the local period at the deepest penetration is 2.1 (Hertz) or 2 (linear) contact durations.
+LOCAL_PERIOD_SHARE = math.pi * math.sqrt(2.0)
 
 
 @jit
@@ -404,6 +412,7 @@ def adaptive_pair(
     ramp_k = RAMP_GROWTH_POT if pot else RAMP_GROWTH
     tail = TAIL_POT if pot else TAIL
     tail_min = TAIL_MIN_POT if pot else TAIL_MIN
+    loc_k = LOCAL_PERIOD_SHARE * math.sqrt(me) / substeps
     status = STATUS_OK
     store = hx.shape[0] > 0
     mode = int(pre[PRE_MODE]) if pre.size > 0 else 0
@@ -446,7 +455,7 @@ def adaptive_pair(
             xb0, xdb0, xb1, xdb1 = f0 * nq0, f0 * nv0, f1 * nq1, f1 * nv1
             # a turning penetration or floor matters only where the bound of its cubic Hermite
             # says the general step's screen could act (margin and tolerance as there)
-            quiet = d1 <= 0.0
+            quiet = d1 <= 0.0 and dc0 <= 0.0
             if quiet and ddc0 > 0.0 and dd1 < 0.0:
                 margin = 0.05 * (abs(ddc0) + abs(dd1)) * dt_rec
                 bnd = max(dc0, d1) + _hermite_spread(dc0, ddc0, d1, dd1, dt_rec)
@@ -485,6 +494,20 @@ def adaptive_pair(
             if steps > budget:
                 status = STATUS_NOT_CONVERGED
                 break
+            if not in_contact and ps0 * v0 + ps1 * v1 > 0.0 and ps0 * q0 + ps1 * q1 - gp > 0.0:
+                # a penetration left by a located separation (within the root's error) that
+                # grows again: the contact resumes here; the onset test below looks for a
+                # crossing of 0 that never comes (extreme drill: whole contacts without force)
+                if mode == PRE_RUN_TO_CONTACT:
+                    return
+                v0c = ps0 * v0 + ps1 * v1
+                phase = 1
+                pending = True
+                zhd = episode_zeta(model, relation, xi0, v0c, zhd)
+                hc = min(h, duration(model, v0c, b, me) / substeps)
+                t_onset = i * dt_rec + s
+                in_contact = True
+                fsal = False
             if not in_contact:
                 # ---------------- exact linear step to the next grid point
                 s_next = (k_grid + 1) * h
@@ -614,6 +637,7 @@ def adaptive_pair(
                     if ddc < 0.0:
                         dc = ps0 * q0 + ps1 * q1 - gp
                         hs = min(hs, max(-tail * dc / ddc, hc * tail_min))
+                hs = _local_bound(hs, ps0 * q0 + ps1 * q1 - gp, model, b, loc_k)
                 if hs >= dt_rec - s or dt_rec - s - hs < 1e-9 * hc:
                     hs = dt_rec - s
                 if pot and phase == 1:
@@ -767,6 +791,23 @@ def adaptive_pair(
         stored_energy = stored(model, ps0 * q0 + ps1 * q1 - gp, b)
     finish(out, cout, peaks, side, ph, q, v, omega, e0, e_in, e_d, w_c, stored_energy, peak_f,
            peak_t, steps, status)  # fmt: skip
+
+
+@jit(inline=True)
+def _local_bound(hs, d, model, b, loc_k):
+    """``hs`` [s] bounded by the contact's local period over ``substeps`` (:data:`LOCAL_PERIOD_SHARE`).
+
+    The local period at penetration ``d`` is that of the secant stiffness ``2 E(d) / d^2``
+    (``E``: the law's stored energy), ``pi sqrt(2 m_eff) d / sqrt(E)``; ``loc_k`` is
+    ``LOCAL_PERIOD_SHARE sqrt(m_eff) / substeps``.
+    """
+    if d > 0.0:
+        e = stored(model, d, b)
+        if e > 0.0:
+            hl = loc_k * d / math.sqrt(e)
+            if hl < hs:
+                return hl
+    return hs
 
 
 @jit(inline=True)
