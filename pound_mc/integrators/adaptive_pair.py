@@ -644,7 +644,10 @@ def adaptive_pair(
                     if ddc < 0.0:
                         dc = ps0 * q0 + ps1 * q1 - gp
                         hs = min(hs, max(-tail * dc / ddc, hc * tail_min))
-                hs = _local_bound(hs, ps0 * q0 + ps1 * q1 - gp, model, b, loc_k)
+                # at the penetration the step may reach (its rate), not only at its start
+                dc = ps0 * q0 + ps1 * q1 - gp
+                hs = _local_bound(hs, dc, model, b, loc_k)
+                hs = _local_bound(hs, dc + max(ps0 * v0 + ps1 * v1, 0.0) * hs, model, b, loc_k)
                 if hs >= dt_rec - s or dt_rec - s - hs < 1e-9 * hc:
                     hs = dt_rec - s
                 if pot and phase == 1:
