@@ -581,6 +581,19 @@ def adaptive_pair(
                     nq1, nv1 = advance(q1, v1, -g1 * p0s, -g1 * p1s, w1, z1, hh)
                     dc1 = ps0 * nq0 + ps1 * nq1 - gp
                     ddc1 = ps0 * nv0 + ps1 * nv1
+                elif d0 > 0.0 and d1 > 0.0 and dd1 > 0.0:
+                    # penetrating since a located separation (within the root's error) and
+                    # again at the end: the contact resumes where delta turns (its minimum)
+                    hh = _exact_root_pair(q0, q1, v0, v1, p0s, slope, 0.5 * hh, 0.0, hh, 1, w0,
+                                          z0, g0, w1, z1, g1, -ps0, -ps1, -gp, ONSET_TOL)  # fmt: skip
+                    onset = True
+                    if mode == PRE_RUN_TO_CONTACT:
+                        return
+                    p1s = ag0 + slope * (s + hh)
+                    nq0, nv0 = advance(q0, v0, -g0 * p0s, -g0 * p1s, w0, z0, hh)
+                    nq1, nv1 = advance(q1, v1, -g1 * p0s, -g1 * p1s, w1, z1, hh)
+                    dc1 = ps0 * nq0 + ps1 * nq1 - gp
+                    ddc1 = ps0 * nv0 + ps1 * nv1
                 # energies by the corrected trapezoidal rule (exact to O(h^5) per step)
                 en1_0, en1_1, en1_2, en1_3 = _ends(nq0, nq1, nv0, nv1, p1s, k0, ww0, g0, k1, ww1,
                                                    g1, zw2_0, zw2_1, zw4_0, zw4_1)  # fmt: skip
