@@ -88,13 +88,15 @@ TAIL_POT, TAIL_MIN_POT = 1.0, 0.5
 #: ``omega h`` near 1 (a 0.05-s building at 0.01 s) misses and misplaces impacts (extreme drill:
 #: peak forces off by up to 200 times).  50 keeps B1 (0.5 s at 0.01 s) as it was.
 STEPS_PER_PERIOD = 50.0
-#: A contact sub-step spans at most ``1 / substeps`` of the contact's local period at the
-#: current penetration (secant stiffness of the law, :func:`_local_bound`): ``pi sqrt(2)``.
+#: A contact sub-step spans at most half of ``1 / substeps`` of the contact's local period at
+#: the current penetration and at the one its rate reaches in the step (secant stiffness of
+#: the law, :func:`_local_bound`): ``pi sqrt(2) / 2``.
 #: The sub-step from the onset velocity (``duration / substeps``) fails where an episode starts
 #: at a near-zero velocity (zero gap, a building resting against the other) and the contact
 #: then carries load: the onset duration is long, the stiff contact is stepped at ``dt_s``
-#: (extreme drill: peak forces off by up to 270 times).  For one impact the bound is loose:
-#: the local period at the deepest penetration is 2.1 (Hertz) or 2 (linear) contact durations.
+#: (extreme drill: peak forces off by up to 270 times).  For one impact the bound is looser
+#: than ``duration / substeps``: the local period at the deepest penetration is 2.1 (Hertz) or
+#: 2 (linear) contact durations (B1 bitwise unchanged); half of it, not a quarter, for that.
 LOCAL_PERIOD_SHARE = math.pi * math.sqrt(2.0) / 2.0
 
 
@@ -584,8 +586,9 @@ def adaptive_pair(
                 elif d0 > 0.0 and d1 > 0.0 and dd1 > 0.0:
                     # penetrating since a located separation (within the root's error) and
                     # again at the end: the contact resumes where delta turns (its minimum)
-                    hh = _exact_root_pair(q0, q1, v0, v1, p0s, slope, 0.5 * hh, 0.0, hh, 1, w0,
-                                          z0, g0, w1, z1, g1, -ps0, -ps1, -gp, ONSET_TOL)  # fmt: skip
+                    hh = _exact_root_pair(q0, q1, v0, v1, p0s, slope, 0.5 * hh, 0.0, hh, 1,
+                                          w0, z0, g0, w1, z1, g1, -ps0, -ps1, -gp,
+                                          ONSET_TOL)  # fmt: skip
                     onset = True
                     if mode == PRE_RUN_TO_CONTACT:
                         return
@@ -818,7 +821,7 @@ def adaptive_pair(
 
 @jit(inline=True)
 def _local_bound(hs, d, model, b, loc_k):
-    """``hs`` [s] bounded by the contact's local period over ``substeps`` (:data:`LOCAL_PERIOD_SHARE`).
+    """``hs`` [s] bounded by the contact's local period (:data:`LOCAL_PERIOD_SHARE`).
 
     The local period at penetration ``d`` is that of the secant stiffness ``2 E(d) / d^2``
     (``E``: the law's stored energy), ``pi sqrt(2 m_eff) d / sqrt(E)``; ``loc_k`` is
