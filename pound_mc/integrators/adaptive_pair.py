@@ -88,16 +88,17 @@ TAIL_POT, TAIL_MIN_POT = 1.0, 0.5
 #: ``omega h`` near 1 (a 0.05-s building at 0.01 s) misses and misplaces impacts (extreme drill:
 #: peak forces off by up to 200 times).  50 keeps B1 (0.5 s at 0.01 s) as it was.
 STEPS_PER_PERIOD = 50.0
-#: A contact sub-step spans at most half of ``1 / substeps`` of the contact's local period at
+#: A contact sub-step spans at most 2/3 of ``1 / substeps`` of the contact's local period at
 #: the current penetration and at the one its rate reaches in the step (secant stiffness of
-#: the law, :func:`_local_bound`): ``pi sqrt(2) / 2``.
+#: the law, :func:`_local_bound`): ``pi sqrt(2) / 1.5``.
 #: The sub-step from the onset velocity (``duration / substeps``) fails where an episode starts
 #: at a near-zero velocity (zero gap, a building resting against the other) and the contact
 #: then carries load: the onset duration is long, the stiff contact is stepped at ``dt_s``
 #: (extreme drill: peak forces off by up to 270 times).  For one impact the bound is looser
 #: than ``duration / substeps``: the local period at the deepest penetration is 2.1 (Hertz) or
-#: 2 (linear) contact durations (B1 bitwise unchanged); half of it, not a quarter, for that.
-LOCAL_PERIOD_SHARE = math.pi * math.sqrt(2.0) / 2.0
+#: 2 (linear) contact durations, so the bound is 1.4 times ``duration / substeps`` or more
+#: there (B1 bitwise unchanged; at half, one sub-step of a Hertz scene changes).
+LOCAL_PERIOD_SHARE = math.pi * math.sqrt(2.0) / 1.5
 
 
 @jit
