@@ -504,20 +504,6 @@ def adaptive_pair(
             if steps > budget:
                 status = STATUS_NOT_CONVERGED
                 break
-            if not in_contact and ps0 * v0 + ps1 * v1 > 0.0 and ps0 * q0 + ps1 * q1 - gp > 0.0:
-                # a penetration left by a located separation (within the root's error) that
-                # grows again: the contact resumes here; the onset test below looks for a
-                # crossing of 0 that never comes (extreme drill: whole contacts without force)
-                if mode == PRE_RUN_TO_CONTACT:
-                    return
-                v0c = ps0 * v0 + ps1 * v1
-                phase = 1
-                pending = True
-                zhd = episode_zeta(model, relation, xi0, v0c, zhd)
-                hc = min(h, duration(model, v0c, b, me) / substeps)
-                t_onset = i * dt_rec + s
-                in_contact = True
-                fsal = False
             if not in_contact:
                 # ---------------- exact linear step to the next grid point
                 s_next = (k_grid + 1) * h
@@ -584,12 +570,16 @@ def adaptive_pair(
                     nq1, nv1 = advance(q1, v1, -g1 * p0s, -g1 * p1s, w1, z1, hh)
                     dc1 = ps0 * nq0 + ps1 * nq1 - gp
                     ddc1 = ps0 * nv0 + ps1 * nv1
-                elif d0 > 0.0 and d1 > 0.0 and dd1 > 0.0:
+                elif d0 > 0.0 and (dd0 > 0.0 or (d1 > 0.0 and dd1 > 0.0)):
                     # penetrating since a located separation (within the root's error) and
-                    # again at the end: the contact resumes where delta turns (its minimum)
-                    hh = _exact_root_pair(q0, q1, v0, v1, p0s, slope, 0.5 * hh, 0.0, hh, 1,
-                                          w0, z0, g0, w1, z1, g1, -ps0, -ps1, -gp,
-                                          ONSET_TOL)  # fmt: skip
+                    # growing now or again at the end: the contact resumes here or where delta
+                    # turns (its minimum); the test above looks for a crossing that never comes
+                    if dd0 > 0.0:
+                        hh = 0.0
+                    else:
+                        hh = _exact_root_pair(q0, q1, v0, v1, p0s, slope, 0.5 * hh, 0.0, hh, 1,
+                                              w0, z0, g0, w1, z1, g1, -ps0, -ps1, -gp,
+                                              ONSET_TOL)  # fmt: skip
                     onset = True
                     if mode == PRE_RUN_TO_CONTACT:
                         return
