@@ -563,13 +563,6 @@ def adaptive_pair(
                     hh = _exact_root_pair(q0, q1, v0, v1, p0s, slope, tg, 0.0, t_hi, 0, w0, z0,
                                           g0, w1, z1, g1, ps0, ps1, gp, ONSET_TOL)  # fmt: skip
                     onset = True
-                    if mode == PRE_RUN_TO_CONTACT:
-                        return
-                    p1s = ag0 + slope * (s + hh)
-                    nq0, nv0 = advance(q0, v0, -g0 * p0s, -g0 * p1s, w0, z0, hh)
-                    nq1, nv1 = advance(q1, v1, -g1 * p0s, -g1 * p1s, w1, z1, hh)
-                    dc1 = ps0 * nq0 + ps1 * nq1 - gp
-                    ddc1 = ps0 * nv0 + ps1 * nv1
                 elif d0 > 0.0 and (dd0 > 0.0 or (d1 > 0.0 and dd1 > 0.0)):
                     # penetrating since a located separation (within the root's error) and
                     # growing now or again at the end: the contact resumes here or where delta
@@ -581,6 +574,7 @@ def adaptive_pair(
                                               w0, z0, g0, w1, z1, g1, -ps0, -ps1, -gp,
                                               ONSET_TOL)  # fmt: skip
                     onset = True
+                if onset:
                     if mode == PRE_RUN_TO_CONTACT:
                         return
                     p1s = ag0 + slope * (s + hh)
