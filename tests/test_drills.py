@@ -469,3 +469,37 @@ def test_no_silent_nan_at_extreme_parameters():
     for method, c in counts.items():
         assert c["unflagged_nonfinite"] == 0, (method, c)
         assert c["ok"] > 0, (method, c)  # the drill runs real simulations, not only failures
+
+
+# Extreme-grid cases that ``adaptive`` got wrong with status ``ok`` (zero gap, the drill's
+# record): (left, right) periods [s], masses [kg], beta [N/m^1.5], e, PGA [g], and the peak
+# force [N] and impacts of the independent SciPy reference
+# (integrators.reference.reference_solution, DOP853 at rtol 1e-11).  Before the fixes of the
+# SDOF-pair kernel: 1.73e5 N (the contact that starts at t = 0 stepped at dt_s), 1.30e5 N (a
+# building resting on a 1e8-kg neighbour, a sustained contact under-resolved), 120 N and
+# 4 impacts (a contact resumed after a located separation stepped without force).
+_ADAPTIVE_CASES = [
+    ((5.0, 0.05), (1e2, 1e2), 1e12, 0.5, 2.0, 642.4139106251769, 1),
+    ((0.5, 5.0), (1e2, 1e8), 1e9, 0.1, 0.5, 6716.054497780488, 1),
+    ((0.5, 5.0), (1e2, 1e2), 1e12, 0.5, 0.5, 56015.747833439134, 29),
+]
+
+
+@pytest.mark.parametrize("dt_s", [0.01, 0.001])
+def test_adaptive_peak_force_at_extreme_parameters_matches_the_reference(dt_s):
+    from pound_mc.motions import load_record, record_arrays
+
+    for periods, masses, beta, e, pga_g, ref_force, ref_impacts in _ADAPTIVE_CASES:
+        dt_rec, acc = record_arrays(load_record("builtin:knet-akt013", duration_s=3.0, pga_g=pga_g))
+        out = integrators.simulate_sdof_pairs(
+            acc, dt_rec, left_period_s=periods[0], right_period_s=periods[1],
+            left_mass_kg=masses[0], right_mass_kg=masses[1], left_damping_ratio=0.05,
+            right_damping_ratio=0.05, gap_m=0.0, beta=beta,
+            xi=float(xi_from_e(e, "jankowski2008")), dt_s=dt_s, method="adaptive",
+            contact_model="jankowski",
+        )  # fmt: skip
+        case = (periods, masses, beta, e, pga_g)
+        assert out["status"][0] == 0, case
+        assert abs(out["peak_force"][0] / ref_force - 1.0) < 0.01, (case, out["peak_force"][0])
+        # the reference counts an impact from any penetration, the kernel from 1e-9 m on
+        assert abs(out["impacts"][0] - ref_impacts) <= 1, (case, out["impacts"][0])
