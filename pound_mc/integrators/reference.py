@@ -303,7 +303,7 @@ def reference_solution(
         if np.any(phase):
             f = forces(yy[:n], yy[n : 2 * n])
             dy[n:] -= (w.T @ f) / masses
-        if yielding.any():
+        if inelastic_storey.any():
             # the plastic drifts' forces (1 - alpha) k u_p pull the floor above a storey back
             # and push the floor below
             fp = k_plastic * plastic_drift(drifts(yy[:n]), yy)
