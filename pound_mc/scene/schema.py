@@ -391,8 +391,8 @@ SDOF = Table(
         Field("height_m", "number", "Height of the mass; needed only to pair it with a shear "
               "building's floors.", unit="m", minimum=0.0, exclusive_minimum=True),
         _HYSTERESIS,
-        Field("yield_disp_m", "number", "Displacement at yield (required for bilinear and bouc-wen).",
-              unit="m", minimum=0.0, exclusive_minimum=True, varied=True),
+        Field("yield_disp_m", "number", "Displacement at yield (required for bilinear and "
+              "bouc-wen).", unit="m", minimum=0.0, exclusive_minimum=True, varied=True),
         _POST_YIELD,
         _BW_EXPONENT,
     ),
@@ -419,8 +419,8 @@ SHEAR = Table(
         _BUILDING_DAMPING,
         _HYSTERESIS,
         Field("storey_yield_disp_m", "numbers", "Inter-storey drift at yield, bottom to top, "
-              "or one for every storey (required for bilinear and bouc-wen).", unit="m", minimum=0.0,
-              exclusive_minimum=True, varied=True),
+              "or one for every storey (required for bilinear and bouc-wen).", unit="m",
+              minimum=0.0, exclusive_minimum=True, varied=True),
         _POST_YIELD,
         _BW_EXPONENT,
     ),
