@@ -37,7 +37,7 @@ from pound_mc.integrators.adaptive import adaptive
 from pound_mc.integrators.adaptive_bilinear import adaptive_bilinear, refuse_unsupported
 from pound_mc.integrators.adaptive_pair import adaptive_pair
 from pound_mc.integrators.fixed import CENTRAL_DIFFERENCE, NEWMARK, NEWMARK_EXPLICIT, fixed
-from pound_mc.integrators.hysteretic import N_STOREY_COLUMNS, S_BW, newmark_hysteretic
+from pound_mc.integrators.hysteretic import N_STOREY_COLUMNS, newmark_hysteretic
 from pound_mc.integrators.outputs import (
     C_MAX_IMPACT_VELOCITY,
     C_MAX_PENETRATION,
@@ -172,12 +172,6 @@ def _check_inelastic(settings, history: bool, pair: bool = False, store=None, ze
     ``pair``: an SDOF pair (``adaptive`` runs it where
     :func:`~pound_mc.integrators.adaptive_bilinear.refuse_unsupported` lets it).
     """
-    if settings.method == ADAPTIVE and pair and np.any(store[:, S_BW] > 0.0):
-        raise InputError(
-            "hysteresis = 'bouc-wen' runs with method = 'newmark' (or 'newmark-explicit'); set "
-            "it and a step dt_s (1e-3 s or less)",
-            key="integrator.method",
-        )
     if settings.method == ADAPTIVE and pair:
         refuse_unsupported(store, zeta)
         if settings.rest_v.size > 0:
