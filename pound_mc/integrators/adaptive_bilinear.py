@@ -54,7 +54,7 @@ from pound_mc.integrators.adaptive_pair import (
     _stage,
     _track_floor,
 )
-from pound_mc.integrators.hysteretic import S_ALPHA, S_K, S_YIELD, storey_outputs
+from pound_mc.integrators.hysteretic import S_ALPHA, S_BW, S_K, S_YIELD, storey_outputs
 from pound_mc.integrators.laws import LAW_CODES, duration, episode_zeta, force_rate, stored
 from pound_mc.integrators.outputs import (
     C_IMPACTS,
@@ -99,7 +99,14 @@ def refuse_unsupported(store, zeta) -> None:
     """Raise :class:`~pound_mc.errors.InputError` for a branch ``adaptive`` cannot step.
 
     ``store``: the storey table (row ``j``: building ``j``), ``zeta``: the damping ratios.
+    Bouc-Wen storeys are not piecewise linear: they run with ``newmark``.
     """
+    if np.any(store[:, S_BW] > 0.0):
+        raise InputError(
+            "hysteresis = 'bouc-wen' runs with method = 'newmark' (or 'newmark-explicit'); set "
+            "it and a step dt_s (1e-3 s or less)",
+            key="integrator.method",
+        )
     for j, side in enumerate(("left", "right")):
         alpha = store[j, S_ALPHA]
         if math.isfinite(store[j, S_YIELD]) and not branch_supported(alpha, zeta[j]):

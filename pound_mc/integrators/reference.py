@@ -211,8 +211,10 @@ def reference_solution(
 
     # storeys: drift u_s = x[top] - x[bottom] (bottom -1: the ground); a bilinear storey resists
     # alpha k u + (1 - alpha) k z, i.e. k u less (1 - alpha) k u_p with u_p = u - z its plastic
-    # drift; mode 0 elastic (u_p fixed), +1 / -1 yielding (z = +-u_y, u_p follows u)
-    s_top, s_bot, s_k, s_uy, s_alpha, s_side, s_h = [], [], [], [], [], [], []
+    # drift; mode 0 elastic (u_p fixed), +1 / -1 yielding (z = +-u_y, u_p follows u).  A
+    # Bouc-Wen storey's z is a state of the ODE (after x and v), its smooth law needs no events;
+    # the last state is then its hysteretic dissipation (1 - alpha) k int z du_p
+    s_top, s_bot, s_k, s_uy, s_alpha, s_side, s_h, s_bw = [], [], [], [], [], [], [], []
     for b, bld in enumerate(buildings):
         off = int(starts[b])
         for st in range(bld.n_floors):
@@ -223,12 +225,20 @@ def reference_solution(
             s_alpha.append(bld.post_yield_ratio)
             s_side.append(min(b, 1))  # left, or one of the others
             s_h.append(bld.storey_height_m[st])
+            s_bw.append(bld.bw_exponent if bld.hysteresis == "bouc-wen" else 0.0)
     s_top, s_bot = np.array(s_top), np.array(s_bot)
     s_k, s_uy, s_alpha = np.array(s_k, float), np.array(s_uy, float), np.array(s_alpha, float)
     ns = s_top.size
-    yielding = np.isfinite(s_uy)
-    uy_finite = np.where(yielding, s_uy, 0.0)
-    k_plastic = np.where(yielding, (1.0 - s_alpha) * np.where(yielding, s_k, 0.0), 0.0)
+    s_bw = np.array(s_bw, float)
+    bw = s_bw > 0.0
+    bw_idx = np.flatnonzero(bw)
+    nz = bw_idx.size
+    inelastic_storey = np.isfinite(s_uy)
+    yielding = inelastic_storey & ~bw  # bilinear storeys (located events)
+    uy_finite = np.where(inelastic_storey, s_uy, 0.0)
+    k_plastic = np.where(
+        inelastic_storey, (1.0 - s_alpha) * np.where(inelastic_storey, s_k, 0.0), 0.0
+    )
     s_mode = np.zeros(ns, dtype=int)
     s_up = np.zeros(ns)
     e_hyst = 0.0
@@ -241,30 +251,37 @@ def reference_solution(
         )
         return x[s_top] - xb
 
-    def plastic_drift(u):
-        return np.where(s_mode == 0, s_up, u - s_mode * uy_finite)
+    def plastic_drift(u, yy=None):
+        up = np.where(s_mode == 0, s_up, u - s_mode * uy_finite)
+        if nz and yy is not None:
+            up[bw_idx] = u[bw_idx] - yy[2 * n : 2 * n + nz]
+        return up
 
-    y = np.zeros(2 * n)
+    y = np.zeros(2 * n + (nz + 1 if nz else 0))
     if x0 is not None:
         y[:n] = np.asarray(x0, dtype=float)
+        y[2 * n : 2 * n + nz] = drifts(y[:n])[bw_idx]
     if v0 is not None:
-        y[n:] = np.asarray(v0, dtype=float)
+        y[n : 2 * n] = np.asarray(v0, dtype=float)
 
     # tolerances
     omega_all = np.concatenate([b.omega for b in buildings])
     pga = float(np.max(np.abs(acc))) if npts else 0.0
     x_scale = max(pga / omega_all.min() ** 2, np.max(np.abs(y[:n])), 1e-300)
-    x_scale = max(x_scale, np.max(np.abs(y[n:])) / omega_all.min())
+    x_scale = max(x_scale, np.max(np.abs(y[n : 2 * n])) / omega_all.min())
     atol = np.r_[
         np.full(n, atol_scale * x_scale), np.full(n, atol_scale * x_scale * omega_all.max())
     ]
+    if nz:
+        e_scale = float(np.max(k_plastic[bw_idx] * uy_finite[bw_idx] * x_scale))
+        atol = np.r_[atol, np.full(nz, atol_scale * x_scale), atol_scale * e_scale]
 
     # phases at the start (already in contact: by the sign of delta_dot, not counted)
     phase = np.zeros(nc, dtype=int)
     for j in range(nc):
         d = w[j] @ y[:n] - gap[j]
         if d > 0.0:
-            dd = w[j] @ y[n:]
+            dd = w[j] @ y[n : 2 * n]
             phase[j] = _APPROACH if dd > 0.0 else _RESTITUTION
             start_episode(j, dd)
 
@@ -280,20 +297,28 @@ def reference_solution(
         return f
 
     def rhs(t, yy):
-        dy = a_lin @ yy
+        dy = a_lin @ yy if not nz else a_lin @ yy[: 2 * n]
         dy[n:] -= state["ag0"] + state["slope"] * (t - state["t0"])
         dy[n + fixed] = 0.0
         if np.any(phase):
-            f = forces(yy[:n], yy[n:])
+            f = forces(yy[:n], yy[n : 2 * n])
             dy[n:] -= (w.T @ f) / masses
-        if yielding.any():
+        if inelastic_storey.any():
             # the plastic drifts' forces (1 - alpha) k u_p pull the floor above a storey back
             # and push the floor below
-            fp = k_plastic * plastic_drift(drifts(yy[:n]))
+            fp = k_plastic * plastic_drift(drifts(yy[:n]), yy)
             np.add.at(dy, n + s_top, fp / masses[s_top])
             below = s_bot >= 0
             np.subtract.at(dy, n + s_bot[below], fp[below] / masses[s_bot[below]])
             dy[n + fixed] = 0.0
+        if nz:
+            # Bouc-Wen: z' = u' (1 - |z / u_y|^n (0.5 sign(u' z) + 0.5))
+            ud = drifts(yy[n : 2 * n])[bw_idx]
+            z = yy[2 * n : 2 * n + nz]
+            r = np.abs(z / uy_finite[bw_idx]) ** s_bw[bw_idx]
+            zd = ud * (1.0 - r * (0.5 * np.sign(ud * z) + 0.5))
+            power = np.sum(k_plastic[bw_idx] * z * (ud - zd))
+            dy = np.r_[dy, zd, power]
         return dy
 
     def make_storey_event(st, which, direction):
@@ -325,7 +350,7 @@ def reference_solution(
         else:
 
             def ev(_t, yy):
-                return w[j] @ yy[n:]
+                return w[j] @ yy[n : 2 * n]
 
         ev.terminal = True
         ev.direction = direction
@@ -384,7 +409,7 @@ def reference_solution(
             def force_of(s, j=j):
                 # penetration and its rate from the state (displacements, then velocities)
                 d = w[j] @ s[:n] - gap[j]
-                dd = w[j] @ s[n:]
+                dd = w[j] @ s[n : 2 * n]
                 return _contact_force(model, d, dd, beta, xi[j], meff[j], zhd[j], phase[j])
 
             def force_at(t, force_of=force_of):
@@ -481,7 +506,7 @@ def reference_solution(
                     phase[j] = _APPROACH
                     pending[j] = True  # an impact once the penetration is deep enough
                     impact_times.append(t)
-                    start_episode(j, w[j] @ y[n:])
+                    start_episode(j, w[j] @ y[n : 2 * n])
                     h_last = None  # let the solver choose a step for the stiff contact
                 elif kind == "turn":
                     phase[j] = _RESTITUTION
@@ -499,8 +524,10 @@ def reference_solution(
     x_left = peak_x[:nl]
     x_right = peak_x[nl:]
     u_end = drifts(y[:n])
-    up_end = plastic_drift(u_end)
-    e_hyst += float(np.sum(k_plastic * uy_finite * np.abs(up_end - s_up)))
+    up_end = plastic_drift(u_end, y)
+    e_hyst += float(np.sum(np.where(yielding, k_plastic * uy_finite * np.abs(up_end - s_up), 0)))
+    if nz:
+        e_hyst += float(y[-1])
     side_of = np.array(s_side)
     storey_out = {}
     # "right": the right building, or the largest over the others of a row
@@ -529,7 +556,7 @@ def reference_solution(
         "contact_peak_force": peak_f.copy(),
         "contact_impacts": impacts.copy(),
         "x_end": y[:n].copy(),
-        "v_end": y[n:].copy(),
+        "v_end": y[n : 2 * n].copy(),
         "segments": segments,
         "wall_s": time.perf_counter() - t_wall,
         **storey_out,

@@ -33,7 +33,7 @@ __all__ = [
 ]
 
 #: Hysteresis laws of a building's storeys (DESIGN.md section 9); the first is the default.
-HYSTERESIS = ("elastic", "bilinear")
+HYSTERESIS = ("elastic", "bilinear", "bouc-wen")
 
 #: Floors whose elevations differ by less than this are at equal height [m].
 HEIGHT_TOLERANCE_M = 1e-6
@@ -56,14 +56,21 @@ class Building:
         Floor elevations above the ground [m] (``None`` for an SDOF without a height).
     damping_ratio : float
         Damping ratio of every mode [-].
-    hysteresis : {"elastic", "bilinear"}
-        Storey law: linear elastic, or bilinear with kinematic hardening (storey force
-        ``alpha k u + (1 - alpha) k z``, ``z`` elastic-perfectly-plastic with ``|z| <= u_y``).
-        The modes, and the damping built from them, are those of the initial elastic building.
+    hysteresis : {"elastic", "bilinear", "bouc-wen"}
+        Storey law: linear elastic, bilinear with kinematic hardening (storey force
+        ``alpha k u + (1 - alpha) k z``, ``z`` elastic-perfectly-plastic with ``|z| <= u_y``),
+        or Bouc-Wen (same force, ``z`` [m] smooth:
+        ``z' = u' (A - |z / u_y|^n (beta_bw sign(u' z) + gamma_bw))`` with ``A = 1``,
+        ``beta_bw = gamma_bw = 0.5``, so that ``|z| -> u_y`` as in the bilinear law; no
+        stiffness or strength degradation, no pinching).  The modes, and the damping built
+        from them, are those of the initial elastic building.
     yield_disp_m : numpy.ndarray or None
-        Storey drift at yield ``u_y`` per storey [m] (bilinear only).
+        Storey drift at yield ``u_y`` per storey [m] (inelastic only).
     post_yield_ratio : float
-        Post-yield stiffness over the elastic stiffness ``alpha`` [-] (bilinear only).
+        Post-yield stiffness over the elastic stiffness ``alpha`` [-] (inelastic only).
+    bw_exponent : float
+        Bouc-Wen exponent ``n`` [-] (sharpness of the transition to yield; large ``n``
+        approaches the bilinear law), Bouc-Wen only.
     """
 
     model: str
@@ -77,6 +84,7 @@ class Building:
     hysteresis: str = "elastic"
     yield_disp_m: np.ndarray | None = None
     post_yield_ratio: float = 0.0
+    bw_exponent: float = 2.0
 
     def __post_init__(self):
         if self.model == "wall":
@@ -176,8 +184,10 @@ def _check_damping(value, *, key: str, file=None) -> float:
     return float(value)
 
 
-def _hysteresis(hysteresis, yield_disp, ratio, n: int, *, yield_key: str, file, prefix: str):
-    """Checked ``(hysteresis, yield drifts [m] or None, post-yield ratio)`` of a building."""
+def _hysteresis(
+    hysteresis, yield_disp, ratio, n: int, *, yield_key: str, file, prefix: str, exponent=None
+):
+    """Checked ``(hysteresis, yield drifts [m] or None, post-yield ratio, Bouc-Wen exponent)``."""
     if hysteresis not in HYSTERESIS:
         raise InputError(
             f"unknown hysteresis {hysteresis!r}; allowed: {', '.join(map(repr, HYSTERESIS))}",
@@ -188,9 +198,16 @@ def _hysteresis(hysteresis, yield_disp, ratio, n: int, *, yield_key: str, file, 
         for key, value in ((yield_key, yield_disp), ("post_yield_ratio", ratio)):
             if value is not None:
                 raise InputError(
-                    "applies only to hysteresis = 'bilinear'", file=file, key=prefix + key
+                    "applies only to hysteresis = 'bilinear' or 'bouc-wen'",
+                    file=file,
+                    key=prefix + key,
                 )
-        return "elastic", None, 0.0
+    if hysteresis != "bouc-wen" and exponent is not None:
+        raise InputError(
+            "applies only to hysteresis = 'bouc-wen'", file=file, key=prefix + "bw_exponent"
+        )
+    if hysteresis == "elastic":
+        return "elastic", None, 0.0, 2.0
     if yield_disp is None:
         raise InputError(
             f"is required for hysteresis = {hysteresis!r}", file=file, key=prefix + yield_key
@@ -207,7 +224,16 @@ def _hysteresis(hysteresis, yield_disp, ratio, n: int, *, yield_key: str, file, 
         raise InputError(
             f"must be a number in [0, 1), got {ratio!r}", file=file, key=prefix + "post_yield_ratio"
         )
-    return hysteresis, uy, float(ratio)
+    exponent = 2.0 if exponent is None else exponent
+    if not (
+        isinstance(exponent, int | float)
+        and not isinstance(exponent, bool)
+        and 1.0 <= exponent <= 50.0
+    ):
+        raise InputError(
+            f"must be a number in [1, 50], got {exponent!r}", file=file, key=prefix + "bw_exponent"
+        )
+    return hysteresis, uy, float(ratio), float(exponent)
 
 
 def sdof(
@@ -221,6 +247,7 @@ def sdof(
     post_yield_ratio: float | None = None,
     file=None,
     prefix: str = "",
+    bw_exponent: float | None = None,
 ) -> Building:
     """Single-degree-of-freedom building.
 
@@ -234,12 +261,15 @@ def sdof(
         Viscous damping ratio [-].
     height_m : float, optional
         Height of the mass [m]; needed only to pair it with a shear building's floors.
-    hysteresis : {"elastic", "bilinear"}
+    hysteresis : {"elastic", "bilinear", "bouc-wen"}
         Law of the storey (:class:`Building`).
     yield_disp_m : float, optional
-        Displacement at yield [m] (bilinear).
+        Displacement at yield [m] (bilinear, Bouc-Wen).
     post_yield_ratio : float, optional
-        Post-yield over elastic stiffness [-] (bilinear, default 0: elastic-perfectly-plastic).
+        Post-yield over elastic stiffness [-] (bilinear, Bouc-Wen; default 0:
+        elastic-perfectly-plastic).
+    bw_exponent : float, optional
+        Bouc-Wen exponent ``n`` [-] (default 2).
     """
     t = _check_positive(period_s, key=f"{prefix}period_s", file=file)[0]
     m = _check_positive(mass_kg, key=f"{prefix}mass_kg", file=file)[0]
@@ -249,7 +279,7 @@ def sdof(
         elevation = _check_positive(height_m, key=f"{prefix}height_m", file=file)
     k = m * (2.0 * math.pi / t) ** 2
     hyst = _hysteresis(hysteresis, yield_disp_m, post_yield_ratio, 1, yield_key="yield_disp_m",
-                       file=file, prefix=prefix)  # fmt: skip
+                       file=file, prefix=prefix, exponent=bw_exponent)  # fmt: skip
     return Building("sdof", np.array([m]), np.array([k]), elevation, z, *hyst)
 
 
@@ -264,6 +294,7 @@ def shear_building(
     post_yield_ratio: float | None = None,
     file=None,
     prefix: str = "",
+    bw_exponent: float | None = None,
 ) -> Building:
     """Shear building (lumped storey masses, storey shear springs, classical damping).
 
@@ -277,12 +308,14 @@ def shear_building(
         Storey heights, bottom to top [m]; floor elevations are their cumulative sums.
     damping_ratio : float
         Damping ratio of every mode [-].
-    hysteresis : {"elastic", "bilinear"}
+    hysteresis : {"elastic", "bilinear", "bouc-wen"}
         Law of the storeys (:class:`Building`).
     storey_yield_disp_m : array_like, optional
-        Inter-storey drift at yield per storey (or one for all) [m] (bilinear).
+        Inter-storey drift at yield per storey (or one for all) [m] (bilinear, Bouc-Wen).
     post_yield_ratio : float, optional
-        Post-yield over elastic stiffness [-] (bilinear, default 0).
+        Post-yield over elastic stiffness [-] (bilinear, Bouc-Wen; default 0).
+    bw_exponent : float, optional
+        Bouc-Wen exponent ``n`` [-] (default 2).
     """
     m = _check_positive(storey_mass_kg, key=f"{prefix}storey_mass_kg", file=file)
     k = _check_positive(
@@ -298,7 +331,8 @@ def shear_building(
         )
     z = _check_damping(damping_ratio, key=f"{prefix}damping_ratio", file=file)
     hyst = _hysteresis(hysteresis, storey_yield_disp_m, post_yield_ratio, m.size,
-                       yield_key="storey_yield_disp_m", file=file, prefix=prefix)  # fmt: skip
+                       yield_key="storey_yield_disp_m", file=file, prefix=prefix,
+                       exponent=bw_exponent)  # fmt: skip
     return Building("shear", m, k, np.cumsum(h), z, *hyst)
 
 
@@ -326,7 +360,7 @@ def building_from_dict(spec: dict, *, file=None, side: str = "left") -> Building
     model = spec.get("model", "sdof")
     if model == "sdof":
         allowed = {"model", "period_s", "mass_kg", "damping_ratio", "height_m", "hysteresis",
-                   "yield_disp_m", "post_yield_ratio"}  # fmt: skip
+                   "yield_disp_m", "post_yield_ratio", "bw_exponent"}  # fmt: skip
         _unknown(spec, allowed, file=file, prefix=prefix)
         for key in ("period_s", "mass_kg"):
             if key not in spec:
@@ -341,6 +375,7 @@ def building_from_dict(spec: dict, *, file=None, side: str = "left") -> Building
             post_yield_ratio=spec.get("post_yield_ratio"),
             file=file,
             prefix=prefix,
+            bw_exponent=spec.get("bw_exponent"),
         )
     if model == "shear":
         allowed = {
@@ -352,6 +387,7 @@ def building_from_dict(spec: dict, *, file=None, side: str = "left") -> Building
             "hysteresis",
             "storey_yield_disp_m",
             "post_yield_ratio",
+            "bw_exponent",
         }
         _unknown(spec, allowed, file=file, prefix=prefix)
         for key in ("storey_mass_kg", "storey_stiffness_N_per_m", "storey_height_m"):
@@ -367,6 +403,7 @@ def building_from_dict(spec: dict, *, file=None, side: str = "left") -> Building
             post_yield_ratio=spec.get("post_yield_ratio"),
             file=file,
             prefix=prefix,
+            bw_exponent=spec.get("bw_exponent"),
         )
     raise InputError(
         f"unknown model {model!r}; allowed: 'sdof', 'shear'", file=file, key=prefix + "model"

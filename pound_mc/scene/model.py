@@ -188,7 +188,8 @@ class Scene:
 
         Returns the drift rows in modal coordinates (storeys x modes, ``u = D q``) and the
         storey table (stiffness [N/m], yield drift [m] (inf where elastic), post-yield ratio,
-        storey height [m] (NaN: none), building 0 left / 1 right), left storeys first.
+        storey height [m] (NaN: none), building 0 left / 1 right, Bouc-Wen exponent (0: not
+        Bouc-Wen)), left storeys first.
         """
         if not self.inelastic:
             return None
@@ -200,9 +201,10 @@ class Scene:
             ns = bld.n_floors
             dmat[start : start + ns, cols] = bld.drift_matrix() @ bld.phi
             uy = bld.yield_disp_m if bld.inelastic else np.full(ns, np.inf)
+            n_bw = bld.bw_exponent if bld.hysteresis == "bouc-wen" else 0.0
             for s in range(ns):
                 rows.append([bld.storey_stiffness_N_per_m[s], uy[s], bld.post_yield_ratio,
-                             bld.storey_height_m[s], b])  # fmt: skip
+                             bld.storey_height_m[s], b, n_bw])  # fmt: skip
             start += ns
         return dmat, np.array(rows, dtype=float)
 
@@ -416,13 +418,14 @@ def _building(spec, side: str, file, errors: list, wall_ok: bool | None = None) 
             return sdof(v["period_s"], v["mass_kg"], v["damping_ratio"], v.get("height_m"),
                         hysteresis=v["hysteresis"], yield_disp_m=v.get("yield_disp_m"),
                         post_yield_ratio=v.get("post_yield_ratio"), file=file,
-                        prefix=f"{side}.")  # fmt: skip
+                        prefix=f"{side}.", bw_exponent=v.get("bw_exponent"))  # fmt: skip
         return shear_building(v["storey_mass_kg"], v["storey_stiffness_N_per_m"],
                               v["storey_height_m"], v["damping_ratio"],
                               hysteresis=v["hysteresis"],
                               storey_yield_disp_m=v.get("storey_yield_disp_m"),
                               post_yield_ratio=v.get("post_yield_ratio"), file=file,
-                              prefix=f"{side}.")  # fmt: skip
+                              prefix=f"{side}.",
+                              bw_exponent=v.get("bw_exponent"))  # fmt: skip
     except InputError as exc:  # rules across keys: storey lists of equal length
         errors.append(exc)
         return None

@@ -358,14 +358,21 @@ _BUILDING_DAMPING = Field(
 )  # fmt: skip
 
 _HYSTERESIS = Field(
-    "hysteresis", "string", "Storey law: `elastic`, or `bilinear` (kinematic hardening: storey "
-    "force alpha k u + (1 - alpha) k z, z elastic-perfectly-plastic with |z| <= yield drift); "
-    "damping from the initial elastic modes.", default="elastic", choices=HYSTERESIS,
+    "hysteresis", "string", "Storey law: `elastic`, `bilinear` (kinematic hardening: storey "
+    "force alpha k u + (1 - alpha) k z, z elastic-perfectly-plastic with |z| <= yield drift) "
+    "or `bouc-wen` (same force, z smooth: z' = u' (1 - |z/u_y|^n (0.5 sign(u' z) + 0.5)), no "
+    "degradation or pinching; runs with `newmark`); damping from the initial elastic modes.",
+    default="elastic", choices=HYSTERESIS,
 )  # fmt: skip
 _POST_YIELD = Field(
     "post_yield_ratio", "number", "Post-yield over elastic storey stiffness alpha (bilinear; "
     "default 0, elastic-perfectly-plastic).", minimum=0.0, maximum=1.0, exclusive_maximum=True,
     varied=True,
+)  # fmt: skip
+_BW_EXPONENT = Field(
+    "bw_exponent", "number", "Bouc-Wen exponent n (bouc-wen only; default 2): the sharpness "
+    "of the transition to yield, large n approaching the bilinear law.", minimum=1.0,
+    maximum=50.0,
 )  # fmt: skip
 
 SDOF = Table(
@@ -384,9 +391,10 @@ SDOF = Table(
         Field("height_m", "number", "Height of the mass; needed only to pair it with a shear "
               "building's floors.", unit="m", minimum=0.0, exclusive_minimum=True),
         _HYSTERESIS,
-        Field("yield_disp_m", "number", "Displacement at yield (required for bilinear).",
-              unit="m", minimum=0.0, exclusive_minimum=True, varied=True),
+        Field("yield_disp_m", "number", "Displacement at yield (required for bilinear and "
+              "bouc-wen).", unit="m", minimum=0.0, exclusive_minimum=True, varied=True),
         _POST_YIELD,
+        _BW_EXPONENT,
     ),
     variant="model = 'sdof'",
 )  # fmt: skip
@@ -411,9 +419,10 @@ SHEAR = Table(
         _BUILDING_DAMPING,
         _HYSTERESIS,
         Field("storey_yield_disp_m", "numbers", "Inter-storey drift at yield, bottom to top, "
-              "or one for every storey (required for bilinear).", unit="m", minimum=0.0,
-              exclusive_minimum=True, varied=True),
+              "or one for every storey (required for bilinear and bouc-wen).", unit="m",
+              minimum=0.0, exclusive_minimum=True, varied=True),
         _POST_YIELD,
+        _BW_EXPONENT,
     ),
     variant="model = 'shear'",
 )  # fmt: skip
