@@ -58,12 +58,19 @@ def _line_dim(ds, line):
     return line if line is not None else (grid[0] if grid else None)
 
 
-def _profile_line(ax, q, heights, scale: float, k: int, label: str) -> None:
-    """The ``k``-th line of a profile: median of ``q`` against ``heights``, 5-95 % band."""
-    style = line_style(k)
-    ax.plot(q.sel(quantile=0.5).values * scale, heights, ms=5, label=label, **style)
-    low, high = (q.sel(quantile=level).values * scale for level in (0.05, 0.95))
-    ax.fill_betweenx(heights, low, high, color=style["color"], alpha=0.12, lw=0)
+def _profile_lines(ax, ds, q, line, heights, scale: float) -> None:
+    """One profile per value of ``line`` (a single one where ``line`` is None).
+
+    Each is the median of ``q`` against ``heights`` with its 5-95 % band.
+    """
+    values = [None] if line is None else range(ds.sizes[line])
+    for k, i in enumerate(values):
+        sq = q if i is None else q.isel({line: i})
+        style = line_style(k)
+        label = "median" if i is None else value_text(ds, line, i)
+        ax.plot(sq.sel(quantile=0.5).values * scale, heights, ms=5, label=label, **style)
+        low, high = (sq.sel(quantile=level).values * scale for level in (0.05, 0.95))
+        ax.fill_betweenx(heights, low, high, color=style["color"], alpha=0.12, lw=0)
 
 
 def contacts_chart(
@@ -107,13 +114,8 @@ def contacts_chart(
         if "contact_elevation" in ds.coords
         else ds[CONTACT_DIM].values.astype(float)
     )
-    scale = scale_of(ds, variable)
     fig, (ax,) = new_axes(ax, (7.6, 4.8))
-    values = [None] if line is None else range(ds.sizes[line])
-    for k, i in enumerate(values):
-        sq = q if i is None else q.isel({line: i})
-        label = "median" if i is None else value_text(ds, line, i)
-        _profile_line(ax, sq, height, scale, k, label)
+    _profile_lines(ax, ds, q, line, height, scale_of(ds, variable))
     ax.set_yticks(height, [f"{h:g}" for h in height])
     ax.set(
         xlabel=axis_label(ds, variable),
@@ -170,26 +172,17 @@ def profile_chart(
     fig, axes = new_axes(ax, (10.0, 4.8), ncols=len(names))
     for ax_b, name in zip(axes, names, strict=True):
         scale = scale_of(ds, name)
-        along = STOREY_DIM in ds[name].dims
-        if along:
-            keep = [STOREY_DIM] + ([line] if line else [])
+        if STOREY_DIM in ds[name].dims:
+            q = _over_samples(ds, name, [STOREY_DIM] + ([line] if line else []))
+            storeys = ds[STOREY_DIM].values
+            _profile_lines(ax_b, ds, q, line, storeys, scale)
+            ax_b.set_yticks(storeys, [str(s) for s in storeys])
+            ax_b.set(xlabel=axis_label(ds, name), ylabel="storey [-]")
         else:
-            keep = [line] if line else []
-        q = _over_samples(ds, name, keep)
-        values = [None] if line is None or not along else range(ds.sizes[line])
-        for k, i in enumerate(values):
-            sq = q if i is None else q.isel({line: i})
-            med = sq.sel(quantile=0.5).values * scale
-            if along:
-                storeys = ds[STOREY_DIM].values
-                label = "median" if i is None else value_text(ds, line, i)
-                _profile_line(ax_b, sq, storeys, scale, k, label)
-                ax_b.set_yticks(storeys, [str(s) for s in storeys])
-                ax_b.set(xlabel=axis_label(ds, name), ylabel="storey [-]")
-            else:
-                xs = ds[line].values * scale_of(ds, line) if line else np.zeros(1)
-                ax_b.plot(xs, np.atleast_1d(med), ms=5, label="median", **line_style(k))
-                ax_b.set(xlabel=axis_label(ds, line) if line else "", ylabel=axis_label(ds, name))
+            med = _over_samples(ds, name, [line] if line else []).sel(quantile=0.5).values * scale
+            xs = ds[line].values * scale_of(ds, line) if line else np.zeros(1)
+            ax_b.plot(xs, np.atleast_1d(med), ms=5, label="median", **line_style(0))
+            ax_b.set(xlabel=axis_label(ds, line) if line else "", ylabel=axis_label(ds, name))
         ax_b.set_title(ds[name].attrs.get("long_name", name), fontsize=9)
         ax_b.grid(alpha=0.3)
     legend_outside(axes[-1], title=axis_label(ds, line) if line else None)
