@@ -78,3 +78,22 @@ def test_bad_variables(key, spec, where):
 def test_unknown_method():
     with pytest.raises(InputError, match="sobol"):
         sampling.design(4, 1, 0, "halton")
+
+
+def test_uniform_shorthand_is_the_uniform_distribution():
+    # { uniform = [0, 1] } (issue 14's form for contact.e_quantile) is { distribution =
+    # "uniform", low = 0, high = 1 }: the same variable, the same draws
+    from pound_mc.study.sampling import draw, parse_variable
+
+    short, errors = parse_variable("contact.e_quantile", {"uniform": [0, 1]})
+    assert not errors
+    long, _ = parse_variable(
+        "contact.e_quantile", {"distribution": "uniform", "low": 0.0, "high": 1.0}
+    )
+    assert (short.kind, short.a, short.b) == (long.kind, long.a, long.b) == ("uniform", 0.0, 1.0)
+    np.testing.assert_array_equal(
+        draw([short], 16, 3, "sobol")["contact.e_quantile"],
+        draw([long], 16, 3, "sobol")["contact.e_quantile"],
+    )
+    _, errors = parse_variable("contact.e_quantile", {"uniform": [0.5]})
+    assert errors and "two numbers" in str(errors[0])

@@ -21,7 +21,7 @@ Distributions (``[sampling.vary]`` values):
 * ``{ material = "concrete" }`` for ``contact.e`` or ``contact.beta``: uniform over the seed's
   measured range (Table 2 over all velocities, or at ``velocity_m_s``; Table 3 over all ball
   masses, or at ``mass_kg``);
-* ``{ distribution = "uniform", low = .., high = .. }``;
+* ``{ distribution = "uniform", low = .., high = .. }`` (or ``{ uniform = [low, high] }``);
 * ``{ distribution = "normal", mean = .., std = .. }``;
 * ``{ distribution = "lognormal", median = .., sigma_ln = .. }``.
 """
@@ -264,6 +264,16 @@ def parse_variable(key: str, spec, *, file=None) -> tuple[RandomVariable | None,
         return None, errors
     if "material" in spec:
         return _material_variable(key, spec, where, file, errors), errors
+    if set(spec) == {"uniform"}:  # the shorthand { uniform = [low, high] }
+        bounds = spec["uniform"]
+        if not (isinstance(bounds, list) and len(bounds) == 2):
+            errors.append(
+                InputError(
+                    "{ uniform = [low, high] } needs two numbers", file=file, key=f"{where}.uniform"
+                )  # fmt: skip
+            )
+            return None, errors
+        spec = {"distribution": "uniform", "low": bounds[0], "high": bounds[1]}
     kind = spec.get("distribution")
     if kind not in DISTRIBUTIONS:
         errors.append(
