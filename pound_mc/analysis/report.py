@@ -25,7 +25,6 @@ from pound_mc.analysis import (
     risk,
     risk_chart,
 )
-from pound_mc.errors import InputError
 
 __all__ = ["chart_png", "report_html", "write_report"]
 
@@ -230,7 +229,7 @@ def report_html(ds: xr.Dataset, *, base_dir: str | Path | None = None, history: 
                     .ravel()[0]
                     .figure
                 )
-            except InputError as exc:  # records not readable here: say so on the page
+            except ValueError as exc:  # records not readable here, or no histories: say so
                 figures.append(f"<p>(No time history: {html.escape(str(exc))})</p>")
             else:
                 figures.append(
