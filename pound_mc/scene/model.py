@@ -298,8 +298,8 @@ class SimulationResult:
     storeys : dict or None
         With yielding buildings, per storey (left building's first, bottom to top):
         ``building`` ("left" / "right"), ``storey`` (1-based within it), ``peak_drift_ratio``
-        and ``residual_drift_ratio`` (|drift| over storey height, NaN without heights),
-        ``peak_ductility`` (peak |drift| over yield drift, NaN for a storey that cannot yield);
+        and ``residual_drift_ratio`` (``|drift|`` over storey height, NaN without heights),
+        ``peak_ductility`` (peak ``|drift|`` over yield drift, NaN for a storey that cannot yield);
         the scalar outputs ``peak_drift_left`` ... are their maxima over a building's storeys.
     """
 
