@@ -254,9 +254,8 @@ def reference_solution(
     inelastic_storey = np.isfinite(s_uy)
     yielding = inelastic_storey & ~bw  # bilinear storeys (located events)
     uy_finite = np.where(inelastic_storey, s_uy, 0.0)
-    k_plastic = np.where(
-        inelastic_storey, (1.0 - s_alpha) * np.where(inelastic_storey, s_k, 0.0), 0.0
-    )
+    # (1 - alpha) k of the yielding storeys, 0 elsewhere (a wall's infinite k never enters)
+    k_plastic = (1.0 - s_alpha) * np.where(inelastic_storey, s_k, 0.0)
     s_mode = np.zeros(ns, dtype=int)
     s_up = np.zeros(ns)
     e_hyst = 0.0
