@@ -445,48 +445,51 @@ def adaptive_pair(
         e0 = pre[PRE_E0]
         q0, q1, v0, v1 = pre[PRE_STATE], pre[PRE_STATE + 1], pre[PRE_STATE + 2], pre[PRE_STATE + 3]
         pk0, pk1 = pre[PRE_STATE + 4], pre[PRE_STATE + 5]
-    for i in range(i_first, npts - 1):
-        if mode == PRE_RUN_TO_CONTACT:
-            _snapshot_pair(pre, i, e_in, e_d, steps, e0, q0, q1, v0, v1, pk0, pk1)
-        if store:
-            _store_pair(i, q0, q1, v0, v1, f0, f1, ps0, ps1, gp, b, cd, zhd, phase, model, hx,
-                        hd, hf)  # fmt: skip
-        ag0 = ag[i]
-        slope = (ag[i + 1] - ag[i]) * inv_dt
-        s = 0.0
-        k_grid = 0  # index of the next grid point within the interval
-        fsal = False  # a new interval: new load, the next sub-step starts afresh
+    i = i_first
+    while i < npts - 1:
         if whole and fresh and not in_contact:
-            # ---------------- the interval in one exact step (one step per interval) where
-            # nothing happens inside it: no onset, no turning penetration, no floor extremum;
-            # the same arithmetic as the general linear step below, which takes the others
-            p0s = ag0 + slope * s
-            p1s = ag0 + slope * dt_rec
-            p0 = -g0 * p0s
-            p1 = -g0 * p1s
-            nq0 = a00 * q0 + a01 * v0 + a02 * p0 + a03 * p1
-            nv0 = b00 * q0 + b01 * v0 + b02 * p0 + b03 * p1
-            p0 = -g1 * p0s
-            p1 = -g1 * p1s
-            nq1 = a10 * q1 + a11 * v1 + a12 * p0 + a13 * p1
-            nv1 = b10 * q1 + b11 * v1 + b12 * p0 + b13 * p1
-            d1 = ps0 * nq0 + ps1 * nq1 - gp
-            dd1 = ps0 * nv0 + ps1 * nv1
-            xb0, xdb0, xb1, xdb1 = f0 * nq0, f0 * nv0, f1 * nq1, f1 * nv1
-            # a turning penetration or floor matters only where the bound of its cubic Hermite
-            # says the general step's screen could act (margin and tolerance as there)
-            quiet = d1 <= 0.0 and dc0 <= 0.0
-            if quiet and ddc0 > 0.0 and dd1 < 0.0:
-                margin = 0.05 * (abs(ddc0) + abs(dd1)) * dt_rec
-                bnd = max(dc0, d1) + _hermite_spread(dc0, ddc0, d1, dd1, dt_rec)
-                quiet = bnd < -margin * (1.0 + 1e-9)
-            if quiet and (xfd0 > 0.0) != (xdb0 > 0.0):
-                bnd = max(abs(xf0), abs(xb0)) + _hermite_spread(xf0, xfd0, xb0, xdb0, dt_rec)
-                quiet = bnd * (1.0 + herm_tol + 1e-9) < pk0
-            if quiet and (xfd1 > 0.0) != (xdb1 > 0.0):
-                bnd = max(abs(xf1), abs(xb1)) + _hermite_spread(xf1, xfd1, xb1, xdb1, dt_rec)
-                quiet = bnd * (1.0 + herm_tol + 1e-9) < pk1
-            if quiet:
+            # ---------------- runs of intervals in one exact step each (one step per
+            # interval) where nothing happens inside them: no onset, no turning penetration,
+            # no floor extremum; the same arithmetic as the general linear step below, which
+            # takes the others.  A loop of its own: its state stays in registers (B1: the
+            # linear phases 2.5 times faster than as a branch of the interval loop)
+            while i < npts - 1:
+                if mode == PRE_RUN_TO_CONTACT:
+                    _snapshot_pair(pre, i, e_in, e_d, steps, e0, q0, q1, v0, v1, pk0, pk1)
+                if store:
+                    _store_pair(i, q0, q1, v0, v1, f0, f1, ps0, ps1, gp, b, cd, zhd, phase,
+                                model, hx, hd, hf)  # fmt: skip
+                ag0 = ag[i]
+                slope = (ag[i + 1] - ag[i]) * inv_dt
+                s = 0.0
+                p0s = ag0 + slope * s
+                p1s = ag0 + slope * dt_rec
+                p0 = -g0 * p0s
+                p1 = -g0 * p1s
+                nq0 = a00 * q0 + a01 * v0 + a02 * p0 + a03 * p1
+                nv0 = b00 * q0 + b01 * v0 + b02 * p0 + b03 * p1
+                p0 = -g1 * p0s
+                p1 = -g1 * p1s
+                nq1 = a10 * q1 + a11 * v1 + a12 * p0 + a13 * p1
+                nv1 = b10 * q1 + b11 * v1 + b12 * p0 + b13 * p1
+                d1 = ps0 * nq0 + ps1 * nq1 - gp
+                dd1 = ps0 * nv0 + ps1 * nv1
+                xb0, xdb0, xb1, xdb1 = f0 * nq0, f0 * nv0, f1 * nq1, f1 * nv1
+                # a turning penetration or floor matters only where the bound of its cubic Hermite
+                # says the general step's screen could act (margin and tolerance as there)
+                quiet = d1 <= 0.0 and dc0 <= 0.0
+                if quiet and ddc0 > 0.0 and dd1 < 0.0:
+                    margin = 0.05 * (abs(ddc0) + abs(dd1)) * dt_rec
+                    bnd = max(dc0, d1) + _hermite_spread(dc0, ddc0, d1, dd1, dt_rec)
+                    quiet = bnd < -margin * (1.0 + 1e-9)
+                if quiet and (xfd0 > 0.0) != (xdb0 > 0.0):
+                    bnd = max(abs(xf0), abs(xb0)) + _hermite_spread(xf0, xfd0, xb0, xdb0, dt_rec)
+                    quiet = bnd * (1.0 + herm_tol + 1e-9) < pk0
+                if quiet and (xfd1 > 0.0) != (xdb1 > 0.0):
+                    bnd = max(abs(xf1), abs(xb1)) + _hermite_spread(xf1, xfd1, xb1, xdb1, dt_rec)
+                    quiet = bnd * (1.0 + herm_tol + 1e-9) < pk1
+                if not quiet:
+                    break  # the general step below takes this interval
                 steps += 1
                 en1_0, en1_1, en1_2, en1_3 = _ends(nq0, nq1, nv0, nv1, p1s, k0, ww0, g0, k1, ww1,
                                                    g1, zw2_0, zw2_1, zw4_0, zw4_1)  # fmt: skip
@@ -508,7 +511,20 @@ def adaptive_pair(
                 if not math.isfinite(q0 + q1 + v0 + v1):
                     status = STATUS_UNSTABLE
                     break
-                continue
+                i += 1
+            if status != 0 or i >= npts - 1:
+                break
+        else:
+            if mode == PRE_RUN_TO_CONTACT:
+                _snapshot_pair(pre, i, e_in, e_d, steps, e0, q0, q1, v0, v1, pk0, pk1)
+            if store:
+                _store_pair(i, q0, q1, v0, v1, f0, f1, ps0, ps1, gp, b, cd, zhd, phase, model,
+                            hx, hd, hf)  # fmt: skip
+        ag0 = ag[i]
+        slope = (ag[i + 1] - ag[i]) * inv_dt
+        s = 0.0
+        k_grid = 0  # index of the next grid point within the interval
+        fsal = False  # a new interval: new load, the next sub-step starts afresh
         while s < dt_rec * (1.0 - 1e-12):
             steps += 1
             if steps > budget:
@@ -804,6 +820,7 @@ def adaptive_pair(
                 break
         if status != 0:
             break
+        i += 1
     if mode == PRE_RUN_TO_CONTACT:
         # no contact in the whole record: the end state is shared
         _snapshot_pair(pre, npts - 1, e_in, e_d, steps, e0, q0, q1, v0, v1, pk0, pk1)

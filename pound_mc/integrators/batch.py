@@ -373,8 +373,8 @@ def run_kernel(
     if settings.method != ADAPTIVE:
         t_c = shortest_contact_s(model, cout[:, C_MAX_PENETRATION], beta, meff).min()
         out[STATUS] = flag_inaccurate(out[STATUS], out[IMPACTS], t_c, dt_s)
-    outputs = {name: float(out[k]) for k, name in enumerate(OUTPUTS)}
-    contacts = {name: cout[:, k].copy() for k, name in enumerate(CONTACT_OUTPUTS)}
+    outputs = dict(zip(OUTPUTS, out.tolist(), strict=True))
+    contacts = dict(zip(CONTACT_OUTPUTS, cout.T.copy(), strict=True))
     return KernelResult(outputs, contacts, (hx, hd, hf) if history else None)
 
 

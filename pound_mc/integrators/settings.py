@@ -15,6 +15,7 @@ for yielding buildings).
 
 from __future__ import annotations
 
+import functools
 import math
 from collections import namedtuple
 
@@ -52,6 +53,7 @@ KernelSettings = namedtuple(
     "model relation method dt_s substeps outside rest_floor xi_e0 xi_de rest_v rest_lo rest_hi "
     "xi_tab",
 )
+_LAW_NAMES = {code: name for name, code in LAW_CODES.items()}
 #: Largest damping ratio of the ``exact`` table [-].
 _XI_MAX = float(exact_table()["xi"].max())
 #: Spacing of the ``e`` grid of a relation's ``xi`` table [-] (linear interpolation in it is
@@ -125,15 +127,28 @@ def fixed_restitution(out, settings, xi) -> None:
     """
     if settings.rest_v.size > 0:
         return  # set per impact by the kernels
-    law = CONTACT_MODELS[next(k for k, v in LAW_CODES.items() if v == settings.model)]
-    xi = np.broadcast_to(np.asarray(xi, dtype=float), out.shape[:-1])
-    if law.damping is None:
-        e = np.ones_like(xi)
-    elif law.damping == "zeta":
-        e = xi
-    elif law.name == "kelvin":
-        e = np.exp(-math.pi * xi / np.sqrt(np.maximum(1.0 - xi * xi, 1e-300)))
-    else:
-        e = np.asarray(restitution_of_xi(np.clip(xi, 0.0, _XI_MAX)), dtype=float)
+    if out.ndim == 1:  # one run: the scalar, computed once per law and ``xi``
+        if out[STATUS] == 0:
+            out[PEAK_FORCE_RESTITUTION] = _restitution_one(settings.model, float(xi))
+        return
+    e = _restitution(settings.model, np.broadcast_to(np.asarray(xi, dtype=float), out.shape[:-1]))
     ok = out[..., STATUS] == 0
     out[..., PEAK_FORCE_RESTITUTION] = np.where(ok, e, out[..., PEAK_FORCE_RESTITUTION])
+
+
+def _restitution(model: int, xi: np.ndarray) -> np.ndarray:
+    """Restitution [-] the law of code ``model`` rebounds with, per damping parameter ``xi``."""
+    law = CONTACT_MODELS[_LAW_NAMES[model]]
+    if law.damping is None:
+        return np.ones_like(xi)
+    if law.damping == "zeta":
+        return xi
+    if law.name == "kelvin":
+        return np.exp(-math.pi * xi / np.sqrt(np.maximum(1.0 - xi * xi, 1e-300)))
+    return np.asarray(restitution_of_xi(np.clip(xi, 0.0, _XI_MAX)), dtype=float)
+
+
+@functools.lru_cache(maxsize=256)
+def _restitution_one(model: int, xi: float) -> float:
+    """:func:`_restitution` of one run (a scene looped over in a notebook pays it once)."""
+    return float(_restitution(model, np.asarray(xi)))
