@@ -21,6 +21,7 @@ import math
 import numpy as np
 
 from pound_mc._jit import jit
+from pound_mc.integrators import outputs
 from pound_mc.integrators.laws import (
     contact_forces,
     duration,
@@ -29,34 +30,6 @@ from pound_mc.integrators.laws import (
     force,
     force_rate,
     stored,
-)
-from pound_mc.integrators.outputs import (
-    C_IMPACTS,
-    C_IMPULSE,
-    C_MAX_IMPACT_VELOCITY,
-    C_MAX_PENETRATION,
-    C_PEAK_FORCE,
-    EP_E,
-    EP_V0,
-    IMPACT_MIN_PENETRATION_M,
-    PRE_E0,
-    PRE_E_D,
-    PRE_E_IN,
-    PRE_INTERVAL,
-    PRE_MODE,
-    PRE_RESUME,
-    PRE_RUN_TO_CONTACT,
-    PRE_STATE,
-    PRE_STEPS,
-    STATUS_NOT_CONVERGED,
-    STATUS_OK,
-    STATUS_UNSTABLE,
-    finish,
-    finish_impacts,
-    impact_log,
-    log_impact,
-    reset_contacts,
-    snapshot,
 )
 from pound_mc.integrators.toolkit import (
     accel,
@@ -325,7 +298,7 @@ def _contact_peaks(q, v, q1, v1, a0, a1, psi, gap, beta, cd, zhd, phase, model, 
     the impact-velocity log with its count (``ep``, ``peak_e``: see ``outputs.impact_log``).
     """
     for c in range(gap.size):
-        cout[c, C_IMPULSE] += cimp[c]
+        cout[c, outputs.C_IMPULSE] += cimp[c]
         if phase[c] == 0:
             continue
         d0 = rowdot(psi, c, q) - gap[c]
@@ -339,7 +312,7 @@ def _contact_peaks(q, v, q1, v1, a0, a1, psi, gap, beta, cd, zhd, phase, model, 
         # an interior maximum exceeds the step's end values by far less than 10 % (sub-steps
         # are a fraction of the contact duration): interpolate only where it could raise this
         # contact's peak
-        if max(f0, f1) >= 0.9 * cout[c, C_PEAK_FORCE] and d0 > 0.25 * d1:
+        if max(f0, f1) >= 0.9 * cout[c, outputs.C_PEAK_FORCE] and d0 > 0.25 * d1:
             r0 = force_rate(model, d0, dd0, rowdot(psi, c, a0), beta[c], cd[c], zhd[c], phase[c])
             r1 = force_rate(model, d1, dd1, rowdot(psi, c, a1), beta[c], cd[c], zhd[c], phase[c])
             if r0 > 0.0 and r1 < 0.0:
@@ -350,24 +323,26 @@ def _contact_peaks(q, v, q1, v1, a0, a1, psi, gap, beta, cd, zhd, phase, model, 
         if f0 > fm:
             fm = f0
             tm = 0.0
-        if fm > cout[c, C_PEAK_FORCE]:
-            cout[c, C_PEAK_FORCE] = fm
+        if fm > cout[c, outputs.C_PEAK_FORCE]:
+            cout[c, outputs.C_PEAK_FORCE] = fm
         if fm > peak_f:
             peak_f = fm
             peak_t = t + tm
-            peak_e[0] = ep[c, EP_E]
+            peak_e[0] = ep[c, outputs.EP_E]
         dm = max(d0, d1)
         if dd0 > 0.0 and dd1 < 0.0:
             hm, _ = hermite_max(d0, dd0, d1, dd1, hs)
             if hm > dm:
                 dm = hm
-        if dm > cout[c, C_MAX_PENETRATION]:
-            cout[c, C_MAX_PENETRATION] = dm
-        if pending[c] and dm > IMPACT_MIN_PENETRATION_M:
-            cout[c, C_IMPACTS] += 1.0  # the episode is an impact
+        if dm > cout[c, outputs.C_MAX_PENETRATION]:
+            cout[c, outputs.C_MAX_PENETRATION] = dm
+        if pending[c] and dm > outputs.IMPACT_MIN_PENETRATION_M:
+            cout[c, outputs.C_IMPACTS] += 1.0  # the episode is an impact
             pending[c] = False
-            vlog, nlog = log_impact(vlog, nlog, ep[c, EP_V0])
-            cout[c, C_MAX_IMPACT_VELOCITY] = max(cout[c, C_MAX_IMPACT_VELOCITY], ep[c, EP_V0])
+            vlog, nlog = outputs.log_impact(vlog, nlog, ep[c, outputs.EP_V0])
+            cout[c, outputs.C_MAX_IMPACT_VELOCITY] = max(
+                cout[c, outputs.C_MAX_IMPACT_VELOCITY], ep[c, outputs.EP_V0]
+            )
     return peak_f, peak_t, vlog, nlog
 
 
@@ -386,9 +361,9 @@ def _open_contact(c, v, psi, xi, beta, meff, zhd, phase, pending, model, relatio
     v0c = rowdot(psi, c, v)
     phase[c] = 1
     pending[c] = True
-    ep[c, EP_V0] = v0c
+    ep[c, outputs.EP_V0] = v0c
     if settings.rest_v.size > 0:
-        cd[c], zhd[c], ep[c, EP_E] = episode_damping(settings, model, relation, xi[c], v0c,
+        cd[c], zhd[c], ep[c, outputs.EP_E] = episode_damping(settings, model, relation, xi[c], v0c,
                                                      beta[c], meff[c], cd[c], zhd[c])  # fmt: skip
     else:
         zhd[c] = episode_zeta(model, relation, xi[c], v0c, zhd[c])
@@ -480,7 +455,7 @@ def adaptive(
     phase = np.zeros(nc, dtype=np.int64)
     pending = np.zeros(nc, dtype=np.bool_)  # an episode not yet counted as an impact
     zhd = np.zeros(nc)
-    ep, vlog, peak_e = impact_log(nc)
+    ep, vlog, peak_e = outputs.impact_log(nc)
     nlog = 0
     peaks = np.zeros(nf)
     dc0 = np.empty(nc)
@@ -507,25 +482,25 @@ def adaptive(
     # steps allowed: 200 per linear step of the record, plus room for many contacts
     budget = 200 * (npts - 1) * m_sub + 1_000_000
     in_contact = False
-    status = STATUS_OK
+    status = outputs.STATUS_OK
     store = hx.shape[0] > 0
-    reset_contacts(cout)
-    mode = int(pre[PRE_MODE]) if pre.size > 0 else 0
+    outputs.reset_contacts(cout)
+    mode = int(pre[outputs.PRE_MODE]) if pre.size > 0 else 0
     i_first = 0
-    if mode == PRE_RESUME:
-        i_first = int(pre[PRE_INTERVAL])
-        e_in = pre[PRE_E_IN]
-        e_d = pre[PRE_E_D]
-        steps = int(pre[PRE_STEPS])
-        e0 = pre[PRE_E0]
+    if mode == outputs.PRE_RESUME:
+        i_first = int(pre[outputs.PRE_INTERVAL])
+        e_in = pre[outputs.PRE_E_IN]
+        e_d = pre[outputs.PRE_E_D]
+        steps = int(pre[outputs.PRE_STEPS])
+        e0 = pre[outputs.PRE_E0]
         for j in range(n):
-            q[j] = pre[PRE_STATE + j]
-            v[j] = pre[PRE_STATE + n + j]
+            q[j] = pre[outputs.PRE_STATE + j]
+            v[j] = pre[outputs.PRE_STATE + n + j]
         for f in range(nf):
-            peaks[f] = pre[PRE_STATE + 2 * n + f]
+            peaks[f] = pre[outputs.PRE_STATE + 2 * n + f]
     for i in range(i_first, npts - 1):
-        if mode == PRE_RUN_TO_CONTACT:
-            snapshot(pre, i, e_in, e_d, steps, e0, q, v, peaks)
+        if mode == outputs.PRE_RUN_TO_CONTACT:
+            outputs.snapshot(pre, i, e_in, e_d, steps, e0, q, v, peaks)
         if store:
             _store_history(i, q, v, phi, psi, gap, beta, cd, zhd, phase, model, hx, hd, hf)
         ag0 = ag[i]
@@ -537,7 +512,7 @@ def adaptive(
             if steps > budget:
                 # absurd parameters (say beta = 1e300 makes contact sub-steps of 1e-119 s):
                 # give up instead of running for ever, and say so
-                status = STATUS_NOT_CONVERGED
+                status = outputs.STATUS_NOT_CONVERGED
                 break
             if not in_contact:
                 # ---------------- exact linear step to the next grid point (or an onset)
@@ -555,7 +530,7 @@ def adaptive(
                     fresh = True
                 c_on, tau_on = _screen_onsets(q, v, q1, v1, p0s, slope, s, hh, dc0, ddc0, dc1,
                                               ddc1, omega, zeta, gamma, psi, gap)  # fmt: skip
-                if c_on >= 0 and mode == PRE_RUN_TO_CONTACT:
+                if c_on >= 0 and mode == outputs.PRE_RUN_TO_CONTACT:
                     return
                 if c_on >= 0:
                     hh = tau_on
@@ -630,20 +605,20 @@ def adaptive(
                 k_grid = _grid_index(s, h, m_sub)
             # divergence / non-finite guard
             if not _finite(q, v):
-                status = STATUS_UNSTABLE
+                status = outputs.STATUS_UNSTABLE
                 break
-        if status != STATUS_OK:
+        if status != outputs.STATUS_OK:
             break
-    if mode == PRE_RUN_TO_CONTACT:
+    if mode == outputs.PRE_RUN_TO_CONTACT:
         # no contact in the whole record: the end state is shared
-        snapshot(pre, npts - 1, e_in, e_d, steps, e0, q, v, peaks)
+        outputs.snapshot(pre, npts - 1, e_in, e_d, steps, e0, q, v, peaks)
         return
-    if store and status == STATUS_OK:
+    if store and status == outputs.STATUS_OK:
         _store_history(npts - 1, q, v, phi, psi, gap, beta, cd, zhd, phase, model, hx, hd, hf)
     stored_energy = 0.0
     for c in range(nc):
         if phase[c] != 0:
             stored_energy += stored(model, rowdot(psi, c, q) - gap[c], beta[c])
-    finish(out, cout, peaks, side, phase, q, v, omega, e0, e_in, e_d, w_c, stored_energy,
-           peak_f, peak_t, steps, status)  # fmt: skip
-    finish_impacts(out, cout, vlog, nlog, peak_e[0])
+    outputs.finish(out, cout, peaks, side, phase, q, v, omega, e0, e_in, e_d, w_c, stored_energy,
+                   peak_f, peak_t, steps, status)  # fmt: skip
+    outputs.finish_impacts(out, cout, vlog, nlog, peak_e[0])

@@ -21,6 +21,7 @@ from __future__ import annotations
 import numpy as np
 
 from pound_mc._jit import jit
+from pound_mc.integrators import outputs
 from pound_mc.integrators.laws import (
     episode_damping,
     episode_zeta,
@@ -29,25 +30,6 @@ from pound_mc.integrators.laws import (
     newton_scalar,
     phase_of,
     stored,
-)
-from pound_mc.integrators.outputs import (
-    C_IMPACTS,
-    C_IMPULSE,
-    C_MAX_IMPACT_VELOCITY,
-    C_MAX_PENETRATION,
-    C_PEAK_FORCE,
-    DIVERGENCE_LIMIT_M,
-    EP_E,
-    EP_V0,
-    IMPACT_MIN_PENETRATION_M,
-    STATUS_NOT_CONVERGED,
-    STATUS_OK,
-    STATUS_UNSTABLE,
-    finish,
-    finish_impacts,
-    impact_log,
-    log_impact,
-    reset_contacts,
 )
 from pound_mc.integrators.toolkit import (
     accel,
@@ -216,9 +198,10 @@ def newmark_solve(settings, q, v, a, ag1, gamma, zw2, ikhat, h, load, psi, gap, 
     for c in range(gap.size):
         dstar[c] = rowdot(psi, c, qs) - gap[c]
         if per_impact and dstar[c] > 0.0 and not was_in[c]:
-            cd[c], zhd[c], ep[c, EP_E] = episode_damping(settings, model, settings.relation,
-                                                         xi[c], ddpen[c], beta[c], meff[c],
-                                                         cd[c], zhd[c])  # fmt: skip
+            cd[c], zhd[c], ep[c, outputs.EP_E] = episode_damping(settings, model,
+                                                                 settings.relation, xi[c],
+                                                                 ddpen[c], beta[c], meff[c],
+                                                                 cd[c], zhd[c])  # fmt: skip
     conv = implicit_forces(model, settings.method, dstar, dtry, dpen, ddpen, g, c2h, fc, beta,
                            cd, zhd, fn, jac, rhs)  # fmt: skip
     for j in range(n):
@@ -242,12 +225,15 @@ def impact_start(settings, xi, beta, meff, cd, zhd):
             cd[c], zhd[c], _ = episode_damping(settings, settings.model, settings.relation,
                                                xi[c], settings.rest_v[0], beta[c], meff[c],
                                                cd[c], zhd[c])  # fmt: skip
-    return impact_log(xi.size)
+    return outputs.impact_log(xi.size)
 
 
 @jit(inline=True)
-def newmark_rates(q, v, a, qn, c2h, c4h, c4h2, vn, an):
-    """Velocities ``vn`` and accelerations ``an`` at the end of a Newmark step."""
+def newmark_rates(q, v, a, qn, h, vn, an):
+    """Velocities ``vn`` and accelerations ``an`` at the end of a Newmark step ``h`` [s]."""
+    c2h = 2.0 / h
+    c4h = 4.0 / h
+    c4h2 = 4.0 / (h * h)
     for j in range(q.size):
         dq = qn[j] - q[j]
         vn[j] = c2h * dq - v[j]
@@ -271,29 +257,30 @@ def contact_events(model, relation, method, psi, qe, ve, gap, xi, beta, cd, zhd,
         dd1 = rowdot(psi, c, ve)
         if d1 > 0.0 and not was_in[c]:
             pending[c] = True  # an episode: an impact once it is deep enough
-            ep[c, EP_V0] = dd1
+            ep[c, outputs.EP_V0] = dd1
             if per_impact:
                 # the prior-impact velocity: the rate at the last step point before contact
-                ep[c, EP_V0] = ddpen[c]
-                cd[c], zhd[c], ep[c, EP_E] = episode_damping(settings, model, relation, xi[c],
-                                                             ddpen[c], beta[c], meff[c], cd[c],
-                                                             zhd[c])  # fmt: skip
+                ep[c, outputs.EP_V0] = ddpen[c]
+                cd[c], zhd[c], ep[c, outputs.EP_E] = episode_damping(settings, model, relation,
+                                                                     xi[c], ddpen[c], beta[c],
+                                                                     meff[c], cd[c],
+                                                                     zhd[c])  # fmt: skip
             else:
                 zhd[c] = episode_zeta(model, relation, xi[c], dd1, zhd[c])
-        if pending[c] and d1 > IMPACT_MIN_PENETRATION_M:
-            cout[c, C_IMPACTS] += 1.0
+        if pending[c] and d1 > outputs.IMPACT_MIN_PENETRATION_M:
+            cout[c, outputs.C_IMPACTS] += 1.0
             pending[c] = False
-            vlog, nlog = log_impact(vlog, nlog, ep[c, EP_V0])
-            cout[c, C_MAX_IMPACT_VELOCITY] = max(cout[c, C_MAX_IMPACT_VELOCITY],
-                                                 ep[c, EP_V0])  # fmt: skip
+            vlog, nlog = outputs.log_impact(vlog, nlog, ep[c, outputs.EP_V0])
+            cout[c, outputs.C_MAX_IMPACT_VELOCITY] = max(cout[c, outputs.C_MAX_IMPACT_VELOCITY],
+                                                         ep[c, outputs.EP_V0])  # fmt: skip
         was_in[c] = d1 > 0.0
         dpen[c] = d1
         ddpen[c] = dd1
         if method == NEWMARK_EXPLICIT:
             # the force the next (lagged) step uses, from this state
             fn[c] = force(model, d1, dd1, beta[c], cd[c], zhd[c], phase_of(d1, dd1))
-        if d1 > cout[c, C_MAX_PENETRATION]:
-            cout[c, C_MAX_PENETRATION] = d1
+        if d1 > cout[c, outputs.C_MAX_PENETRATION]:
+            cout[c, outputs.C_MAX_PENETRATION] = d1
     return vlog, nlog
 
 
@@ -313,13 +300,13 @@ def impulses(h, fc, fn, t1, cout, peak_f, peak_t, ep, peak_e):
     ``peak_e[0]`` takes the restitution of the episode of the peak force (``ep``).
     """
     for c in range(fn.size):
-        cout[c, C_IMPULSE] += 0.5 * h * (fc[c] + fn[c])
-        if fn[c] > cout[c, C_PEAK_FORCE]:
-            cout[c, C_PEAK_FORCE] = fn[c]
+        cout[c, outputs.C_IMPULSE] += 0.5 * h * (fc[c] + fn[c])
+        if fn[c] > cout[c, outputs.C_PEAK_FORCE]:
+            cout[c, outputs.C_PEAK_FORCE] = fn[c]
         if fn[c] > peak_f:
             peak_f = fn[c]
             peak_t = t1
-            peak_e[0] = ep[c, EP_E]
+            peak_e[0] = ep[c, outputs.EP_E]
     return peak_f, peak_t
 
 
@@ -340,7 +327,7 @@ def diverged(phi, q, peaks):
     bad = False
     for f in range(peaks.size):
         x = abs(rowdot(phi, f, q))
-        if not x < DIVERGENCE_LIMIT_M:  # also true for NaN
+        if not x < outputs.DIVERGENCE_LIMIT_M:  # also true for NaN
             bad = True
         elif x > peaks[f]:
             peaks[f] = x
@@ -384,10 +371,7 @@ def fixed(
     nlog = 0
     no_load = np.zeros(0)
     e0 = mechanical_energy(q, v, omega)
-    reset_contacts(cout)
-    c2h = 2.0 / h
-    c4h = 4.0 / h
-    c4h2 = 4.0 / (h * h)
+    outputs.reset_contacts(cout)
     ikhat, zw2, g = newmark_matrices(omega, zeta, h, psi)
     # initial contact state and accelerations
     initial_contacts(model, psi, q, v, gap, beta, cd, zhd, dpen, ddpen, fc, was_in)
@@ -398,7 +382,7 @@ def fixed(
     e_in = e_d = w_c = 0.0  # input, damping and contact work
     peak_f = 0.0
     peak_t = 0.0
-    status = STATUS_OK
+    status = outputs.STATUS_OK
     pin_prev, pd_prev = powers(v, ag[0], omega, zeta, gamma)
     pc_prev = contact_power(fc, ddpen)
     steps = 0
@@ -441,15 +425,15 @@ def fixed(
                 e_in, e_d, w_c = trapezoid(h, e_in, e_d, w_c, pin_prev, pd_prev, pc_prev,
                                            pin1, pd1, pc1)  # fmt: skip
                 for c in range(nc):
-                    cout[c, C_IMPULSE] += 0.5 * h * (fprev[c] + fc[c])
+                    cout[c, outputs.C_IMPULSE] += 0.5 * h * (fprev[c] + fc[c])
             for c in range(nc):
                 fprev[c] = fc[c]
-                if fc[c] > cout[c, C_PEAK_FORCE]:
-                    cout[c, C_PEAK_FORCE] = fc[c]
+                if fc[c] > cout[c, outputs.C_PEAK_FORCE]:
+                    cout[c, outputs.C_PEAK_FORCE] = fc[c]
                 if fc[c] > peak_f:
                     peak_f = fc[c]
                     peak_t = t1 - h
-                    peak_e[0] = ep[c, EP_E]
+                    peak_e[0] = ep[c, outputs.EP_E]
             pin_prev, pd_prev, pc_prev = pin1, pd1, pc1
             for j in range(n):
                 qprev[j] = q[j]
@@ -463,8 +447,8 @@ def fixed(
             if not newmark_solve(settings, q, v, a, ag1, gamma, zw2, ikhat, h, no_load, psi,
                                  gap, g, dpen, ddpen, fc, beta, cd, zhd, qs, dstar, dtry, fn,
                                  jac, rhs, qn, xi, meff, was_in, ep):  # fmt: skip
-                status = STATUS_NOT_CONVERGED
-            newmark_rates(q, v, a, qn, c2h, c4h, c4h2, vn, an)
+                status = outputs.STATUS_NOT_CONVERGED
+            newmark_rates(q, v, a, qn, h, vn, an)
         # contact bookkeeping at n+1
         vlog, nlog = contact_events(model, relation, method, psi,
                                     qn if method != CENTRAL_DIFFERENCE else q, vn, gap, xi, beta,
@@ -483,9 +467,9 @@ def fixed(
             for c in range(nc):
                 fc[c] = fn[c]
         if diverged(phi, q, peaks):
-            status = STATUS_UNSTABLE
+            status = outputs.STATUS_UNSTABLE
             break
-    if store and status != STATUS_UNSTABLE:
+    if store and status != outputs.STATUS_UNSTABLE:
         i = npts - 1
         for f in range(nf):
             hx[i, f] = rowdot(phi, f, q)
@@ -499,6 +483,6 @@ def fixed(
         for c in range(nc):
             dpen[c] = rowdot(psi, c, q) - gap[c]
     stored_energy, phase = final_contacts(model, dpen, beta)
-    finish(out, cout, peaks, side, phase, q, v, omega, e0, e_in, e_d, w_c, stored_energy,
-           peak_f, peak_t, steps, status)  # fmt: skip
-    finish_impacts(out, cout, vlog, nlog, peak_e[0])
+    outputs.finish(out, cout, peaks, side, phase, q, v, omega, e0, e_in, e_d, w_c, stored_energy,
+                   peak_f, peak_t, steps, status)  # fmt: skip
+    outputs.finish_impacts(out, cout, vlog, nlog, peak_e[0])

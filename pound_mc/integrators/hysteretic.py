@@ -32,6 +32,7 @@ import math
 import numpy as np
 
 from pound_mc._jit import jit
+from pound_mc.integrators import outputs
 from pound_mc.integrators.fixed import (
     advance,
     contact_events,
@@ -45,21 +46,6 @@ from pound_mc.integrators.fixed import (
     newmark_matrices,
     newmark_rates,
     newmark_solve,
-)
-from pound_mc.integrators.outputs import (
-    HYSTERETIC_ENERGY,
-    PEAK_DRIFT_LEFT,
-    PEAK_DUCTILITY_LEFT,
-    PEAK_FLOOR_ACCEL_LEFT,
-    PEAK_FLOOR_ACCEL_RIGHT,
-    RESIDUAL_DRIFT_LEFT,
-    STATUS,
-    STATUS_NOT_CONVERGED,
-    STATUS_OK,
-    STATUS_UNSTABLE,
-    finish,
-    finish_impacts,
-    reset_contacts,
 )
 from pound_mc.integrators.toolkit import (
     accel,
@@ -166,12 +152,12 @@ def storey_outputs(out, store, peak_u, drift, peak_acc, side_f, e_h, sout):
     every slot is NaN for a run that is not ok.  ``sout`` (storeys x 2, or no rows) takes each
     storey's peak |drift| and its drift at the end of the run [m].
     """
-    ok = out[STATUS] == STATUS_OK
+    ok = out[outputs.STATUS] == outputs.STATUS_OK
     for s in range(sout.shape[0]):
         sout[s, 0] = peak_u[s] if ok else np.nan
         sout[s, 1] = drift[s] if ok else np.nan
     if not ok:
-        for k in range(PEAK_DUCTILITY_LEFT, PEAK_FLOOR_ACCEL_RIGHT + 1):
+        for k in range(outputs.PEAK_DUCTILITY_LEFT, outputs.PEAK_FLOOR_ACCEL_RIGHT + 1):
             out[k] = np.nan
         return
     for b in range(2):
@@ -191,11 +177,11 @@ def storey_outputs(out, store, peak_u, drift, peak_acc, side_f, e_h, sout):
         for f in range(side_f.size):
             if side_f[f] == b and peak_acc[f] > acc:
                 acc = peak_acc[f]
-        out[PEAK_DUCTILITY_LEFT + b] = duct
-        out[PEAK_DRIFT_LEFT + b] = pdr
-        out[RESIDUAL_DRIFT_LEFT + b] = rdr
-        out[PEAK_FLOOR_ACCEL_LEFT + b] = acc
-    out[HYSTERETIC_ENERGY] = e_h
+        out[outputs.PEAK_DUCTILITY_LEFT + b] = duct
+        out[outputs.PEAK_DRIFT_LEFT + b] = pdr
+        out[outputs.RESIDUAL_DRIFT_LEFT + b] = rdr
+        out[outputs.PEAK_FLOOR_ACCEL_LEFT + b] = acc
+    out[outputs.HYSTERETIC_ENERGY] = e_h
 
 
 @jit
@@ -231,10 +217,7 @@ def newmark_hysteretic(
     pl = np.zeros(n)
     peak_acc = np.zeros(nf)
     e0 = mechanical_energy(q, v, omega)
-    reset_contacts(cout)
-    c2h = 2.0 / h
-    c4h = 4.0 / h
-    c4h2 = 4.0 / (h * h)
+    outputs.reset_contacts(cout)
     ikhat, zw2, g = newmark_matrices(omega, zeta, h, psi)
     ep, vlog, peak_e = impact_start(settings, xi, beta, meff, cd, zhd)
     nlog = 0
@@ -245,7 +228,7 @@ def newmark_hysteretic(
     e_h = 0.0  # hysteretic dissipation
     peak_f = 0.0
     peak_t = 0.0
-    status = STATUS_OK
+    status = outputs.STATUS_OK
     pin_prev, pd_prev = powers(v, ag[0], omega, zeta, gamma)
     pc_prev = contact_power(fc, ddpen)
     pp_prev = 0.0
@@ -268,10 +251,10 @@ def newmark_hysteretic(
             if return_map(drift, store, up_n, up, drift_n) <= PLASTIC_TOLERANCE:
                 break
             if _it == MAX_PLASTIC_ITERATIONS:
-                status = STATUS_NOT_CONVERGED
+                status = outputs.STATUS_NOT_CONVERGED
         if not conv:
-            status = STATUS_NOT_CONVERGED
-        newmark_rates(q, v, a, qn, c2h, c4h, c4h2, vn, an)
+            status = outputs.STATUS_NOT_CONVERGED
+        newmark_rates(q, v, a, qn, h, vn, an)
         for s in range(ns):
             z = drift[s] - up[s]
             if store[s, S_BW] > 0.0:  # z varies over the step: trapezoid in the plastic drift
@@ -300,11 +283,11 @@ def newmark_hysteretic(
         pin_prev, pd_prev, pc_prev, pp_prev = pin1, pd1, pc1, pp1
         advance(q, v, a, qn, vn, an, fc, fn)
         if diverged(phi, q, peaks):
-            status = STATUS_UNSTABLE
+            status = outputs.STATUS_UNSTABLE
             break
     stored_energy, phase = final_contacts(model, dpen, beta)
     # the plastic load's work enters the balance as a negative damping work
-    finish(out, cout, peaks, side, phase, q, v, omega, e0, e_in, e_d - w_p, w_c, stored_energy,
-           peak_f, peak_t, steps, status)  # fmt: skip
-    finish_impacts(out, cout, vlog, nlog, peak_e[0])
+    outputs.finish(out, cout, peaks, side, phase, q, v, omega, e0, e_in, e_d - w_p, w_c,
+                   stored_energy, peak_f, peak_t, steps, status)  # fmt: skip
+    outputs.finish_impacts(out, cout, vlog, nlog, peak_e[0])
     storey_outputs(out, store, peak_u, drift, peak_acc, side, e_h, sout)
