@@ -28,8 +28,8 @@ from pound_mc.integrators.laws import (
     episode_damping,
     episode_zeta,
     force,
-    force_rate,
     stored,
+    substep_peaks,
 )
 from pound_mc.integrators.toolkit import (
     accel,
@@ -307,33 +307,16 @@ def _contact_peaks(q, v, q1, v1, a0, a1, psi, gap, beta, cd, zhd, phase, model, 
         dd1 = rowdot(psi, c, v1)
         f0 = fc0[c]
         f1 = fc[c]  # forces at the end of the (possibly cut) sub-step
-        fm = f1
-        tm = hs
-        # an interior maximum exceeds the step's end values by far less than 10 % (sub-steps
-        # are a fraction of the contact duration): interpolate only where it could raise this
-        # contact's peak
-        if max(f0, f1) >= 0.9 * cout[c, outputs.C_PEAK_FORCE] and d0 > 0.25 * d1:
-            r0 = force_rate(model, d0, dd0, rowdot(psi, c, a0), beta[c], cd[c], zhd[c], phase[c])
-            r1 = force_rate(model, d1, dd1, rowdot(psi, c, a1), beta[c], cd[c], zhd[c], phase[c])
-            if r0 > 0.0 and r1 < 0.0:
-                hm, th = hermite_max(f0, r0, f1, r1, hs)
-                if hm > fm:
-                    fm = hm
-                    tm = th
-        if f0 > fm:
-            fm = f0
-            tm = 0.0
+        fm, tm, dm = substep_peaks(
+            model, f0, f1, d0, d1, dd0, dd1, rowdot(psi, c, a0), rowdot(psi, c, a1), hs,
+            cout[c, outputs.C_PEAK_FORCE], beta[c], cd[c], zhd[c], phase[c],
+        )  # fmt: skip
         if fm > cout[c, outputs.C_PEAK_FORCE]:
             cout[c, outputs.C_PEAK_FORCE] = fm
         if fm > peak_f:
             peak_f = fm
             peak_t = t + tm
             peak_e[0] = ep[c, outputs.EP_E]
-        dm = max(d0, d1)
-        if dd0 > 0.0 and dd1 < 0.0:
-            hm, _ = hermite_max(d0, dd0, d1, dd1, hs)
-            if hm > dm:
-                dm = hm
         if dm > cout[c, outputs.C_MAX_PENETRATION]:
             cout[c, outputs.C_MAX_PENETRATION] = dm
         if pending[c] and dm > outputs.IMPACT_MIN_PENETRATION_M:

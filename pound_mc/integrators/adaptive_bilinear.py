@@ -55,7 +55,7 @@ from pound_mc.integrators.adaptive_pair import (
     _track_floor,
 )
 from pound_mc.integrators.hysteretic import S_ALPHA, S_BW, S_K, S_YIELD, storey_outputs
-from pound_mc.integrators.laws import LAW_CODES, duration, episode_zeta, force_rate, stored
+from pound_mc.integrators.laws import LAW_CODES, duration, episode_zeta, stored, substep_peaks
 from pound_mc.integrators.outputs import (
     C_IMPACTS,
     C_IMPULSE,
@@ -403,25 +403,13 @@ def adaptive_bilinear(
                 dd1 = ps[0] * nv[0] + ps[1] * nv[1]
                 if phase != 0:
                     # peak force (Hermite on F with its rate) and penetration
-                    fm = max(fc0, fc1)
-                    tm = 0.0 if fc0 > fc1 else hh
-                    if max(fc0, fc1) >= 0.9 * peak_f and d0 > 0.25 * d1:
-                        ddd0 = ps[0] * ac0 + ps[1] * ac1
-                        ddd1 = ps[0] * a_end[0] + ps[1] * a_end[1]
-                        r0 = force_rate(model, d0, dd0, ddd0, b, cd, zhd, phase)
-                        r1 = force_rate(model, d1, dd1, ddd1, b, cd, zhd, phase)
-                        if r0 > 0.0 and r1 < 0.0:
-                            hm, th = hermite_max(fc0, r0, fc1, r1, hh)
-                            if hm > fm:
-                                fm = hm
-                                tm = th
+                    ddd0 = ps[0] * ac0 + ps[1] * ac1
+                    ddd1 = ps[0] * a_end[0] + ps[1] * a_end[1]
+                    fm, tm, dm = substep_peaks(model, fc0, fc1, d0, d1, dd0, dd1, ddd0, ddd1, hh,
+                                               peak_f, b, cd, zhd, phase)  # fmt: skip
                     if fm > peak_f:
                         peak_f = fm
                         peak_t = i * dt_rec + s + tm
-                    dm = max(d0, d1)
-                    if dd0 > 0.0 and dd1 < 0.0:
-                        hm, _ = hermite_max(d0, dd0, d1, dd1, hh)
-                        dm = max(dm, hm)
                     maxpen = max(maxpen, dm)
                     if pending and dm > IMPACT_MIN_PENETRATION_M:
                         impacts += 1.0

@@ -31,8 +31,8 @@ from pound_mc.integrators.laws import (
     episode_damping,
     episode_zeta,
     force,
-    force_rate,
     stored,
+    substep_peaks,
 )
 from pound_mc.integrators.outputs import (
     C_IMPACTS,
@@ -620,30 +620,11 @@ def adaptive_pair(
                 e_d += 0.5 * hh * (en0_2 + en1_2) + hh12 * (en0_3 - en1_3)
                 # peak floor displacements: where the cubic Hermite bound says an extremum
                 # inside the step may be a new peak, find it on the exact solution
-                for fl in range(2):
-                    if fl == 0:
-                        ff, xa, xda, xb, xdb, pk = f0, xf0, xfd0, f0 * nq0, f0 * nv0, pk0
-                    else:
-                        ff, xa, xda, xb, xdb, pk = f1, xf1, xfd1, f1 * nq1, f1 * nv1, pk1
-                    m = abs(xb)
-                    if m > pk:
-                        pk = m
-                    if (xda > 0.0) != (xdb > 0.0):
-                        # one extremum inside: a maximum of x where the velocity turns
-                        # from + to -, else of -x (the cubic has no other)
-                        sign = 1.0 if xda > 0.0 else -1.0
-                        hm, tg = hermite_max(sign * xa, sign * xda, sign * xb, sign * xdb, hh)
-                        if hm > pk - herm_tol * abs(hm):
-                            c0 = sign * ff if fl == 0 else 0.0
-                            c1 = sign * ff if fl == 1 else 0.0
-                            xm, _ = _exact_max(q0, q1, v0, v1, p0s, slope, tg, hh, w0, z0, g0,
-                                               w1, z1, g1, c0, c1, 0.0)  # fmt: skip
-                            if xm > pk:
-                                pk = xm
-                    if fl == 0:
-                        pk0, xf0, xfd0 = pk, xb, xdb
-                    else:
-                        pk1, xf1, xfd1 = pk, xb, xdb
+                pk0 = _floor_peak(f0, 0, xf0, xfd0, f0 * nq0, f0 * nv0, pk0, q0, q1, v0, v1, p0s,
+                                  slope, hh, w0, z0, g0, w1, z1, g1, herm_tol)  # fmt: skip
+                pk1 = _floor_peak(f1, 1, xf1, xfd1, f1 * nq1, f1 * nv1, pk1, q0, q1, v0, v1, p0s,
+                                  slope, hh, w0, z0, g0, w1, z1, g1, herm_tol)  # fmt: skip
+                xf0, xfd0, xf1, xfd1 = f0 * nq0, f0 * nv0, f1 * nq1, f1 * nv1
                 dc0 = dc1
                 ddc0 = ddc1
                 en0_0, en0_1, en0_2, en0_3 = en1_0, en1_1, en1_2, en1_3
@@ -683,49 +664,12 @@ def adaptive_pair(
                 hs = _local_bound(hs, dc + max(ps0 * v0 + ps1 * v1, 0.0) * hs, model, b, loc_k)
                 if hs >= dt_rec - s or dt_rec - s - hs < 1e-9 * hc:
                     hs = dt_rec - s
-                if pot and phase == 1:
-                    (nq0, nq1, nv0, nv1, de_in, de_d, dw_c, cimp, fc0, ac0, ac1) = _rk4_pot(
-                        q0, q1, v0, v1, s, hs, ag0, slope, k0, ww0, g0, k1, ww1, g1, zw2_0,
-                        zw2_1, ps0, ps1, gp, b, cd, kpot,
-                    )  # fmt: skip
-                else:
-                    (nq0, nq1, nv0, nv1, de_in, de_d, dw_c, cimp, fc0, ac0, ac1) = _rk4_pair(
-                        q0, q1, v0, v1, s, hs, ag0, slope, k0, ww0, g0, k1, ww1, g1, zw2_0,
-                        zw2_1, ps0, ps1, gp, b, cd, zhd, phase, model, fsal, fc_end, ae0, ae1,
-                    )  # fmt: skip
-                fc1, _, ae0, ae1 = _stage(nq0, nq1, nv0, nv1, ag0 + slope * (s + hs), k0, ww0,
-                                          g0, k1, ww1, g1, ps0, ps1, gp, b, cd, zhd, phase,
-                                          model)  # fmt: skip
-                fc_end = fc1
-                # switches of the force law: located by Hermite interpolation in the step
-                d0 = ps0 * q0 + ps1 * q1 - gp
-                d1 = ps0 * nq0 + ps1 * nq1 - gp
-                dd0 = ps0 * v0 + ps1 * v1
-                dd1 = ps0 * nv0 + ps1 * nv1
-                ddd0 = ps0 * ac0 + ps1 * ac1
-                ddd1 = ps0 * ae0 + ps1 * ae1
+                # the sub-step, and again to the first switch of the force law inside it
+                # (located by Hermite interpolation in the step), from the same start
+                have, fs0, as0, as1 = fsal, fc_end, ae0, ae1
                 t_ev = _INF
                 kind = 0
-                if phase == 0:
-                    if d1 > 0.0 and d0 <= 0.0:
-                        t_ev = hermite_root(d0, dd0, d1, dd1, hs)
-                        kind = 1  # onset
-                elif phase == 1:
-                    if dd1 <= 0.0 and dd0 > 0.0:
-                        t_ev = hermite_root(dd0, ddd0, dd1, ddd1, hs)
-                        kind = 2  # approach -> restitution
-                else:
-                    if d1 <= 0.0 and d0 > 0.0:
-                        t_ev = hermite_root(d0, dd0, d1, dd1, hs)
-                        kind = 3  # separation
-                    if dd1 > 0.0 and dd0 <= 0.0:
-                        t2 = hermite_root(dd0, ddd0, dd1, ddd1, hs)
-                        if t2 < t_ev:
-                            t_ev = t2
-                            kind = 4  # restitution -> approach
-                event = t_ev < _INF
-                if event and t_ev < hs:
-                    hs = t_ev
+                for attempt in range(2):
                     if pot and phase == 1:
                         (nq0, nq1, nv0, nv1, de_in, de_d, dw_c, cimp, fc0, ac0, ac1) = _rk4_pot(
                             q0, q1, v0, v1, s, hs, ag0, slope, k0, ww0, g0, k1, ww1, g1, zw2_0,
@@ -734,46 +678,54 @@ def adaptive_pair(
                     else:
                         (nq0, nq1, nv0, nv1, de_in, de_d, dw_c, cimp, fc0, ac0, ac1) = _rk4_pair(
                             q0, q1, v0, v1, s, hs, ag0, slope, k0, ww0, g0, k1, ww1, g1, zw2_0,
-                            zw2_1, ps0, ps1, gp, b, cd, zhd, phase, model, True, fc0, ac0, ac1,
+                            zw2_1, ps0, ps1, gp, b, cd, zhd, phase, model, have, fs0, as0, as1,
                         )  # fmt: skip
                     fc1, _, ae0, ae1 = _stage(nq0, nq1, nv0, nv1, ag0 + slope * (s + hs), k0,
-                                              ww0, g0, k1, ww1, g1, ps0, ps1, gp, b, cd,
-                                              zhd, phase, model)  # fmt: skip
+                                              ww0, g0, k1, ww1, g1, ps0, ps1, gp, b, cd, zhd,
+                                              phase, model)  # fmt: skip
                     fc_end = fc1
+                    d0 = ps0 * q0 + ps1 * q1 - gp
                     d1 = ps0 * nq0 + ps1 * nq1 - gp
+                    dd0 = ps0 * v0 + ps1 * v1
                     dd1 = ps0 * nv0 + ps1 * nv1
+                    ddd0 = ps0 * ac0 + ps1 * ac1
                     ddd1 = ps0 * ae0 + ps1 * ae1
+                    if attempt == 1:
+                        break
+                    if phase == 0:
+                        if d1 > 0.0 and d0 <= 0.0:
+                            t_ev = hermite_root(d0, dd0, d1, dd1, hs)
+                            kind = 1  # onset
+                    elif phase == 1:
+                        if dd1 <= 0.0 and dd0 > 0.0:
+                            t_ev = hermite_root(dd0, ddd0, dd1, ddd1, hs)
+                            kind = 2  # approach -> restitution
+                    else:
+                        if d1 <= 0.0 and d0 > 0.0:
+                            t_ev = hermite_root(d0, dd0, d1, dd1, hs)
+                            kind = 3  # separation
+                        if dd1 > 0.0 and dd0 <= 0.0:
+                            t2 = hermite_root(dd0, ddd0, dd1, ddd1, hs)
+                            if t2 < t_ev:
+                                t_ev = t2
+                                kind = 4  # restitution -> approach
+                    if not t_ev < hs:
+                        break
+                    hs = t_ev
+                    have, fs0, as0, as1 = True, fc0, ac0, ac1
+                event = t_ev < _INF
                 e_in += de_in
                 e_d += de_d
                 w_c += dw_c
                 impulse += cimp
                 # peak force (Hermite on F with its rate), penetration
                 if phase != 0:
-                    fm = fc1
-                    tm = hs
-                    # an interior maximum exceeds the step's end values by far less than 10 %
-                    # (sub-steps are a fraction of the contact duration): interpolate only
-                    # where it could raise the peak
-                    if max(fc0, fc1) >= 0.9 * peak_f and d0 > 0.25 * d1:
-                        r0 = force_rate(model, d0, dd0, ddd0, b, cd, zhd, phase)
-                        r1 = force_rate(model, d1, dd1, ddd1, b, cd, zhd, phase)
-                        if r0 > 0.0 and r1 < 0.0:
-                            hm, th = hermite_max(fc0, r0, fc1, r1, hs)
-                            if hm > fm:
-                                fm = hm
-                                tm = th
-                    if fc0 > fm:
-                        fm = fc0
-                        tm = 0.0
+                    fm, tm, dm = substep_peaks(model, fc0, fc1, d0, d1, dd0, dd1, ddd0, ddd1, hs,
+                                               peak_f, b, cd, zhd, phase)  # fmt: skip
                     if fm > peak_f:
                         peak_f = fm
                         peak_t = i * dt_rec + s + tm
                         peak_e = e_ep
-                    dm = max(d0, d1)
-                    if dd0 > 0.0 and dd1 < 0.0:
-                        hm, _ = hermite_max(d0, dd0, d1, dd1, hs)
-                        if hm > dm:
-                            dm = hm
                     if dm > maxpen:
                         maxpen = dm
                     if pending and dm > IMPACT_MIN_PENETRATION_M:
@@ -874,6 +826,33 @@ def _hermite_spread(y0, yp0, y1, yp1, h):
     """
     m = max(abs(yp0), abs(yp1)) + 0.25 * abs(6.0 * (y1 - y0) / h - 3.0 * (yp0 + yp1))
     return 0.5 * m * h
+
+
+@jit(inline=True)
+def _floor_peak(
+    ff, fl, xa, xda, xb, xdb, pk, q0, q1, v0, v1, p0s, slope, hh, w0, z0, g0, w1, z1, g1, herm_tol,
+):  # fmt: skip
+    """Peak ``|x|`` [m] of floor ``fl`` (``x = ff q_fl``) updated over an exact linear step.
+
+    ``xa, xda`` and ``xb, xdb``: its displacement and velocity at the step's start and end.
+    Where the velocity turns, the step holds one extremum (a maximum of ``x`` where it turns
+    from + to -, else of ``-x``: the cubic Hermite has no other); where the Hermite estimate
+    says it may be a new peak, it is found on the exact solution (:func:`_exact_max`).
+    """
+    m = abs(xb)
+    if m > pk:
+        pk = m
+    if (xda > 0.0) != (xdb > 0.0):
+        sign = 1.0 if xda > 0.0 else -1.0
+        hm, tg = hermite_max(sign * xa, sign * xda, sign * xb, sign * xdb, hh)
+        if hm > pk - herm_tol * abs(hm):
+            c0 = sign * ff if fl == 0 else 0.0
+            c1 = sign * ff if fl == 1 else 0.0
+            xm, _ = _exact_max(q0, q1, v0, v1, p0s, slope, tg, hh, w0, z0, g0, w1, z1, g1, c0, c1,
+                               0.0)  # fmt: skip
+            if xm > pk:
+                pk = xm
+    return pk
 
 
 @jit(inline=True)

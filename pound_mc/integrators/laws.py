@@ -12,7 +12,7 @@ from __future__ import annotations
 import math
 
 from pound_mc._jit import jit
-from pound_mc.integrators.toolkit import rowdot
+from pound_mc.integrators.toolkit import hermite_max, rowdot
 from pound_mc.physics.contact import CONTACT_MODELS
 from pound_mc.physics.relations import HERTZDAMP_RELATIONS
 
@@ -98,6 +98,38 @@ def force_rate(model, d, dd, ddd, beta, c0, zeta, phase):
     if model == _HERTZ:
         return _h_rate(d, dd, ddd, beta, c0, zeta, phase)
     return _hd_rate(d, dd, ddd, beta, c0, zeta, phase)
+
+
+@jit(inline=True)
+def substep_peaks(model, f0, f1, d0, d1, dd0, dd1, ddd0, ddd1, hs, peak, beta, c0, zeta, phase):
+    """Largest force and penetration over a contact sub-step of length ``hs`` [s].
+
+    ``f, d, dd, ddd``: force [N], penetration [m] and its first two rates at the sub-step's
+    start (0) and end (1).  The force's interior maximum is that of the cubic Hermite on the
+    force and its rate, looked for only where it could raise ``peak`` (an interior maximum
+    exceeds the end values by far less than 10 %: sub-steps are a fraction of the contact
+    duration); the penetration's that of the cubic Hermite on it and its rate.  Returns the
+    largest force, its time in the sub-step [s] and the largest penetration.
+    """
+    fm = f1
+    tm = hs
+    if max(f0, f1) >= 0.9 * peak and d0 > 0.25 * d1:
+        r0 = force_rate(model, d0, dd0, ddd0, beta, c0, zeta, phase)
+        r1 = force_rate(model, d1, dd1, ddd1, beta, c0, zeta, phase)
+        if r0 > 0.0 and r1 < 0.0:
+            hm, th = hermite_max(f0, r0, f1, r1, hs)
+            if hm > fm:
+                fm = hm
+                tm = th
+    if f0 > fm:
+        fm = f0
+        tm = 0.0
+    dm = max(d0, d1)
+    if dd0 > 0.0 and dd1 < 0.0:
+        hm, _ = hermite_max(d0, dd0, d1, dd1, hs)
+        if hm > dm:
+            dm = hm
+    return fm, tm, dm
 
 
 @jit(inline=True)
