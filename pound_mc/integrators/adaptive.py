@@ -38,6 +38,7 @@ from pound_mc.integrators.toolkit import (
     end_values,
     exact_delta,
     exact_root,
+    grid_step,
     hermite_max,
     hermite_root,
     mechanical_energy,
@@ -499,13 +500,7 @@ def adaptive(
                 break
             if not in_contact:
                 # ---------------- exact linear step to the next grid point (or an onset)
-                s_next = (k_grid + 1) * h
-                if k_grid + 1 == m_sub:
-                    s_next = dt_rec
-                hh = s_next - s
-                regular = abs(hh - h) <= 1e-12 * h
-                p0s = ag0 + slope * s
-                p1s = ag0 + slope * s_next
+                s_next, hh, p0s, p1s, regular = grid_step(k_grid, m_sub, h, dt_rec, s, ag0, slope)
                 _exact_step(q, v, q1, v1, coef, regular, p0s, p1s, omega, zeta, gamma, hh)
                 if not fresh:
                     refresh(q, v, p0s, omega, zeta, gamma, phi, psi, gap, dc0, ddc0, xf0, xfd0,

@@ -70,6 +70,7 @@ from pound_mc.integrators.outputs import (
 from pound_mc.integrators.toolkit import (
     advance,
     coefficients,
+    grid_step,
     hermite_max,
     hermite_root,
     step_size,
@@ -262,11 +263,9 @@ def adaptive_bilinear(
             kind = 0  # 1 onset, 2 / 3 a branch switch of building 0 / 1
             if not in_contact:
                 # ---------------- exact linear step to the next grid point (or an event)
-                s_next = dt_rec if k_grid + 1 == m_sub else (k_grid + 1) * h
-                hh = s_next - s
-                p0s = ag0 + slope * s
-                p1s = ag0 + slope * s_next
-                if abs(hh - h) <= 1e-12 * h:
+                s_next, hh, p0s, p1s, whole_step = grid_step(k_grid, m_sub, h, dt_rec, s, ag0,
+                                                              slope)  # fmt: skip
+                if whole_step:
                     p0 = -g[0] * p0s
                     p1 = -g[0] * p1s
                     nq[0] = a00 * qs[0] + a01 * v[0] + a02 * p0 + a03 * p1

@@ -25,15 +25,7 @@ import math
 import numpy as np
 
 from pound_mc._jit import jit
-from pound_mc.integrators.laws import (
-    LAW_CODES,
-    duration,
-    episode_damping,
-    episode_zeta,
-    force,
-    stored,
-    substep_peaks,
-)
+from pound_mc.integrators import laws
 from pound_mc.integrators.outputs import (
     C_IMPACTS,
     C_IMPULSE,
@@ -61,6 +53,7 @@ from pound_mc.integrators.outputs import (
 from pound_mc.integrators.toolkit import (
     advance,
     coefficients,
+    grid_step,
     hermite_max,
     hermite_root,
     newton_in_bracket,
@@ -74,7 +67,7 @@ _TWELFTH = 1.0 / 12.0
 #: Contact onset located to this fraction of the step [-] (1e-12 of a 0.01 s step: the
 #: penetration at the located onset is ~1e-14 v0, far below anything the contact phase resolves).
 ONSET_TOL = 1e-12
-_JANKOWSKI = LAW_CODES["jankowski"]
+_JANKOWSKI = laws.LAW_CODES["jankowski"]
 #: Sub-steps after onset grow geometrically from ``RAMP_START`` of the contact sub-step by a
 #: factor ``1 + RAMP_GROWTH``; Jankowski's approach phase integrates ``u = v + psi D(delta)``
 #: (below), which takes the ``delta^0.25`` singularity out of the velocities and lets the ramp
@@ -119,18 +112,14 @@ def _exact_pen(
     dd = 0.0
     ddd = 0.0
     ag = p0s + slope * tau
-    if c0 != 0.0:
-        qm, vm = advance(q0, v0, -g0 * p0s, -g0 * ag, w0, z0, tau)
-        am = -2.0 * z0 * w0 * vm - w0 * w0 * qm - g0 * ag
-        d += c0 * qm
-        dd += c0 * vm
-        ddd += c0 * am
-    if c1 != 0.0:
-        qm, vm = advance(q1, v1, -g1 * p0s, -g1 * ag, w1, z1, tau)
-        am = -2.0 * z1 * w1 * vm - w1 * w1 * qm - g1 * ag
-        d += c1 * qm
-        dd += c1 * vm
-        ddd += c1 * am
+    for j in range(2):
+        c, q, v, w, z, g = (c0, q0, v0, w0, z0, g0) if j == 0 else (c1, q1, v1, w1, z1, g1)
+        if c != 0.0:
+            qm, vm = advance(q, v, -g * p0s, -g * ag, w, z, tau)
+            am = -2.0 * z * w * vm - w * w * qm - g * ag
+            d += c * qm
+            dd += c * vm
+            ddd += c * am
     return d, dd, ddd
 
 
@@ -180,6 +169,20 @@ def _exact_max(
 
 
 @jit(inline=True)
+def _mode_step(q, v, p0s, p1s, g, cf):
+    """Exact step of one mode: its new ``(q, v)`` from the step's coefficients ``cf``.
+
+    ``cf``: the two rows of ``toolkit.coefficients`` in one tuple; the load ``-g ag`` is linear
+    between the ground accelerations ``p0s`` and ``p1s`` [m/s^2].
+    """
+    p0 = -g * p0s
+    p1 = -g * p1s
+    q1 = cf[0] * q + cf[1] * v + cf[2] * p0 + cf[3] * p1
+    v1 = cf[4] * q + cf[5] * v + cf[6] * p0 + cf[7] * p1
+    return q1, v1
+
+
+@jit(inline=True)
 def _ends(q0, q1, v0, v1, ag, k0, ww0, g0, k1, ww1, g1, zw2_0, zw2_1, zw4_0, zw4_1):
     """Sums for the energy integrals without contact force (``toolkit.end_values``).
 
@@ -200,12 +203,28 @@ def _ends(q0, q1, v0, v1, ag, k0, ww0, g0, k1, ww1, g1, zw2_0, zw2_1, zw4_0, zw4
 
 
 @jit(inline=True)
+def _energy_step(hh, slope, p0s, p1s, s0, s1, s2, s3, e0, e1, e2, e3):
+    """Input and damping energy of a linear step of length ``hh`` [s] (per unit modal mass).
+
+    The corrected trapezoidal rule (exact to O(h^5) per step) on the sums of :func:`_ends` at
+    the step's start (``s0..s3``) and end (``e0..e3``); ``p0s, p1s``: ground accelerations.
+    """
+    pin0 = -p0s * s0
+    pin1 = -p1s * e0
+    dpin0 = -(slope * s0 + p0s * s1)
+    dpin1 = -(slope * e0 + p1s * e1)
+    hh12 = hh * hh * _TWELFTH
+    de_in = 0.5 * hh * (pin0 + pin1) + hh12 * (dpin0 - dpin1)
+    return de_in, 0.5 * hh * (s2 + e2) + hh12 * (s3 - e3)
+
+
+@jit(inline=True)
 def _stage(q0, q1, v0, v1, ag, k0, ww0, g0, k1, ww1, g1, ps0, ps1, gp, b, cd, zhd, phase,
            model):  # fmt: skip
     """Contact force [N], penetration rate [m/s] and modal accelerations at one state."""
     d = ps0 * q0 + ps1 * q1 - gp
     dd = ps0 * v0 + ps1 * v1
-    fc = force(model, d, dd, b, cd, zhd, phase)
+    fc = laws.force(model, d, dd, b, cd, zhd, phase)
     a0 = k0 * v0 - ww0 * q0 - g0 * ag
     a1 = k1 * v1 - ww1 * q1 - g1 * ag
     if fc != 0.0:
@@ -394,11 +413,9 @@ def adaptive_pair(
     gp, b, me, xi0 = gap[0], beta[0], meff[0], xi[0]
     cd = 2.0 * xi0 * math.sqrt(b * me)  # damping constant c0 of the force laws
     cf = coefficients(w0, z0, h)
-    a00, a01, a02, a03 = cf[0, 0], cf[0, 1], cf[0, 2], cf[0, 3]
-    b00, b01, b02, b03 = cf[1, 0], cf[1, 1], cf[1, 2], cf[1, 3]
+    cf0 = (cf[0, 0], cf[0, 1], cf[0, 2], cf[0, 3], cf[1, 0], cf[1, 1], cf[1, 2], cf[1, 3])
     cf = coefficients(w1, z1, h)
-    a10, a11, a12, a13 = cf[0, 0], cf[0, 1], cf[0, 2], cf[0, 3]
-    b10, b11, b12, b13 = cf[1, 0], cf[1, 1], cf[1, 2], cf[1, 3]
+    cf1 = (cf[0, 0], cf[0, 1], cf[0, 2], cf[0, 3], cf[1, 0], cf[1, 1], cf[1, 2], cf[1, 3])
     q0, q1, v0, v1 = q[0], q[1], v[0], v[1]
     phase = 0
     zhd = pk0 = pk1 = e_in = e_d = w_c = 0.0
@@ -464,14 +481,8 @@ def adaptive_pair(
                 s = 0.0
                 p0s = ag0 + slope * s
                 p1s = ag0 + slope * dt_rec
-                p0 = -g0 * p0s
-                p1 = -g0 * p1s
-                nq0 = a00 * q0 + a01 * v0 + a02 * p0 + a03 * p1
-                nv0 = b00 * q0 + b01 * v0 + b02 * p0 + b03 * p1
-                p0 = -g1 * p0s
-                p1 = -g1 * p1s
-                nq1 = a10 * q1 + a11 * v1 + a12 * p0 + a13 * p1
-                nv1 = b10 * q1 + b11 * v1 + b12 * p0 + b13 * p1
+                nq0, nv0 = _mode_step(q0, v0, p0s, p1s, g0, cf0)
+                nq1, nv1 = _mode_step(q1, v1, p0s, p1s, g1, cf1)
                 d1 = ps0 * nq0 + ps1 * nq1 - gp
                 dd1 = ps0 * nv0 + ps1 * nv1
                 xb0, xdb0, xb1, xdb1 = f0 * nq0, f0 * nv0, f1 * nq1, f1 * nv1
@@ -493,14 +504,10 @@ def adaptive_pair(
                 steps += 1
                 en1_0, en1_1, en1_2, en1_3 = _ends(nq0, nq1, nv0, nv1, p1s, k0, ww0, g0, k1, ww1,
                                                    g1, zw2_0, zw2_1, zw4_0, zw4_1)  # fmt: skip
-                hh = dt_rec
-                pin0 = -p0s * en0_0
-                pin1 = -p1s * en1_0
-                dpin0 = -(slope * en0_0 + p0s * en0_1)
-                dpin1 = -(slope * en1_0 + p1s * en1_1)
-                hh12 = hh * hh * _TWELFTH
-                e_in += 0.5 * hh * (pin0 + pin1) + hh12 * (dpin0 - dpin1)
-                e_d += 0.5 * hh * (en0_2 + en1_2) + hh12 * (en0_3 - en1_3)
+                de_in, de_d = _energy_step(dt_rec, slope, p0s, p1s, en0_0, en0_1, en0_2, en0_3,
+                                           en1_0, en1_1, en1_2, en1_3)  # fmt: skip
+                e_in += de_in
+                e_d += de_d
                 pk0 = max(pk0, abs(xb0))
                 pk1 = max(pk1, abs(xb1))
                 xf0, xfd0, xf1, xfd1 = xb0, xdb0, xb1, xdb1
@@ -532,21 +539,11 @@ def adaptive_pair(
                 break
             if not in_contact:
                 # ---------------- exact linear step to the next grid point
-                s_next = (k_grid + 1) * h
-                if k_grid + 1 == m_sub:
-                    s_next = dt_rec
-                hh = s_next - s
-                p0s = ag0 + slope * s
-                p1s = ag0 + slope * s_next
-                if abs(hh - h) <= 1e-12 * h:
-                    p0 = -g0 * p0s
-                    p1 = -g0 * p1s
-                    nq0 = a00 * q0 + a01 * v0 + a02 * p0 + a03 * p1
-                    nv0 = b00 * q0 + b01 * v0 + b02 * p0 + b03 * p1
-                    p0 = -g1 * p0s
-                    p1 = -g1 * p1s
-                    nq1 = a10 * q1 + a11 * v1 + a12 * p0 + a13 * p1
-                    nv1 = b10 * q1 + b11 * v1 + b12 * p0 + b13 * p1
+                s_next, hh, p0s, p1s, whole_step = grid_step(k_grid, m_sub, h, dt_rec, s, ag0,
+                                                              slope)  # fmt: skip
+                if whole_step:
+                    nq0, nv0 = _mode_step(q0, v0, p0s, p1s, g0, cf0)
+                    nq1, nv1 = _mode_step(q1, v1, p0s, p1s, g1, cf1)
                 else:
                     nq0, nv0 = advance(q0, v0, -g0 * p0s, -g0 * p1s, w0, z0, hh)
                     nq1, nv1 = advance(q1, v1, -g1 * p0s, -g1 * p1s, w1, z1, hh)
@@ -611,13 +608,10 @@ def adaptive_pair(
                 # energies by the corrected trapezoidal rule (exact to O(h^5) per step)
                 en1_0, en1_1, en1_2, en1_3 = _ends(nq0, nq1, nv0, nv1, p1s, k0, ww0, g0, k1, ww1,
                                                    g1, zw2_0, zw2_1, zw4_0, zw4_1)  # fmt: skip
-                pin0 = -p0s * en0_0
-                pin1 = -p1s * en1_0
-                dpin0 = -(slope * en0_0 + p0s * en0_1)
-                dpin1 = -(slope * en1_0 + p1s * en1_1)
-                hh12 = hh * hh * _TWELFTH
-                e_in += 0.5 * hh * (pin0 + pin1) + hh12 * (dpin0 - dpin1)
-                e_d += 0.5 * hh * (en0_2 + en1_2) + hh12 * (en0_3 - en1_3)
+                de_in, de_d = _energy_step(hh, slope, p0s, p1s, en0_0, en0_1, en0_2, en0_3, en1_0,
+                                           en1_1, en1_2, en1_3)  # fmt: skip
+                e_in += de_in
+                e_d += de_d
                 # peak floor displacements: where the cubic Hermite bound says an extremum
                 # inside the step may be a new peak, find it on the exact solution
                 pk0 = _floor_peak(f0, 0, xf0, xfd0, f0 * nq0, f0 * nv0, pk0, q0, q1, v0, v1, p0s,
@@ -636,12 +630,12 @@ def adaptive_pair(
                     pending = True
                     v_ep = v0c
                     if per_impact:
-                        cd, zhd, e_ep = episode_damping(settings, model, relation, xi0, v0c, b,
+                        cd, zhd, e_ep = laws.episode_damping(settings, model, relation, xi0, v0c, b,
                                                         me, cd, zhd)  # fmt: skip
                         kpot = 0.8 * cd
                     else:
-                        zhd = episode_zeta(model, relation, xi0, v0c, zhd)
-                    hc = min(h, duration(model, v0c, b, me) / substeps)
+                        zhd = laws.episode_zeta(model, relation, xi0, v0c, zhd)
+                    hc = min(h, laws.duration(model, v0c, b, me) / substeps)
                     t_onset = i * dt_rec + s
                     in_contact = True
                     fsal = False
@@ -720,8 +714,8 @@ def adaptive_pair(
                 impulse += cimp
                 # peak force (Hermite on F with its rate), penetration
                 if phase != 0:
-                    fm, tm, dm = substep_peaks(model, fc0, fc1, d0, d1, dd0, dd1, ddd0, ddd1, hs,
-                                               peak_f, b, cd, zhd, phase)  # fmt: skip
+                    fm, tm, dm = laws.substep_peaks(model, fc0, fc1, d0, d1, dd0, dd1, ddd0, ddd1,
+                                                    hs, peak_f, b, cd, zhd, phase)  # fmt: skip
                     if fm > peak_f:
                         peak_f = fm
                         peak_t = i * dt_rec + s + tm
@@ -747,12 +741,12 @@ def adaptive_pair(
                         v0c = ps0 * v0 + ps1 * v1
                         v_ep = v0c
                         if per_impact:
-                            cd, zhd, e_ep = episode_damping(settings, model, relation, xi0, v0c,
-                                                            b, me, cd, zhd)  # fmt: skip
+                            cd, zhd, e_ep = laws.episode_damping(settings, model, relation, xi0,
+                                                                 v0c, b, me, cd, zhd)  # fmt: skip
                             kpot = 0.8 * cd
                         else:
-                            zhd = episode_zeta(model, relation, xi0, v0c, zhd)
-                        hc = min(hc, duration(model, v0c, b, me) / substeps)
+                            zhd = laws.episode_zeta(model, relation, xi0, v0c, zhd)
+                        hc = min(hc, laws.duration(model, v0c, b, me) / substeps)
                         t_onset = i * dt_rec + s
                     elif kind == 2:
                         phase = 2
@@ -793,7 +787,7 @@ def adaptive_pair(
     ph[0] = phase
     stored_energy = 0.0
     if phase != 0:
-        stored_energy = stored(model, ps0 * q0 + ps1 * q1 - gp, b)
+        stored_energy = laws.stored(model, ps0 * q0 + ps1 * q1 - gp, b)
     finish(out, cout, peaks, side, ph, q, v, omega, e0, e_in, e_d, w_c, stored_energy, peak_f,
            peak_t, steps, status)  # fmt: skip
     finish_impacts(out, cout, vlog, nlog, peak_e)
@@ -808,7 +802,7 @@ def _local_bound(hs, d, model, b, loc_k):
     ``LOCAL_PERIOD_SHARE sqrt(m_eff) / substeps``.
     """
     if d > 0.0:
-        e = stored(model, d, b)
+        e = laws.stored(model, d, b)
         if e > 0.0:
             hl = loc_k * d / math.sqrt(e)
             if hl < hs:
@@ -894,4 +888,4 @@ def _store_pair(i, q0, q1, v0, v1, f0, f1, ps0, ps1, gp, b, cd, zhd, phase, mode
     hx[i, 1] = f1 * q1
     d = ps0 * q0 + ps1 * q1 - gp
     hd[i, 0] = d
-    hf[i, 0] = force(model, d, ps0 * v0 + ps1 * v1, b, cd, zhd, phase)
+    hf[i, 0] = laws.force(model, d, ps0 * v0 + ps1 * v1, b, cd, zhd, phase)

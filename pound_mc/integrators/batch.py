@@ -532,36 +532,35 @@ def simulate_sdof_pairs(
     return _named(out)
 
 
+@jit(inline=True)
+def _scene_args(k, ag, dt_rec, omega, zeta, gamma, phi, side, psi, meff, gap, beta, xi, dt_s,
+                settings, out, cout):  # fmt: skip
+    """The kernel arguments of simulation ``k`` of one pair of buildings (no histories)."""
+    n = omega.size
+    nc = psi.shape[0]
+    empty1 = np.zeros((0, nc))
+    return (ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap[k].copy(), meff,
+            np.full(nc, beta[k]), np.full(nc, xi[k]), _with_step(settings, dt_s[k]), np.zeros(n),
+            np.zeros(n), out[k], cout[k], np.zeros((0, phi.shape[0])), empty1, empty1,
+            np.zeros(0))  # fmt: skip
+
+
 @jit
 def _scene_adaptive(ag, dt_rec, omega, zeta, gamma, phi, side, psi, meff, gap, beta, xi, dt_s,
                     settings, out, cout, lo, hi):  # fmt: skip
     """``adaptive``: simulations ``lo:hi`` of one pair of buildings."""
-    n = omega.size
-    nf = phi.shape[0]
-    nc = psi.shape[0]
     for k in range(lo, hi):
-        empty = np.zeros((0, nf))
-        empty1 = np.zeros((0, nc))
-        _run_adaptive(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap[k].copy(), meff,
-                      np.full(nc, beta[k]), np.full(nc, xi[k]), _with_step(settings, dt_s[k]),
-                      np.zeros(n), np.zeros(n), out[k], cout[k], empty, empty1, empty1,
-                      np.zeros(0))  # fmt: skip
+        _run_adaptive(*_scene_args(k, ag, dt_rec, omega, zeta, gamma, phi, side, psi, meff, gap,
+                                   beta, xi, dt_s, settings, out, cout))  # fmt: skip
 
 
 @jit
 def _scene_fixed(ag, dt_rec, omega, zeta, gamma, phi, side, psi, meff, gap, beta, xi, dt_s,
                  settings, out, cout, lo, hi):  # fmt: skip
     """A fixed-step method: simulations ``lo:hi`` of one pair of buildings."""
-    n = omega.size
-    nf = phi.shape[0]
-    nc = psi.shape[0]
     for k in range(lo, hi):
-        empty = np.zeros((0, nf))
-        empty1 = np.zeros((0, nc))
-        _run_fixed(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap[k].copy(), meff,
-                   np.full(nc, beta[k]), np.full(nc, xi[k]), _with_step(settings, dt_s[k]),
-                   np.zeros(n), np.zeros(n), out[k], cout[k], empty, empty1, empty1,
-                   np.zeros(0))  # fmt: skip
+        _run_fixed(*_scene_args(k, ag, dt_rec, omega, zeta, gamma, phi, side, psi, meff, gap,
+                                beta, xi, dt_s, settings, out, cout))  # fmt: skip
 
 
 def simulate_scene_batch(

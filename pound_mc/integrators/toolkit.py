@@ -34,6 +34,20 @@ def step_size(dt_rec, dt_s):
 
 
 @jit(inline=True)
+def grid_step(k_grid, m_sub, h, dt_rec, s, ag0, slope):
+    """The linear step from local time ``s`` to grid point ``k_grid + 1`` of a record interval.
+
+    The interval (``dt_rec`` [s], ground acceleration ``ag0 + slope t``) is split in ``m_sub``
+    steps of ``h``; the last grid point is the interval's end itself, not ``m_sub h``.
+    Returns its end [s], its length [s], the ground accelerations at both ends [m/s^2] and
+    whether it is a whole step of ``h`` (whose precomputed coefficients apply).
+    """
+    s_next = dt_rec if k_grid + 1 == m_sub else (k_grid + 1) * h
+    hh = s_next - s
+    return s_next, hh, ag0 + slope * s, ag0 + slope * s_next, abs(hh - h) <= 1e-12 * h
+
+
+@jit(inline=True)
 def run_sizes(ag, dt_rec, phi, gap, meff, beta, xi, settings, q):
     """Sizes, step and damping constants every kernel starts a run with.
 
