@@ -35,8 +35,6 @@ __all__ = [
     "fit_tick_labels",
     "new_axes",
     "save",
-    "CHART_PARAMETERS",
-    "chart_doc",
 ]
 
 #: Okabe & Ito (2008) colour-blind-safe colours (yellow left out: too pale on white).
@@ -181,13 +179,13 @@ def save(fig: Figure, path: str | Path | None) -> Figure:
     return fig
 
 
-#: Parameter descriptions several charts share, by name: a chart's docstring names one as
-#: ``%(name)s`` on a line of its own (:func:`chart_doc`).
+#: Parameter descriptions several charts share, by name (a chart's docstring names one as
+#: ``%(name)s`` on a line of its own and is decorated with ``chart_doc``).
 CHART_PARAMETERS = {
     "ds": "ds : xarray.Dataset\n    A study dataset.",
     "path": "path : str or Path, optional\n    Where to write the PNG.",
     "record": "record : int or str, optional\n"
     "    Which record (index or name); default all records pooled.",
 }
-#: Decorator filling a chart's docstring's ``%(name)s`` lines from :data:`CHART_PARAMETERS`.
+#: Decorator filling a chart's docstring's ``%(name)s`` lines from ``CHART_PARAMETERS``.
 chart_doc = fill(**CHART_PARAMETERS)
