@@ -31,6 +31,7 @@ RANK = {
     "numerics": 5,
     "analysis": 6,
     "cli": 7,
+    "_docstring": 0,  # core too: shared docstring blocks (physics and analysis use them)
 }
 
 #: Third-party packages that may be imported inside a function: optional dependencies only.

@@ -13,7 +13,7 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from numpy.typing import ArrayLike
 
-from pound_mc.analysis.style import PALETTE, legend_outside, line_style, new_axes, save
+from pound_mc.analysis.style import PALETTE, chart_doc, legend_outside, line_style, new_axes, save
 from pound_mc.physics import materials, relations
 from pound_mc.physics.droptest import DropTestResult, drop_test
 
@@ -64,6 +64,7 @@ def restitution_curves(
     return curves
 
 
+@chart_doc
 def restitution_chart(
     path: str | Path | None = None,
     *,
@@ -75,8 +76,7 @@ def restitution_chart(
 
     Parameters
     ----------
-    path : str or Path, optional
-        Where to write the PNG.
+    %(path)s
     targets : array_like, optional
         Target coefficients of restitution of the curves (default 37 values in 0.1-0.99).
     samples : tuple, optional

@@ -26,6 +26,7 @@ from pound_mc.analysis.physics_charts import (  # noqa: F401  (charts of this mo
 )
 from pound_mc.analysis.style import (
     axis_label,
+    chart_doc,
     fit_tick_labels,
     legend_outside,
     line_style,
@@ -107,6 +108,7 @@ def spectrum_quantiles(ds: xr.Dataset, record: int | str = "median") -> xr.DataA
     return q.isel(record=_record_index(ds, record))
 
 
+@chart_doc
 def spectrum_chart(
     ds: xr.Dataset,
     path: str | Path | None = None,
@@ -123,8 +125,7 @@ def spectrum_chart(
     ----------
     ds : xarray.Dataset
         A study dataset (:mod:`pound_mc.study.dataset`).
-    path : str or Path, optional
-        Where to write the PNG.
+    %(path)s
     x : str, optional
         Grid dimension on the horizontal axis (default: the first).
     line : str, optional
@@ -209,6 +210,7 @@ def spectrum_chart(
     return save(fig, path)
 
 
+@chart_doc
 def inelastic_chart(ds, path: str | Path | None = None, *, side="left", record=0) -> Figure:
     """Inelastic spectrum: median ductility demand and peak force against a grid axis.
 
@@ -222,8 +224,7 @@ def inelastic_chart(ds, path: str | Path | None = None, *, side="left", record=0
     ----------
     ds : xarray.Dataset
         A dataset of a study with yielding buildings (``peak_ductility_left`` ...).
-    path : str or Path, optional
-        Where to write the PNG.
+    %(path)s
     side : {"left", "right"}
         The building whose ductility is drawn.
     record : int
@@ -279,6 +280,7 @@ MATERIAL_DIM = "contact_material"
 CONTACT_DIM = "contact"
 
 
+@chart_doc
 def rule_gaps(
     ds: xr.Dataset, rules: dict | str | None = "auto", *, base_dir: str | Path | None = None
 ) -> dict:
@@ -286,8 +288,7 @@ def rule_gaps(
 
     Parameters
     ----------
-    ds : xarray.Dataset
-        A study dataset.
+    %(ds)s
     rules : dict, "auto" or None
         ``{label: gap}``: a number [m], an array with one value per value of the chart's line
         axis, or an :class:`xarray.DataArray` (reduced as below).  ``"auto"``: the dataset's
@@ -387,6 +388,7 @@ def _grid_dims(ds) -> list[str]:
     return [d for d in ds["peak_force"].dims if d not in ("record", "sample")]
 
 
+@chart_doc
 def probability_chart(
     ds: xr.Dataset,
     path: str | Path | None = None,
@@ -408,15 +410,12 @@ def probability_chart(
 
     Parameters
     ----------
-    ds : xarray.Dataset
-        A study dataset.
-    path : str or Path, optional
-        Where to write the PNG.
+    %(ds)s
+    %(path)s
     line : str, optional
         Grid dimension drawn as one line per value (default: the first other grid axis); at most
         ``max_lines`` values, evenly spread, are drawn.
-    record : int or str, optional
-        Which record (index or name); default all records pooled.
+    %(record)s
     sel : dict, optional
         ``{dim: value}`` for the other grid dimensions (nearest value; default the first), or a
         list of values of the ``line`` dimension to draw.
@@ -537,6 +536,7 @@ def _distribution_groups(ds, by, record, sel):
     return groups, labels, pooled
 
 
+@chart_doc
 def distribution_chart(
     ds: xr.Dataset,
     path: str | Path | None = None,
@@ -554,16 +554,13 @@ def distribution_chart(
 
     Parameters
     ----------
-    ds : xarray.Dataset
-        A study dataset.
-    path : str or Path, optional
-        Where to write the PNG.
+    %(ds)s
+    %(path)s
     by : str, optional
         Dimension with one box and one histogram per value (default the material axis
         ``contact_material`` when the dataset has it, else the gap, else the last grid
         dimension).
-    record : int or str, optional
-        Which record (index or name); default all records pooled.
+    %(record)s
     sel : dict, optional
         ``{dim: value}`` of grid dimensions to hold at one value (nearest) instead of pooling.
     bins : int

@@ -12,7 +12,15 @@ from matplotlib.figure import Figure
 from matplotlib.ticker import NullFormatter
 
 from pound_mc.analysis.plot import finish_axes
-from pound_mc.analysis.style import MARKERS, PALETTE, legend_outside, line_style, new_axes, save
+from pound_mc.analysis.style import (
+    MARKERS,
+    PALETTE,
+    chart_doc,
+    legend_outside,
+    line_style,
+    new_axes,
+    save,
+)
 from pound_mc.scene import SimulationResult
 
 __all__ = ["work_precision_chart", "stability_map_chart", "time_history_chart"]
@@ -105,6 +113,7 @@ def _contact_floors(result) -> list[tuple[int, int]]:
     return [(int(c.left_floor) + 1, int(c.right_floor) + 1) for c in contacts]
 
 
+@chart_doc
 def time_history_chart(
     result: SimulationResult,
     path: str | Path | None = None,
@@ -120,8 +129,7 @@ def time_history_chart(
     ----------
     result : pound_mc.scene.SimulationResult
         A result run with ``history=True``.
-    path : str or Path, optional
-        Where to write the PNG.
+    %(path)s
     ax : sequence of three matplotlib.axes.Axes, optional
         Where to draw the displacements, the penetrations and the forces.
     """

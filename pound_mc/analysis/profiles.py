@@ -13,21 +13,14 @@ from __future__ import annotations
 import warnings
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Literal
 
 import numpy as np
 import xarray as xr
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-from pound_mc.analysis.style import (
-    axis_label,
-    legend_outside,
-    line_style,
-    new_axes,
-    save,
-    scale_of,
-    value_text,
-)
+from pound_mc.analysis import style
 
 __all__ = ["CONTACT_DIM", "STOREY_DIM", "PROFILE_VARIABLES", "contacts_chart", "profile_chart"]
 
@@ -66,20 +59,21 @@ def _profile_lines(ax, ds, q, line, heights, scale: float) -> None:
     values = [None] if line is None else range(ds.sizes[line])
     for k, i in enumerate(values):
         sq = q if i is None else q.isel({line: i})
-        style = line_style(k)
-        label = "median" if i is None else value_text(ds, line, i)
-        ax.plot(sq.sel(quantile=0.5).values * scale, heights, ms=5, label=label, **style)
+        look = style.line_style(k)
+        label = "median" if i is None else style.value_text(ds, line, i)
+        ax.plot(sq.sel(quantile=0.5).values * scale, heights, ms=5, label=label, **look)
         low, high = (sq.sel(quantile=level).values * scale for level in (0.05, 0.95))
-        ax.fill_betweenx(heights, low, high, color=style["color"], alpha=0.12, lw=0)
+        ax.fill_betweenx(heights, low, high, color=look["color"], alpha=0.12, lw=0)
 
 
+@style.chart_doc
 def contacts_chart(
     ds: xr.Dataset,
     path: str | Path | None = None,
     *,
     variable: str = "contact_peak_force",
     line: str | None = None,
-    ax: Axes | Sequence[Axes] | None = None,
+    ax: Axes | None = None,
 ) -> Figure:
     """Peak impact force (or another per-contact result) at each contact against its elevation.
 
@@ -87,8 +81,7 @@ def contacts_chart(
     ----------
     ds : xarray.Dataset
         A shear-building study dataset (a ``contact`` dimension).
-    path : str or Path, optional
-        Where to write the PNG.
+    %(path)s
     variable : str
         Per-contact variable (``contact_peak_force``, ``contact_impacts``, ...).
     line : str, optional
@@ -114,11 +107,11 @@ def contacts_chart(
         if "contact_elevation" in ds.coords
         else ds[CONTACT_DIM].values.astype(float)
     )
-    fig, (ax,) = new_axes(ax, (7.6, 4.8))
-    _profile_lines(ax, ds, q, line, height, scale_of(ds, variable))
+    fig, (ax,) = style.new_axes(ax, (7.6, 4.8))
+    _profile_lines(ax, ds, q, line, height, style.scale_of(ds, variable))
     ax.set_yticks(height, [f"{h:g}" for h in height])
     ax.set(
-        xlabel=axis_label(ds, variable),
+        xlabel=style.axis_label(ds, variable),
         ylabel="contact elevation [m]" if "contact_elevation" in ds.coords else "contact [-]",
         title=(
             f"{ds[variable].attrs.get('long_name', variable)} ({ds.attrs.get('study_name', '')})"
@@ -127,15 +120,16 @@ def contacts_chart(
     )
     ax.title.set_fontsize(9)
     ax.grid(alpha=0.3)
-    legend_outside(ax, title=axis_label(ds, line) if line else None)
-    return save(fig, path)
+    style.legend_outside(ax, title=style.axis_label(ds, line) if line else None)
+    return style.save(fig, path)
 
 
+@style.chart_doc
 def profile_chart(
     ds: xr.Dataset,
     path: str | Path | None = None,
     *,
-    quantity: str = "drift",
+    quantity: Literal["drift", "ductility"] = "drift",
     line: str | None = None,
     ax: Axes | Sequence[Axes] | None = None,
 ) -> Figure:
@@ -145,8 +139,7 @@ def profile_chart(
     ----------
     ds : xarray.Dataset
         A study dataset with the inelastic outputs (:data:`PROFILE_VARIABLES`).
-    path : str or Path, optional
-        Where to write the PNG.
+    %(path)s
     quantity : {"drift", "ductility"}
         Which outputs.
     line : str, optional
@@ -169,26 +162,27 @@ def profile_chart(
             f"({', '.join(PROFILE_VARIABLES[quantity])}; inelastic buildings only)"
         )
     line = _line_dim(ds, line)
-    fig, axes = new_axes(ax, (10.0, 4.8), ncols=len(names))
+    fig, axes = style.new_axes(ax, (10.0, 4.8), ncols=len(names))
     for ax_b, name in zip(axes, names, strict=True):
-        scale = scale_of(ds, name)
+        scale = style.scale_of(ds, name)
         if STOREY_DIM in ds[name].dims:
             q = _over_samples(ds, name, [STOREY_DIM] + ([line] if line else []))
             storeys = ds[STOREY_DIM].values
             _profile_lines(ax_b, ds, q, line, storeys, scale)
             ax_b.set_yticks(storeys, [str(s) for s in storeys])
-            ax_b.set(xlabel=axis_label(ds, name), ylabel="storey [-]")
+            ax_b.set(xlabel=style.axis_label(ds, name), ylabel="storey [-]")
         else:
             med = _over_samples(ds, name, [line] if line else []).sel(quantile=0.5).values * scale
-            xs = ds[line].values * scale_of(ds, line) if line else np.zeros(1)
-            ax_b.plot(xs, np.atleast_1d(med), ms=5, label="median", **line_style(0))
-            ax_b.set(xlabel=axis_label(ds, line) if line else "", ylabel=axis_label(ds, name))
+            xs = ds[line].values * style.scale_of(ds, line) if line else np.zeros(1)
+            ax_b.plot(xs, np.atleast_1d(med), ms=5, label="median", **style.line_style(0))
+            xlabel = style.axis_label(ds, line) if line else ""
+            ax_b.set(xlabel=xlabel, ylabel=style.axis_label(ds, name))
         ax_b.set_title(ds[name].attrs.get("long_name", name), fontsize=9)
         ax_b.grid(alpha=0.3)
-    legend_outside(axes[-1], title=axis_label(ds, line) if line else None)
+    style.legend_outside(axes[-1], title=style.axis_label(ds, line) if line else None)
     fig.suptitle(
         f"Peak {quantity} ({ds.attrs.get('study_name', '')}): median over records and samples, "
         "5-95 % band",
         fontsize=9,
     )
-    return save(fig, path)
+    return style.save(fig, path)

@@ -22,12 +22,13 @@ from pound_mc.analysis.fragility import fit_fragility
 from pound_mc.analysis.fragility_chart import fragility_chart
 from pound_mc.analysis.plot import _hold, _line_label, probability_chart, save
 from pound_mc.analysis.risk import GAP_DIM, _counts, _intensity_dim, required_gap
-from pound_mc.analysis.style import axis_label, legend_outside, value_text
+from pound_mc.analysis.style import axis_label, chart_doc, legend_outside, value_text
 from pound_mc.errors import InputError
 
 __all__ = ["fragility_panels", "required_gap_chart"]
 
 
+@chart_doc
 def fragility_panels(
     ds: xr.Dataset,
     path: str | Path | None = None,
@@ -45,8 +46,7 @@ def fragility_panels(
     ----------
     ds : xarray.Dataset
         A study dataset with an intensity axis (or ``im``: a grid dimension with values > 0).
-    path : str or Path, optional
-        Where to write the PNG.
+    %(path)s
     im, event, n_boot, seed
         As :func:`pound_mc.analysis.risk.fragility`.
     sel : dict, optional
@@ -102,6 +102,7 @@ def fragility_panels(
     return save(fig, path)
 
 
+@chart_doc
 def required_gap_chart(
     ds: xr.Dataset,
     path: str | Path | None = None,
@@ -118,8 +119,7 @@ def required_gap_chart(
     ----------
     ds : xarray.Dataset
         A study dataset with two or more gaps on its grid.
-    path : str or Path, optional
-        Where to write the PNG.
+    %(path)s
     probability : float, default 0.1
         Target probability (a horizontal line); each line's required gap is marked on it with
         its Wilson confidence interval.

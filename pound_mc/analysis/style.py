@@ -21,6 +21,8 @@ import xarray as xr
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
+from pound_mc._docstring import fill
+
 __all__ = [
     "PALETTE",
     "MARKERS",
@@ -175,3 +177,15 @@ def save(fig: Figure, path: str | Path | None) -> Figure:
         fig.savefig(tmp, dpi=130, format="png")
         tmp.replace(path)
     return fig
+
+
+#: Parameter descriptions several charts share, by name (a chart's docstring names one as
+#: ``%(name)s`` on a line of its own and is decorated with ``chart_doc``).
+CHART_PARAMETERS = {
+    "ds": "ds : xarray.Dataset\n    A study dataset.",
+    "path": "path : str or Path, optional\n    Where to write the PNG.",
+    "record": "record : int or str, optional\n"
+    "    Which record (index or name); default all records pooled.",
+}
+#: Decorator filling a chart's docstring's ``%(name)s`` lines from ``CHART_PARAMETERS``.
+chart_doc = fill(**CHART_PARAMETERS)

@@ -72,6 +72,32 @@ Draw one chart. What FILE is depends on the kind:
 A kind that does not apply to the file says so in one line (exit status 2).
 """
 
+COMPILE_DESCRIPTION = (
+    "Compile the numba kernels of the given methods and contact laws, for SDOF pairs "
+    "and shear buildings, into the user cache (POUND_MC_CACHE_DIR, else "
+    "XDG_CACHE_HOME/pound-mc, else ~/.cache/pound-mc). Later runs of the same source "
+    "load them instead of compiling; any edit of the compiled sources compiles again."
+)
+
+INIT_DESCRIPTION = (
+    "Write a shipped study file NAME.toml, and the scene files it reads, into the "
+    "current folder (or --dir), ready for pound-mc check and pound-mc run. Without "
+    "NAME, list the shipped studies."
+)
+
+#: Arguments that several sub-commands share, declared once: name -> (flag, keywords of
+#: ``add_argument``); a sub-command adds them with :func:`_shared`.
+SHARED_ARGUMENTS: dict[str, tuple[str, dict]] = {
+    "study": ("study", dict(metavar="STUDY.toml")),
+    "chunk-size": ("--chunk-size", dict(type=int, metavar="N", help="simulations per chunk file")),
+    "table-json": ("--json", dict(action="store_true", help="print the table as JSON records")),
+    "table-out": ("--out", dict(default="outputs", metavar="DIR", help="folder for CSV and PNG")),
+    "im": ("--im", dict(metavar="DIM",
+                        help="intensity dimension of the fragility (default sa_g or pga_g)")),
+    "event": ("--event", dict(default="pounding",
+                              help="pounding (default), peak_force>N (newtons) or ductility>X")),
+}  # fmt: skip
+
 
 class HelpFormatter(argparse.RawDescriptionHelpFormatter):
     """Descriptions kept as written; every option's default shown unless its help says it."""
@@ -93,6 +119,13 @@ def _json_and_plot(parser: argparse.ArgumentParser, plot_help: str) -> None:
     """The ``--json`` and ``--plot FILE.png`` options of a command that prints one result."""
     parser.add_argument("--json", action="store_true", help="print one JSON object")
     parser.add_argument("--plot", metavar="FILE.png", help=plot_help)
+
+
+def _shared(parser: argparse.ArgumentParser, *names: str) -> None:
+    """Add the :data:`SHARED_ARGUMENTS` ``names`` to ``parser``, in that order."""
+    for name in names:
+        flag, keywords = SHARED_ARGUMENTS[name]
+        parser.add_argument(flag, **keywords)
 
 
 def add_commands(sub: argparse._SubParsersAction) -> None:
@@ -189,8 +222,7 @@ def _scene(sub: argparse._SubParsersAction) -> None:
         "bench",
         help="speed against accuracy: B1 head to head (ratios), then every method's sweep",
     )
-    p.add_argument("--json", action="store_true", help="print the table as JSON records")
-    p.add_argument("--out", default="outputs", metavar="DIR", help="folder for CSV and PNG")
+    _shared(p, "table-json", "table-out")
     p.add_argument("--repeats", type=int, default=7, help="timed runs per point (median)")
     p.add_argument("--methods", nargs="+", metavar="METHOD", help="methods to run (all)")
     p.add_argument(
@@ -208,15 +240,14 @@ def _scene(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(handler="bench")
 
     p = sub.add_parser("stability", help="map the largest stable step against contact stiffness")
-    p.add_argument("--out", default="outputs", metavar="DIR", help="folder for CSV and PNG")
-    p.add_argument("--json", action="store_true", help="print the table as JSON records")
+    _shared(p, "table-out", "table-json")
     p.set_defaults(handler="stability")
 
 
 def _study(sub: argparse._SubParsersAction) -> None:
     """Studies: ``run`` and ``check``."""
     p = sub.add_parser("run", help="run a study and write <out>/<name>.nc and a spectrum chart")
-    p.add_argument("study", metavar="STUDY.toml")
+    _shared(p, "study")
     p.add_argument("--out", default="outputs", metavar="DIR", help="output folder")
     p.add_argument("--threads", type=int, metavar="N", help="numba threads (in-process run)")
     p.add_argument(
@@ -229,7 +260,7 @@ def _study(sub: argparse._SubParsersAction) -> None:
         "--scheduler", metavar="ADDRESS", help="run on the Dask cluster of this scheduler"
     )
     p.add_argument("--fresh", action="store_true", help="discard earlier results of this study")
-    p.add_argument("--chunk-size", type=int, metavar="N", help="simulations per chunk file")
+    _shared(p, "chunk-size")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--no-plot", action="store_true", help="do not draw the spectrum chart")
     p.add_argument(
@@ -242,9 +273,9 @@ def _study(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(handler="run")
 
     p = sub.add_parser("check", help="validate a study and print its plan; writes nothing")
-    p.add_argument("study", metavar="STUDY.toml")
+    _shared(p, "study")
     p.add_argument("--threads", type=int, metavar="N", help="threads for the estimate")
-    p.add_argument("--chunk-size", type=int, metavar="N", help="simulations per chunk file")
+    _shared(p, "chunk-size")
     p.add_argument(
         "--calibrate", type=int, default=64, metavar="N", help="simulations timed for the estimate"
     )
@@ -256,12 +287,7 @@ def _study(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "compile",
         help="compile the kernels into the on-disk cache (cluster images, Dask workers)",
-        description=(
-            "Compile the numba kernels of the given methods and contact laws, for SDOF pairs "
-            "and shear buildings, into the user cache (POUND_MC_CACHE_DIR, else "
-            "XDG_CACHE_HOME/pound-mc, else ~/.cache/pound-mc). Later runs of the same source "
-            "load them instead of compiling; any edit of the compiled sources compiles again."
-        ),
+        description=COMPILE_DESCRIPTION,
     )
     p.add_argument("--methods", nargs="+", metavar="METHOD", help="methods (default all)")
     p.add_argument("--laws", nargs="+", metavar="LAW", help="contact laws (default all)")
@@ -276,11 +302,7 @@ def _study(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "init",
         help="write a shipped study (and its scene files) into the current folder",
-        description=(
-            "Write a shipped study file NAME.toml, and the scene files it reads, into the "
-            "current folder (or --dir), ready for pound-mc check and pound-mc run. Without "
-            "NAME, list the shipped studies."
-        ),
+        description=INIT_DESCRIPTION,
     )
     p.add_argument("name", nargs="?", metavar="NAME", help="shipped study (e.g. quickstart)")
     p.add_argument("--dir", default=".", metavar="DIR", help="folder to write into")
@@ -314,10 +336,7 @@ def _analysis(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--sample", type=int, default=0, metavar="N", help="sample index (history)")
     p.add_argument("--line", metavar="DIM", help="dimension drawn as one line per value")
     p.add_argument("--by", metavar="DIM", help="dimension of the distribution chart's groups")
-    p.add_argument(
-        "--im", metavar="DIM", help="intensity dimension (fragility; default sa_g/pga_g)"
-    )
-    p.add_argument("--event", default="pounding", help="fragility event (default pounding)")
+    _shared(p, "im", "event")
     p.add_argument(
         "--probability", type=float, default=0.1, help="target probability (required-gap)"
     )
@@ -325,12 +344,7 @@ def _analysis(sub: argparse._SubParsersAction) -> None:
 
     p = sub.add_parser("fragility", help="fit lognormal fragility curves to a study dataset")
     p.add_argument("file", metavar="RESULT.nc")
-    p.add_argument("--im", metavar="NAME", help="intensity dimension (default sa_g or pga_g)")
-    p.add_argument(
-        "--event",
-        default="pounding",
-        help="pounding (default), peak_force>N (newtons) or ductility>X",
-    )
+    _shared(p, "im", "event")
     p.add_argument("--n-boot", type=int, default=1000, metavar="N", help="bootstrap replicates")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(handler="fragility")

@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from pound_mc._docstring import fill
 from pound_mc.errors import InputError
 
 __all__ = [
@@ -37,6 +38,11 @@ HYSTERESIS = ("elastic", "bilinear", "bouc-wen")
 
 #: Floors whose elevations differ by less than this are at equal height [m].
 HEIGHT_TOLERANCE_M = 1e-6
+
+#: Keyword descriptions :func:`sdof` and :func:`shear_building` share (``%(name)s`` lines).
+_keyword_doc = fill(
+    bw_exponent="bw_exponent : float, optional\n    Bouc-Wen exponent ``n`` [-] (default 2)."
+)
 
 
 @dataclass(frozen=True)
@@ -236,6 +242,7 @@ def _hysteresis(
     return hysteresis, uy, float(ratio), float(exponent)
 
 
+@_keyword_doc
 def sdof(
     period_s: float,
     mass_kg: float,
@@ -250,6 +257,8 @@ def sdof(
     bw_exponent: float | None = None,
 ) -> Building:
     """Single-degree-of-freedom building.
+
+    Its storey stiffness follows from the period and the mass: ``k = m (2 pi / T)^2`` [N/m].
 
     Parameters
     ----------
@@ -268,8 +277,7 @@ def sdof(
     post_yield_ratio : float, optional
         Post-yield over elastic stiffness [-] (bilinear, Bouc-Wen; default 0:
         elastic-perfectly-plastic).
-    bw_exponent : float, optional
-        Bouc-Wen exponent ``n`` [-] (default 2).
+    %(bw_exponent)s
     """
     t = _check_positive(period_s, key=f"{prefix}period_s", file=file)[0]
     m = _check_positive(mass_kg, key=f"{prefix}mass_kg", file=file)[0]
@@ -283,6 +291,7 @@ def sdof(
     return Building("sdof", np.array([m]), np.array([k]), elevation, z, *hyst)
 
 
+@_keyword_doc
 def shear_building(
     storey_mass_kg,
     storey_stiffness_N_per_m,
@@ -314,8 +323,7 @@ def shear_building(
         Inter-storey drift at yield per storey (or one for all) [m] (bilinear, Bouc-Wen).
     post_yield_ratio : float, optional
         Post-yield over elastic stiffness [-] (bilinear, Bouc-Wen; default 0).
-    bw_exponent : float, optional
-        Bouc-Wen exponent ``n`` [-] (default 2).
+    %(bw_exponent)s
     """
     m = _check_positive(storey_mass_kg, key=f"{prefix}storey_mass_kg", file=file)
     k = _check_positive(
@@ -358,6 +366,14 @@ def building_from_dict(spec: dict, *, file=None, side: str = "left") -> Building
     """Build a :class:`Building` from a scene file's ``[left]`` or ``[right]`` table."""
     prefix = f"{side}."
     model = spec.get("model", "sdof")
+    # the storeys' law and where errors point: alike for both models
+    common = {
+        "hysteresis": spec.get("hysteresis", "elastic"),
+        "post_yield_ratio": spec.get("post_yield_ratio"),
+        "file": file,
+        "prefix": prefix,
+        "bw_exponent": spec.get("bw_exponent"),
+    }
     if model == "sdof":
         allowed = {"model", "period_s", "mass_kg", "damping_ratio", "height_m", "hysteresis",
                    "yield_disp_m", "post_yield_ratio", "bw_exponent"}  # fmt: skip
@@ -370,12 +386,8 @@ def building_from_dict(spec: dict, *, file=None, side: str = "left") -> Building
             spec["mass_kg"],
             spec.get("damping_ratio", 0.05),
             spec.get("height_m"),
-            hysteresis=spec.get("hysteresis", "elastic"),
             yield_disp_m=spec.get("yield_disp_m"),
-            post_yield_ratio=spec.get("post_yield_ratio"),
-            file=file,
-            prefix=prefix,
-            bw_exponent=spec.get("bw_exponent"),
+            **common,
         )
     if model == "shear":
         allowed = {
@@ -398,12 +410,8 @@ def building_from_dict(spec: dict, *, file=None, side: str = "left") -> Building
             spec["storey_stiffness_N_per_m"],
             spec["storey_height_m"],
             spec.get("damping_ratio", 0.05),
-            hysteresis=spec.get("hysteresis", "elastic"),
             storey_yield_disp_m=spec.get("storey_yield_disp_m"),
-            post_yield_ratio=spec.get("post_yield_ratio"),
-            file=file,
-            prefix=prefix,
-            bw_exponent=spec.get("bw_exponent"),
+            **common,
         )
     raise InputError(
         f"unknown model {model!r}; allowed: 'sdof', 'shear'", file=file, key=prefix + "model"
