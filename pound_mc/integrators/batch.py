@@ -503,7 +503,7 @@ def simulate_sdof_pairs(
         right_mass_kg, gap_m, beta, xi, dt_s,
     ]  # fmt: skip
     arrays = np.broadcast_arrays(*[np.asarray(a, dtype=np.float64) for a in arrays])
-    arrays = [np.ascontiguousarray(a.ravel()) for a in arrays]
+    arrays = [np.array(a.ravel(), order="C") for a in arrays]  # writable: one compiled type
     nsim = arrays[0].size
     out = np.empty((nsim, N_OUT))
     acc = np.ascontiguousarray(acc, dtype=np.float64)
@@ -611,11 +611,12 @@ def simulate_scene_batch(
     beta, xi, dt_s = np.broadcast_arrays(
         *[np.asarray(a, dtype=np.float64) for a in (beta, xi, dt_s)]
     )
-    beta, xi, dt_s = (np.ascontiguousarray(a.ravel()) for a in (beta, xi, dt_s))
+    # writable copies: numba compiles a read-only (broadcast) array as another type
+    beta, xi, dt_s = (np.array(a.ravel(), order="C") for a in (beta, xi, dt_s))
     nsim = beta.size
     gap = np.asarray(gap_m, dtype=np.float64)
-    gap = np.ascontiguousarray(
-        np.broadcast_to(gap.reshape(gap.shape[0] if gap.ndim else 1, -1), (nsim, nc))
+    gap = np.array(
+        np.broadcast_to(gap.reshape(gap.shape[0] if gap.ndim else 1, -1), (nsim, nc)), order="C"
     )
     out = np.empty((nsim, N_OUT))
     cout = np.empty((nsim, nc, N_COUT))
