@@ -32,7 +32,11 @@ import numpy as np
 
 from pound_mc._jit import jit
 from pound_mc.errors import InputError
-from pound_mc.integrators.accuracy import flag_inaccurate, shortest_contact_s
+from pound_mc.integrators.accuracy import (
+    ADAPTIVE_SUBSTEPS_FACTOR,
+    flag_inaccurate,
+    shortest_contact_s,
+)
 from pound_mc.integrators.adaptive import adaptive
 from pound_mc.integrators.adaptive_bilinear import adaptive_bilinear, refuse_unsupported
 from pound_mc.integrators.adaptive_pair import adaptive_pair
@@ -55,6 +59,7 @@ from pound_mc.integrators.outputs import (
     PRE_RUN_TO_CONTACT,
     STATUS,
     STATUS_NOT_CONVERGED,
+    STATUS_OK,
     UNSTABLE_ENERGY_FRACTION,
     fail,
     pre_size,
@@ -529,6 +534,19 @@ def simulate_sdof_pairs(
     _threaded(_sdof_groups, first.size, acc, dt_rec, *arrays, settings, first, shared)
     _threaded(_sdof_adaptive, nsim, acc, dt_rec, *arrays, settings, out, group, shared)
     fixed_restitution(out, settings, arrays[8])
+    # the runs with a contact again with more contact sub-steps (pound_mc.integrators.accuracy)
+    hit = np.flatnonzero((out[:, PEAK_FORCE] > 0.0) & (out[:, STATUS] == STATUS_OK))
+    if hit.size:
+        fine = np.empty((hit.size, N_OUT))
+        finer = kernel_settings(contact_model, method, relation=relation,
+                                substeps=substeps * ADAPTIVE_SUBSTEPS_FACTOR,
+                                restitution=restitution)  # fmt: skip
+        _threaded(_sdof_adaptive, hit.size, acc, dt_rec, *[a[hit] for a in arrays], finer, fine,
+                  group[hit], shared)  # fmt: skip
+        peak_fine = out[:, PEAK_FORCE].copy()
+        peak_fine[hit] = fine[:, PEAK_FORCE]
+        out[:, STATUS] = flag_inaccurate(out[:, STATUS], out[:, IMPACTS], np.inf, arrays[9],
+                                         out[:, PEAK_FORCE], peak_fine)  # fmt: skip
     return _named(out)
 
 
@@ -642,6 +660,20 @@ def simulate_scene_batch(
         t_c = t_c.min(axis=1)
         out[:, STATUS] = flag_inaccurate(out[:, STATUS], out[:, IMPACTS], t_c, dt_s,
                                          out[:, PEAK_FORCE], half[:, PEAK_FORCE])  # fmt: skip
+    else:
+        # the runs with a contact again with more contact sub-steps (pound_mc.integrators.accuracy)
+        hit = np.flatnonzero((out[:, PEAK_FORCE] > 0.0) & (out[:, STATUS] == STATUS_OK))
+        if hit.size:
+            fine = np.empty((hit.size, N_OUT))
+            finer = kernel_settings(contact_model, method, relation=relation,
+                                    substeps=substeps * ADAPTIVE_SUBSTEPS_FACTOR,
+                                    restitution=restitution)  # fmt: skip
+            _threaded(kernel, hit.size, *pair[:-3], gap[hit], beta[hit], xi[hit], dt_s[hit],
+                      finer, fine, np.empty((hit.size, nc, N_COUT)))  # fmt: skip
+            peak_fine = out[:, PEAK_FORCE].copy()
+            peak_fine[hit] = fine[:, PEAK_FORCE]
+            out[:, STATUS] = flag_inaccurate(out[:, STATUS], out[:, IMPACTS], np.inf, dt_s,
+                                             out[:, PEAK_FORCE], peak_fine)  # fmt: skip
     contacts = {name: cout[:, :, k] for k, name in enumerate(CONTACT_OUTPUTS)}
     contacts["impacts"] = contacts["impacts"].astype(np.int32)
     fixed_restitution(out, settings, xi)
