@@ -536,3 +536,29 @@ def test_adaptive_flags_what_it_does_not_resolve():
         # either within 1 % of the reference or flagged, its numbers kept
         assert err < 0.01 or out["status"][0] == STATUS_INACCURATE, (periods, err)
         assert np.isfinite(out["peak_force"][0])
+
+
+def test_reference_on_buildings_that_move_together():
+    # Identical 0.05-s buildings at zero gap (the extreme grid's first cases): the penetration
+    # and its rate stay at zero, the reference raised "first_step must be positive" (then
+    # switched phases at t = 0 for ever).  No impact; the floor moves as the building alone,
+    # whose exact linear response the kernel's Nigam-Jennings steps give.
+    from pound_mc.integrators.reference import reference_solution
+    from pound_mc.motions import load_record, record_arrays
+    from pound_mc.scene.model import scene_from_dict
+
+    record = record_arrays(load_record("builtin:knet-akt013", duration_s=1.0, pga_g=2.0))
+    sdof = {"model": "sdof", "period_s": 0.05, "damping_ratio": 0.05, "mass_kg": 100.0}
+    scene = scene_from_dict({
+        "record": {"source": "builtin:knet-akt013", "duration_s": 1.0, "pga_g": 2.0},
+        "left": sdof, "right": sdof,
+        "contact": {"model": "jankowski", "gap_m": 0.0, "beta": 1e6, "e": 0.1},
+    })  # fmt: skip
+    ref = reference_solution(scene, record=record)
+    out = integrators.simulate_sdof_pairs(
+        record[1], record[0], left_period_s=0.05, right_period_s=0.05, left_mass_kg=100.0,
+        right_mass_kg=100.0, left_damping_ratio=0.05, right_damping_ratio=0.05, gap_m=0.0,
+        beta=1e6, xi=0.0, dt_s=0.01,
+    )  # fmt: skip
+    assert ref["impacts"] == 0 and out["impacts"][0] == 0
+    assert ref["peak_disp_left"] == pytest.approx(out["peak_disp_left"][0], rel=1e-9)
