@@ -534,20 +534,33 @@ def simulate_sdof_pairs(
     _threaded(_sdof_groups, first.size, acc, dt_rec, *arrays, settings, first, shared)
     _threaded(_sdof_adaptive, nsim, acc, dt_rec, *arrays, settings, out, group, shared)
     fixed_restitution(out, settings, arrays[8])
-    # the runs with a contact again with more contact sub-steps (pound_mc.integrators.accuracy)
-    hit = np.flatnonzero((out[:, PEAK_FORCE] > 0.0) & (out[:, STATUS] == STATUS_OK))
-    if hit.size:
-        fine = np.empty((hit.size, N_OUT))
-        finer = kernel_settings(contact_model, method, relation=relation,
-                                substeps=substeps * ADAPTIVE_SUBSTEPS_FACTOR,
-                                restitution=restitution)  # fmt: skip
-        _threaded(_sdof_adaptive, hit.size, acc, dt_rec, *[a[hit] for a in arrays], finer, fine,
-                  group[hit], shared)  # fmt: skip
-        peak_fine = out[:, PEAK_FORCE].copy()
-        peak_fine[hit] = fine[:, PEAK_FORCE]
-        out[:, STATUS] = flag_inaccurate(out[:, STATUS], out[:, IMPACTS], np.inf, arrays[9],
-                                         out[:, PEAK_FORCE], peak_fine)  # fmt: skip
+    finer = kernel_settings(contact_model, method, relation=relation,
+                            substeps=substeps * ADAPTIVE_SUBSTEPS_FACTOR,
+                            restitution=restitution)  # fmt: skip
+    _check_substeps(out, lambda hit, fine: _threaded(
+        _sdof_adaptive, hit.size, acc, dt_rec, *[a[hit] for a in arrays], finer, fine, group[hit],
+        shared,
+    ))  # fmt: skip
     return _named(out)
+
+
+def _check_substeps(out, rerun) -> None:
+    """``adaptive``: flag the runs whose peak force changes with more contact sub-steps.
+
+    ``rerun(hit, fine)`` runs simulations ``hit`` again with
+    :data:`~pound_mc.integrators.accuracy.ADAPTIVE_SUBSTEPS_FACTOR` times the sub-steps into
+    ``fine``; every run with a contact (status ok) is checked
+    (:mod:`pound_mc.integrators.accuracy`).
+    """
+    hit = np.flatnonzero((out[:, PEAK_FORCE] > 0.0) & (out[:, STATUS] == STATUS_OK))
+    if hit.size == 0:
+        return
+    fine = np.empty((hit.size, N_OUT))
+    rerun(hit, fine)
+    peak_fine = out[:, PEAK_FORCE].copy()
+    peak_fine[hit] = fine[:, PEAK_FORCE]
+    out[:, STATUS] = flag_inaccurate(out[:, STATUS], out[:, IMPACTS], np.inf, 0.0,
+                                     out[:, PEAK_FORCE], peak_fine)  # fmt: skip
 
 
 @jit
@@ -661,19 +674,13 @@ def simulate_scene_batch(
         out[:, STATUS] = flag_inaccurate(out[:, STATUS], out[:, IMPACTS], t_c, dt_s,
                                          out[:, PEAK_FORCE], half[:, PEAK_FORCE])  # fmt: skip
     else:
-        # the runs with a contact again with more contact sub-steps (pound_mc.integrators.accuracy)
-        hit = np.flatnonzero((out[:, PEAK_FORCE] > 0.0) & (out[:, STATUS] == STATUS_OK))
-        if hit.size:
-            fine = np.empty((hit.size, N_OUT))
-            finer = kernel_settings(contact_model, method, relation=relation,
-                                    substeps=substeps * ADAPTIVE_SUBSTEPS_FACTOR,
-                                    restitution=restitution)  # fmt: skip
-            _threaded(kernel, hit.size, *pair[:-3], gap[hit], beta[hit], xi[hit], dt_s[hit],
-                      finer, fine, np.empty((hit.size, nc, N_COUT)))  # fmt: skip
-            peak_fine = out[:, PEAK_FORCE].copy()
-            peak_fine[hit] = fine[:, PEAK_FORCE]
-            out[:, STATUS] = flag_inaccurate(out[:, STATUS], out[:, IMPACTS], np.inf, dt_s,
-                                             out[:, PEAK_FORCE], peak_fine)  # fmt: skip
+        finer = kernel_settings(contact_model, method, relation=relation,
+                                substeps=substeps * ADAPTIVE_SUBSTEPS_FACTOR,
+                                restitution=restitution)  # fmt: skip
+        _check_substeps(out, lambda hit, fine: _threaded(
+            kernel, hit.size, *pair[:-3], gap[hit], beta[hit], xi[hit], dt_s[hit], finer, fine,
+            np.empty((hit.size, nc, N_COUT)),
+        ))  # fmt: skip
     contacts = {name: cout[:, :, k] for k, name in enumerate(CONTACT_OUTPUTS)}
     contacts["impacts"] = contacts["impacts"].astype(np.int32)
     fixed_restitution(out, settings, xi)
