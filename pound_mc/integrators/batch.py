@@ -19,6 +19,10 @@ Every run returns the outputs of :data:`OUTPUTS` and a status: 0 ok, 1 unstable 
 diverging state, or an energy balance broken either way by more than
 :data:`UNSTABLE_ENERGY_FRACTION` of the energy put in), 2 not converged (Newton).
 Fixed-step methods report maxima over their step points.
+
+Longer than 600 lines because every entry point (one run, SDOF-pair batches, scene batches) of
+every method family and their accuracy checks (:mod:`pound_mc.integrators.accuracy`) meet at
+this one boundary.
 """
 
 from __future__ import annotations
