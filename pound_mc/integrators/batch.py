@@ -19,6 +19,10 @@ Every run returns the outputs of :data:`OUTPUTS` and a status: 0 ok, 1 unstable 
 diverging state, or an energy balance broken either way by more than
 :data:`UNSTABLE_ENERGY_FRACTION` of the energy put in), 2 not converged (Newton).
 Fixed-step methods report maxima over their step points.
+
+Longer than 600 lines because every entry point (one run, SDOF-pair batches, scene batches) of
+every method family and their accuracy checks (:mod:`pound_mc.integrators.accuracy`) meet at
+this one boundary.
 """
 
 from __future__ import annotations
@@ -32,7 +36,11 @@ import numpy as np
 
 from pound_mc._jit import jit
 from pound_mc.errors import InputError
-from pound_mc.integrators.accuracy import flag_inaccurate, shortest_contact_s
+from pound_mc.integrators.accuracy import (
+    ADAPTIVE_SUBSTEPS_FACTOR,
+    flag_inaccurate,
+    shortest_contact_s,
+)
 from pound_mc.integrators.adaptive import adaptive
 from pound_mc.integrators.adaptive_bilinear import adaptive_bilinear, refuse_unsupported
 from pound_mc.integrators.adaptive_pair import adaptive_pair
@@ -55,6 +63,7 @@ from pound_mc.integrators.outputs import (
     PRE_RUN_TO_CONTACT,
     STATUS,
     STATUS_NOT_CONVERGED,
+    STATUS_OK,
     UNSTABLE_ENERGY_FRACTION,
     fail,
     pre_size,
@@ -529,7 +538,33 @@ def simulate_sdof_pairs(
     _threaded(_sdof_groups, first.size, acc, dt_rec, *arrays, settings, first, shared)
     _threaded(_sdof_adaptive, nsim, acc, dt_rec, *arrays, settings, out, group, shared)
     fixed_restitution(out, settings, arrays[8])
+    finer = kernel_settings(contact_model, method, relation=relation,
+                            substeps=substeps * ADAPTIVE_SUBSTEPS_FACTOR,
+                            restitution=restitution)  # fmt: skip
+    _check_substeps(out, lambda hit, fine: _threaded(
+        _sdof_adaptive, hit.size, acc, dt_rec, *[a[hit] for a in arrays], finer, fine, group[hit],
+        shared,
+    ))  # fmt: skip
     return _named(out)
+
+
+def _check_substeps(out, rerun) -> None:
+    """``adaptive``: flag the runs whose peak force changes with more contact sub-steps.
+
+    ``rerun(hit, fine)`` runs simulations ``hit`` again with
+    :data:`~pound_mc.integrators.accuracy.ADAPTIVE_SUBSTEPS_FACTOR` times the sub-steps into
+    ``fine``; every run with a contact (status ok) is checked
+    (:mod:`pound_mc.integrators.accuracy`).
+    """
+    hit = np.flatnonzero((out[:, PEAK_FORCE] > 0.0) & (out[:, STATUS] == STATUS_OK))
+    if hit.size == 0:
+        return
+    fine = np.empty((hit.size, N_OUT))
+    rerun(hit, fine)
+    peak_fine = out[:, PEAK_FORCE].copy()
+    peak_fine[hit] = fine[:, PEAK_FORCE]
+    out[:, STATUS] = flag_inaccurate(out[:, STATUS], out[:, IMPACTS], np.inf, 0.0,
+                                     out[:, PEAK_FORCE], peak_fine)  # fmt: skip
 
 
 @jit(inline=True)
@@ -642,6 +677,14 @@ def simulate_scene_batch(
         t_c = t_c.min(axis=1)
         out[:, STATUS] = flag_inaccurate(out[:, STATUS], out[:, IMPACTS], t_c, dt_s,
                                          out[:, PEAK_FORCE], half[:, PEAK_FORCE])  # fmt: skip
+    else:
+        finer = kernel_settings(contact_model, method, relation=relation,
+                                substeps=substeps * ADAPTIVE_SUBSTEPS_FACTOR,
+                                restitution=restitution)  # fmt: skip
+        _check_substeps(out, lambda hit, fine: _threaded(
+            kernel, hit.size, *pair[:-3], gap[hit], beta[hit], xi[hit], dt_s[hit], finer, fine,
+            np.empty((hit.size, nc, N_COUT)),
+        ))  # fmt: skip
     contacts = {name: cout[:, :, k] for k, name in enumerate(CONTACT_OUTPUTS)}
     contacts["impacts"] = contacts["impacts"].astype(np.int32)
     fixed_restitution(out, settings, xi)

@@ -388,6 +388,10 @@ def reference_solution(
     impact_times: list[float] = []
     segments = 0
     h_last = None
+    # segments in a row that ended where they started: a contact whose penetration and its rate
+    # are both zero (identical buildings at zero gap) switches onset -> turn -> separation at one
+    # instant for ever; after one such round it runs to the end of the interval without them
+    stalled = 0
     for f_idx in range(n):
         peak_x[f_idx] = abs(y[f_idx])
 
@@ -448,7 +452,7 @@ def reference_solution(
         t = t_a
         while t_b - t > 1e-14 * max(1.0, t_b):
             events, kinds = [], []
-            for j in range(nc):
+            for j in range(nc if stalled < 3 else 0):
                 if phase[j] == _OPEN:
                     events.append(ev_d_up[j])
                     kinds.append((j, "onset"))
@@ -485,11 +489,14 @@ def reference_solution(
             segments += 1
             if sol.status < 0:
                 raise RuntimeError(f"solve_ivp failed at t = {t}: {sol.message}")
-            if sol.t.size >= 2:
+            if sol.t.size >= 2 and sol.t[-1] > sol.t[0]:
+                # not after an event at the segment's start (identical buildings touching by
+                # round-off at rest): its zero step is no first step for the next segment
                 steps = np.diff(sol.t)
                 h_last = float(steps.max())
             scan_segment(sol.t, sol.sol)
             y = sol.y[:, -1].copy()
+            stalled = stalled + 1 if sol.t[-1] <= t else 0
             t = float(sol.t[-1])
             if sol.status == 1:
                 fired = [(float(te[0]), idx) for idx, te in enumerate(sol.t_events) if te.size > 0]
