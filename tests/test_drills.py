@@ -524,18 +524,28 @@ def test_adaptive_flags_what_it_does_not_resolve():
     from pound_mc.motions import load_record, record_arrays
 
     dt_rec, acc = record_arrays(load_record("builtin:knet-akt013", duration_s=3.0, pga_g=0.5))
+    unflagged_errors = []
     for periods, masses, beta, e, ref_force in _SENSITIVE_CASES:
-        out = integrators.simulate_sdof_pairs(
-            acc, dt_rec, left_period_s=periods[0], right_period_s=periods[1],
-            left_mass_kg=masses[0], right_mass_kg=masses[1], left_damping_ratio=0.05,
-            right_damping_ratio=0.05, gap_m=0.0, beta=beta,
-            xi=float(xi_from_e(e, "jankowski2008")), dt_s=0.01, method="adaptive",
-            contact_model="jankowski",
+        out, plain = (
+            integrators.simulate_sdof_pairs(
+                acc, dt_rec, left_period_s=periods[0], right_period_s=periods[1],
+                left_mass_kg=masses[0], right_mass_kg=masses[1], left_damping_ratio=0.05,
+                right_damping_ratio=0.05, gap_m=0.0, beta=beta,
+                xi=float(xi_from_e(e, "jankowski2008")), dt_s=0.01, method="adaptive",
+                contact_model="jankowski", accuracy_check=check,
+            )
+            for check in (True, False)
         )  # fmt: skip
         err = abs(out["peak_force"][0] / ref_force - 1.0)
         # either within 1 % of the reference or flagged, its numbers kept
         assert err < 0.01 or out["status"][0] == STATUS_INACCURATE, (periods, err)
         assert np.isfinite(out["peak_force"][0])
+        # without the check (integrator.accuracy_check = false) the same numbers, never flagged
+        assert plain["peak_force"][0] == out["peak_force"][0]
+        assert plain["status"][0] == 0
+        unflagged_errors.append(err)
+    # the check is what flags them: some of these cases are off by more than 1 % unchecked
+    assert max(unflagged_errors) > 0.01
 
 
 def test_reference_on_buildings_that_move_together():

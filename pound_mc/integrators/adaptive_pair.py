@@ -49,6 +49,7 @@ from pound_mc.integrators.outputs import (
     finish_impacts,
     impact_log,
     log_impact,
+    log_max,
 )
 from pound_mc.integrators.toolkit import (
     advance,
@@ -789,7 +790,7 @@ def adaptive_pair(
     cout[0, C_IMPACTS] = impacts
     cout[0, C_MAX_PENETRATION] = maxpen
     cout[0, C_IMPULSE] = impulse
-    cout[0, C_MAX_IMPACT_VELOCITY] = vlog[:nlog].max() if nlog > 0 else 0.0
+    cout[0, C_MAX_IMPACT_VELOCITY] = log_max(vlog, nlog)
     peaks = np.empty(2)
     peaks[0] = pk0
     peaks[1] = pk1

@@ -495,6 +495,7 @@ def simulate_sdof_pairs(
     relation: str | None = None,
     substeps: int = 16,
     restitution: dict | None = None,
+    accuracy_check: bool = True,
 ) -> dict[str, np.ndarray]:
     """Run many SDOF-pair simulations on one record in threads.
 
@@ -503,7 +504,9 @@ def simulate_sdof_pairs(
     law's damping relation (None: its default).  Returns ``{output name: array}`` for every
     name in :data:`OUTPUTS`; each simulation writes only its own slot, so results do not
     depend on the number of threads.  ``restitution``: set per impact (:func:`kernel_settings`;
-    ``xi`` then holds its quantile).
+    ``xi`` then holds its quantile).  ``accuracy_check``: run the second, finer run of
+    :mod:`~pound_mc.integrators.accuracy` that flags ``inaccurate`` runs (False: only the
+    steps-per-contact criterion of the fixed-step methods).
     """
     settings = kernel_settings(contact_model, method, relation=relation, substeps=substeps,
                                restitution=restitution)  # fmt: skip
@@ -520,13 +523,16 @@ def simulate_sdof_pairs(
     if settings.method != ADAPTIVE:
         _threaded(_sdof_fixed, nsim, acc, dt_rec, *arrays, settings, out)
         fixed_restitution(out, settings, arrays[8])
-        half = np.empty_like(out)  # step doubling (pound_mc.integrators.accuracy)
-        _threaded(_sdof_fixed, nsim, acc, dt_rec, *arrays[:9], arrays[9] / 2, settings, half)
+        half = None
+        if accuracy_check:
+            half = np.empty_like(out)  # step doubling (pound_mc.integrators.accuracy)
+            _threaded(_sdof_fixed, nsim, acc, dt_rec, *arrays[:9], arrays[9] / 2, settings,
+                      half)  # fmt: skip
         ml, mr, beta_k, dt_k = arrays[2], arrays[5], arrays[7], arrays[9]
         t_c = shortest_contact_s(contact_model, out[:, MAX_PENETRATION], beta_k,
                                  ml * mr / (ml + mr))  # fmt: skip
         out[:, STATUS] = flag_inaccurate(out[:, STATUS], out[:, IMPACTS], t_c, dt_k,
-                                         out[:, PEAK_FORCE], half[:, PEAK_FORCE])  # fmt: skip
+                                         *_peaks(out, half))  # fmt: skip
         return _named(out)
     # simulations that differ only in contact parameters share their linear response up to
     # the first contact (periods, damping ratios, masses, gap and step define a group)
@@ -538,6 +544,8 @@ def simulate_sdof_pairs(
     _threaded(_sdof_groups, first.size, acc, dt_rec, *arrays, settings, first, shared)
     _threaded(_sdof_adaptive, nsim, acc, dt_rec, *arrays, settings, out, group, shared)
     fixed_restitution(out, settings, arrays[8])
+    if not accuracy_check:
+        return _named(out)
     finer = kernel_settings(contact_model, method, relation=relation,
                             substeps=substeps * ADAPTIVE_SUBSTEPS_FACTOR,
                             restitution=restitution)  # fmt: skip
@@ -546,6 +554,11 @@ def simulate_sdof_pairs(
         shared,
     ))  # fmt: skip
     return _named(out)
+
+
+def _peaks(out, half) -> tuple:
+    """Peak forces of the runs and of their step-doubling runs (none without the check)."""
+    return (None, None) if half is None else (out[:, PEAK_FORCE], half[:, PEAK_FORCE])
 
 
 def _check_substeps(out, rerun) -> None:
@@ -612,6 +625,7 @@ def simulate_scene_batch(
     relation: str | None = None,
     substeps: int = 16,
     restitution: dict | None = None,
+    accuracy_check: bool = True,
 ) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
     """Run many simulations of one pair of buildings (any model) on one record, in threads.
 
@@ -632,6 +646,10 @@ def simulate_scene_batch(
         Contact sub-steps per estimated contact duration (``adaptive``).
     restitution : dict, optional
         Restitution set per impact (:func:`kernel_settings`; ``xi`` then holds its quantile).
+    accuracy_check : bool
+        Run the second, finer run of :mod:`~pound_mc.integrators.accuracy` that flags
+        ``inaccurate`` runs (False: only the steps-per-contact criterion of the fixed-step
+        methods).
 
     Returns
     -------
@@ -670,14 +688,16 @@ def simulate_scene_batch(
     )  # fmt: skip
     _threaded(kernel, nsim, *pair, dt_s, settings, out, cout)
     if settings.method != ADAPTIVE:
-        half = np.empty_like(out)  # step doubling (pound_mc.integrators.accuracy)
-        _threaded(kernel, nsim, *pair, dt_s / 2, settings, half, np.empty_like(cout))
+        half = None
+        if accuracy_check:
+            half = np.empty_like(out)  # step doubling (pound_mc.integrators.accuracy)
+            _threaded(kernel, nsim, *pair, dt_s / 2, settings, half, np.empty_like(cout))
         meff = np.asarray(arrays["meff"], dtype=f8)[None, :]
         t_c = shortest_contact_s(contact_model, cout[:, :, C_MAX_PENETRATION], beta[:, None], meff)
         t_c = t_c.min(axis=1)
         out[:, STATUS] = flag_inaccurate(out[:, STATUS], out[:, IMPACTS], t_c, dt_s,
-                                         out[:, PEAK_FORCE], half[:, PEAK_FORCE])  # fmt: skip
-    else:
+                                         *_peaks(out, half))  # fmt: skip
+    elif accuracy_check:
         finer = kernel_settings(contact_model, method, relation=relation,
                                 substeps=substeps * ADAPTIVE_SUBSTEPS_FACTOR,
                                 restitution=restitution)  # fmt: skip

@@ -201,10 +201,20 @@ def finish(out, cout, peaks, side, phase, q, v, omega, e0, e_in, e_d, w_c, store
 EP_V0, EP_E = 0, 1
 
 
+# Element loops instead of numpy's fill, slice copy and reductions: their compiled
+# implementations cost seconds of every first run's compile for a handful of values.
+
+
 @jit
 def impact_log(nc):
     """Empty episode table, impact-velocity log and peak-force restitution of a run."""
-    return np.full((nc, 2), np.nan), np.zeros(16), np.full(1, np.nan)
+    ep = np.empty((nc, 2))
+    for c in range(nc):
+        ep[c, EP_V0] = np.nan
+        ep[c, EP_E] = np.nan
+    peak_e = np.empty(1)
+    peak_e[0] = np.nan
+    return ep, np.zeros(16), peak_e
 
 
 @jit
@@ -212,10 +222,21 @@ def log_impact(log, count, v0):
     """Append ``v0`` to ``log`` (doubled when full); returns the log and the new count."""
     if count == log.size:
         grown = np.empty(2 * log.size)
-        grown[:count] = log
+        for k in range(count):
+            grown[k] = log[k]
         log = grown
     log[count] = v0
     return log, count + 1
+
+
+@jit
+def log_max(log, count):
+    """Largest of the first ``count`` values of ``log`` (0 when there are none)."""
+    top = 0.0
+    for k in range(count):
+        if k == 0 or log[k] > top:
+            top = log[k]
+    return top
 
 
 @jit
@@ -225,7 +246,9 @@ def _sorted(log, count):
     Instead of ``np.sort``, whose compiled quicksort costs seconds of the first run's compile
     for the few impact velocities of a run (O(n^1.5): 10,000 impacts sort in about 1e6 steps).
     """
-    vals = log[:count].copy()
+    vals = np.empty(count)
+    for k in range(count):
+        vals[k] = log[k]
     gap = 1
     while 3 * gap + 1 < count:
         gap = 3 * gap + 1

@@ -172,7 +172,7 @@ def newmark_pair(
     cout[0, outputs.C_IMPACTS] = impacts
     cout[0, outputs.C_MAX_PENETRATION] = maxpen
     cout[0, outputs.C_IMPULSE] = impulse
-    cout[0, outputs.C_MAX_IMPACT_VELOCITY] = vlog[:nlog].max() if nlog > 0 else 0.0
+    cout[0, outputs.C_MAX_IMPACT_VELOCITY] = outputs.log_max(vlog, nlog)
     peaks = np.empty(2)
     peaks[0] = pk0
     peaks[1] = pk1

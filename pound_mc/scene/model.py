@@ -90,6 +90,7 @@ class Scene:
     file: str | None = None
     base_dir: Path | None = None
     tail_s: float = 5.0
+    accuracy_check: bool = True
     _cache: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     def __setattr__(self, name, value):
@@ -593,6 +594,7 @@ def scene_from_dict(data: dict, *, file: str | Path | None = None) -> Scene:
         dt_s=float(it["dt_s"]),
         substeps=it["substeps"],
         tail_s=float(it["tail_s"]),
+        accuracy_check=bool(it["accuracy_check"]),
         restitution=ct.get("restitution", "fixed"),
         material=ct.get("material"),
         e_quantile=None if ct.get("e_quantile") is None else float(ct["e_quantile"]),

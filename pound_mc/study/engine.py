@@ -316,6 +316,7 @@ class StudyEngine:
         out["contact.model"] = scene.contact_model
         out["integrator.method"] = scene.method
         out["integrator.substeps"] = scene.substeps
+        out["integrator.accuracy_check"] = scene.accuracy_check
         if scene.restitution == "velocity":
             # restitution set per impact: the kernels' damping parameter is its quantile
             out["contact.e_quantile"] = scene.e_quantile
@@ -450,6 +451,7 @@ class StudyEngine:
             "method": self._base["integrator.method"],
             "contact_model": self._base["contact.model"],
             "substeps": self._base["integrator.substeps"],
+            "accuracy_check": self._base["integrator.accuracy_check"],
             "relation": self._base["contact.relation"] or None,
         }
         if "contact.restitution" in self._base:
