@@ -825,14 +825,16 @@ def _local_bound(hs, d, model, b, loc_k):
 def _damping_bound(hs, d, dd, model, b, cd, zhd, phase, loc_c):
     """``hs`` [s] bounded by the contact's damping time (:data:`LOCAL_DAMPING_SHARE`).
 
-    ``c = dF / d delta_dot`` (:func:`~pound_mc.integrators.laws.force_grad`) at penetration
-    ``d`` and at the one the rate ``dd`` reaches in ``hs``; ``loc_c`` is
+    ``c = dF / d delta_dot`` at penetration ``d`` and at the one the rate ``dd`` reaches in
+    ``hs`` (every law's force is linear in the rate: the force at unit rate less the force at
+    rest, which needs no compiled gradient of the laws); ``loc_c`` is
     ``LOCAL_DAMPING_SHARE m_eff / substeps``.
     """
     for k in range(2):
         dk = d + max(dd, 0.0) * hs if k == 1 else d
         if dk > 0.0:
-            c = laws.force_grad(model, dk, dd, b, cd, zhd, phase)[2]
+            c = laws.force(model, dk, 1.0, b, cd, zhd, phase)
+            c -= laws.force(model, dk, 0.0, b, cd, zhd, phase)
             if c * hs > loc_c:
                 hs = loc_c / c
     return hs
