@@ -495,8 +495,7 @@ def _structure_keys(scene: dict, grid: dict, variables: list, file, errors: list
         if side not in ("left", "right"):
             continue
         model = scene_model(scene, side)
-        # a model that is not a string is reported by the scene's own validation
-        table = BUILDINGS.get(model) if isinstance(model, str) else None
+        table = BUILDINGS.get(model) if isinstance(model, str) else None  # else: scene's error
         allowed = sorted(f"{side}.{f.name}" for f in table.fields if f.varied) if table else []
         if table is not None and key not in allowed:
             errors.append(
