@@ -98,6 +98,10 @@ def test_yield_never_reached_gives_the_elastic_adaptive_results():
             continue
         scale = 1.0 if name == "energy_residual" else abs(want[name])  # already a fraction
         assert abs(got[name] - want[name]) <= 1e-12 * scale, name
+    # the onset velocity of every impact, logged as the elastic kernel logs it
+    for name in ("max_impact_velocity", "median_impact_velocity"):
+        assert want[name] > 0.0
+        assert abs(got[name] - want[name]) <= 1e-12 * want[name], name
 
 
 def test_adaptive_refuses_a_yielding_branch_without_stiffness():

@@ -59,6 +59,7 @@ from pound_mc.integrators.laws import LAW_CODES, duration, episode_zeta, stored,
 from pound_mc.integrators.outputs import (
     C_IMPACTS,
     C_IMPULSE,
+    C_MAX_IMPACT_VELOCITY,
     C_MAX_PENETRATION,
     C_PEAK_FORCE,
     IMPACT_MIN_PENETRATION_M,
@@ -66,6 +67,10 @@ from pound_mc.integrators.outputs import (
     STATUS_OK,
     STATUS_UNSTABLE,
     finish,
+    finish_impacts,
+    impact_log,
+    log_impact,
+    log_max,
 )
 from pound_mc.integrators.toolkit import (
     advance,
@@ -216,6 +221,9 @@ def adaptive_bilinear(
     zhd = e_in = e_d = w_c = w_p = e_h = 0.0
     peak_f = peak_t = impacts = impulse = 0.0
     pending = False
+    _, vlog, _ = impact_log(1)  # onset velocity of every impact
+    nlog = 0
+    v_ep = math.nan
     maxpen = -_INF
     steps = 0
     hc = h
@@ -413,6 +421,7 @@ def adaptive_bilinear(
                     if pending and dm > IMPACT_MIN_PENETRATION_M:
                         impacts += 1.0
                         pending = False
+                        vlog, nlog = log_impact(vlog, nlog, v_ep)
                 for j in range(2):
                     peaks[j] = _track_floor(ff[j] * q[j], ff[j] * v[j], ff[j] * (nq[j] + sh[j]),
                                             ff[j] * nv[j], hh, peaks[j])  # fmt: skip
@@ -421,6 +430,7 @@ def adaptive_bilinear(
                     if phase == 0:
                         phase = 1
                         pending = True
+                        v_ep = dd1
                         zhd = episode_zeta(model, relation, xi0, dd1, zhd)
                         hc = min(hc, duration(model, dd1, b, me) / substeps)
                         t_onset = i * dt_rec + s_end
@@ -456,6 +466,7 @@ def adaptive_bilinear(
                 phase = 1
                 pending = True
                 v0c = ps[0] * v[0] + ps[1] * v[1]
+                v_ep = v0c
                 zhd = episode_zeta(model, relation, xi0, v0c, zhd)
                 hc = min(h, duration(model, v0c, b, me) / substeps)
                 t_onset = i * dt_rec + s
@@ -475,6 +486,7 @@ def adaptive_bilinear(
             break
     cout[0, C_PEAK_FORCE], cout[0, C_IMPACTS] = peak_f, impacts
     cout[0, C_MAX_PENETRATION], cout[0, C_IMPULSE] = maxpen, impulse
+    cout[0, C_MAX_IMPACT_VELOCITY] = log_max(vlog, nlog)
     ph = np.full(1, phase, dtype=np.int64)
     stored_energy = 0.0
     if phase != 0:
@@ -482,6 +494,7 @@ def adaptive_bilinear(
     # the plastic load's work enters the balance as a negative damping work
     finish(out, cout, peaks, side, ph, q, v, omega, e0, e_in, e_d - w_p, w_c, stored_energy,
            peak_f, peak_t, steps, status)  # fmt: skip
+    finish_impacts(out, cout, vlog, nlog, math.nan)  # fixed restitution: set by the batch
     drift = np.array([ff[0] * q[0], ff[1] * q[1]])
     storey_outputs(out, store, peaks, drift, peak_acc, side, e_h, sout)
 

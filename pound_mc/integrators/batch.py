@@ -47,13 +47,10 @@ from pound_mc.integrators.adaptive_pair import adaptive_pair
 from pound_mc.integrators.fixed import CENTRAL_DIFFERENCE, NEWMARK, NEWMARK_EXPLICIT, fixed
 from pound_mc.integrators.hysteretic import N_STOREY_COLUMNS, newmark_hysteretic
 from pound_mc.integrators.outputs import (
-    C_MAX_IMPACT_VELOCITY,
     C_MAX_PENETRATION,
     CONTACT_OUTPUTS,
     IMPACTS,
-    MAX_IMPACT_VELOCITY,
     MAX_PENETRATION,
-    MEDIAN_IMPACT_VELOCITY,
     N_COUT,
     N_OUT,
     OUTPUTS,
@@ -213,9 +210,6 @@ def _inelastic_run(storeys, sout, pair=False):
         if pair:
             _run_adaptive_bilinear(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff,
                                    beta, xi, settings, q, v, out, cout, store, sout)  # fmt: skip
-            # impact velocities are not logged by this kernel
-            out[MAX_IMPACT_VELOCITY] = out[MEDIAN_IMPACT_VELOCITY] = np.nan
-            cout[:, C_MAX_IMPACT_VELOCITY] = np.nan
             return
         _run_inelastic(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi,
                        settings, q, v, out, cout, dmat, store, sout)  # fmt: skip
