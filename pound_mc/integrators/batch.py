@@ -540,10 +540,7 @@ def simulate_sdof_pairs(
     fixed_restitution(out, settings, arrays[8])
     if not accuracy_check:
         return _named(out)
-    finer = kernel_settings(contact_model, method, relation=relation,
-                            substeps=substeps * ADAPTIVE_SUBSTEPS_FACTOR,
-                            restitution=restitution)  # fmt: skip
-    _check_substeps(out, lambda hit, fine: _threaded(
+    _check_substeps(out, settings, lambda hit, finer, fine: _threaded(
         _sdof_adaptive, hit.size, acc, dt_rec, *[a[hit] for a in arrays], finer, fine, group[hit],
         shared,
     ))  # fmt: skip
@@ -555,19 +552,19 @@ def _peaks(out, half) -> tuple:
     return (None, None) if half is None else (out[:, PEAK_FORCE], half[:, PEAK_FORCE])
 
 
-def _check_substeps(out, rerun) -> None:
+def _check_substeps(out, settings, rerun) -> None:
     """``adaptive``: flag the runs whose peak force changes with more contact sub-steps.
 
-    ``rerun(hit, fine)`` runs simulations ``hit`` again with
-    :data:`~pound_mc.integrators.accuracy.ADAPTIVE_SUBSTEPS_FACTOR` times the sub-steps into
-    ``fine``; every run with a contact (status ok) is checked
+    ``rerun(hit, finer, fine)`` runs simulations ``hit`` again with ``finer``, the run's
+    ``settings`` with :data:`~pound_mc.integrators.accuracy.ADAPTIVE_SUBSTEPS_FACTOR` times the
+    sub-steps, into ``fine``; every run with a contact (status ok) is checked
     (:mod:`pound_mc.integrators.accuracy`).
     """
     hit = np.flatnonzero((out[:, PEAK_FORCE] > 0.0) & (out[:, STATUS] == STATUS_OK))
     if hit.size == 0:
         return
     fine = np.empty((hit.size, N_OUT))
-    rerun(hit, fine)
+    rerun(hit, settings._replace(substeps=settings.substeps * ADAPTIVE_SUBSTEPS_FACTOR), fine)
     peak_fine = out[:, PEAK_FORCE].copy()
     peak_fine[hit] = fine[:, PEAK_FORCE]
     out[:, STATUS] = flag_inaccurate(out[:, STATUS], out[:, IMPACTS], np.inf, 0.0,
@@ -692,10 +689,7 @@ def simulate_scene_batch(
         out[:, STATUS] = flag_inaccurate(out[:, STATUS], out[:, IMPACTS], t_c, dt_s,
                                          *_peaks(out, half))  # fmt: skip
     elif accuracy_check:
-        finer = kernel_settings(contact_model, method, relation=relation,
-                                substeps=substeps * ADAPTIVE_SUBSTEPS_FACTOR,
-                                restitution=restitution)  # fmt: skip
-        _check_substeps(out, lambda hit, fine: _threaded(
+        _check_substeps(out, settings, lambda hit, finer, fine: _threaded(
             kernel, hit.size, *pair[:-3], gap[hit], beta[hit], xi[hit], dt_s[hit], finer, fine,
             np.empty((hit.size, nc, N_COUT)),
         ))  # fmt: skip
