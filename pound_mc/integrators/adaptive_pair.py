@@ -89,7 +89,7 @@ TAIL_POT, TAIL_MIN_POT = 1.0, 0.5
 STEPS_PER_PERIOD = 50.0
 #: A contact sub-step spans at most 2/3 of ``1 / substeps`` of the contact's local period at
 #: the current penetration and at the one its rate reaches in the step (secant stiffness of
-#: the law, :func:`_local_bound`): ``pi sqrt(2) / 1.5``.
+#: the law, :func:`_contact_bound`): ``pi sqrt(2) / 1.5``.
 #: The sub-step from the onset velocity (``duration / substeps``) fails where an episode starts
 #: at a near-zero velocity (zero gap, a building resting against the other) and the contact
 #: then carries load: the onset duration is long, the stiff contact is stepped at ``dt_s``
@@ -99,8 +99,8 @@ STEPS_PER_PERIOD = 50.0
 #: there (B1 bitwise unchanged; at half, one sub-step of a Hertz scene changes).
 LOCAL_PERIOD_SHARE = math.pi * math.sqrt(2.0) / 1.5
 #: A contact sub-step spans at most ``LOCAL_DAMPING_SHARE / substeps`` of the contact's
-#: damping time ``m_eff / c`` (``c = dF / d delta_dot`` at the current penetration and at the
-#: one its rate reaches in the step, :func:`_damping_bound`): 0.5 at the default 16 sub-steps.
+#: damping time ``m_eff / c`` (``c = dF / d delta_dot`` at the penetration the rate reaches in
+#: the step, :func:`_contact_bound`): 0.5 at the default 16 sub-steps.
 #: The local period alone fails where the contact is overdamped (Jankowski with ``e = 0.1``:
 #: ``xi = 5.8``, the damping rate ``2 xi`` times the local frequency): RK4 then steps the
 #: damping at ``c h / m_eff`` near 3.4, at its stability limit (extreme drill: peak forces off
@@ -664,9 +664,8 @@ def adaptive_pair(
                         hs = min(hs, max(-tail * dc / ddc, hc * tail_min))
                 # at the penetration the step may reach (its rate), not only at its start
                 dc = ps0 * q0 + ps1 * q1 - gp
-                hs = _local_bound(hs, dc, model, b, loc_k)
-                hs = _local_bound(hs, dc + max(ps0 * v0 + ps1 * v1, 0.0) * hs, model, b, loc_k)
-                hs = _damping_bound(hs, dc, ps0 * v0 + ps1 * v1, model, b, cd, zhd, phase, loc_c)
+                hs = _contact_bound(hs, dc, ps0 * v0 + ps1 * v1, model, b, cd, zhd, phase, loc_k,
+                                    loc_c)  # fmt: skip
                 if hs >= dt_rec - s or dt_rec - s - hs < 1e-9 * hc:
                     hs = dt_rec - s
                 # the sub-step, and again to the first switch of the force law inside it
@@ -805,38 +804,33 @@ def adaptive_pair(
 
 
 @jit(inline=True)
-def _local_bound(hs, d, model, b, loc_k):
-    """``hs`` [s] bounded by the contact's local period (:data:`LOCAL_PERIOD_SHARE`).
+def _contact_bound(hs, d, dd, model, b, cd, zhd, phase, loc_k, loc_c):
+    """``hs`` [s] bounded by the contact's local period and damping time at penetration ``d``.
 
-    The local period at penetration ``d`` is that of the secant stiffness ``2 E(d) / d^2``
-    (``E``: the law's stored energy), ``pi sqrt(2 m_eff) d / sqrt(E)``; ``loc_k`` is
-    ``LOCAL_PERIOD_SHARE sqrt(m_eff) / substeps``.
+    Local period (:data:`LOCAL_PERIOD_SHARE`): that of the secant stiffness ``2 E(d) / d^2``
+    (``E``: the law's stored energy), ``pi sqrt(2 m_eff) d / sqrt(E)``, at ``d`` and at the
+    penetration the rate ``dd`` reaches in the step; ``loc_k`` is
+    ``LOCAL_PERIOD_SHARE sqrt(m_eff) / substeps``.  Damping time
+    (:data:`LOCAL_DAMPING_SHARE`): ``m_eff / c`` with ``c = dF / d delta_dot`` at the
+    penetration the rate reaches (every law's force is linear in the rate: the force at unit
+    rate less the force at rest; ``c`` grows with the penetration in every law, so the deepest
+    point of the step bounds it); ``loc_c`` is ``LOCAL_DAMPING_SHARE m_eff / substeps``.
     """
-    if d > 0.0:
-        e = laws.stored(model, d, b)
-        if e > 0.0:
-            hl = loc_k * d / math.sqrt(e)
-            if hl < hs:
-                return hl
-    return hs
-
-
-@jit(inline=True)
-def _damping_bound(hs, d, dd, model, b, cd, zhd, phase, loc_c):
-    """``hs`` [s] bounded by the contact's damping time (:data:`LOCAL_DAMPING_SHARE`).
-
-    ``c = dF / d delta_dot`` at penetration ``d`` and at the one the rate ``dd`` reaches in
-    ``hs`` (every law's force is linear in the rate: the force at unit rate less the force at
-    rest, which needs no compiled gradient of the laws); ``loc_c`` is
-    ``LOCAL_DAMPING_SHARE m_eff / substeps``.
-    """
+    reach = max(dd, 0.0)
     for k in range(2):
-        dk = d + max(dd, 0.0) * hs if k == 1 else d
+        dk = d + reach * hs if k == 1 else d
         if dk > 0.0:
-            c = laws.force(model, dk, 1.0, b, cd, zhd, phase)
-            c -= laws.force(model, dk, 0.0, b, cd, zhd, phase)
-            if c * hs > loc_c:
-                hs = loc_c / c
+            e = laws.stored(model, dk, b)
+            if e > 0.0:
+                hl = loc_k * dk / math.sqrt(e)
+                if hl < hs:
+                    hs = hl
+    dk = d + reach * hs
+    if dk > 0.0:
+        c = laws.force(model, dk, 1.0, b, cd, zhd, phase)
+        c -= laws.force(model, dk, 0.0, b, cd, zhd, phase)
+        if c * hs > loc_c:
+            hs = loc_c / c
     return hs
 
 

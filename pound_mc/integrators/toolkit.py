@@ -21,6 +21,10 @@ from pound_mc._jit import jit
 #: Most integration steps one simulation may take (record length / dt_s); beyond it the run is
 #: flagged not converged instead of running for hours.
 MAX_STEPS = 2.0e9
+#: The Taylor series of :func:`advance` (``w h < 0.05``) stops once the next term is below this
+#: share of the state's scale, ``(w h)^k / k!`` (under round-off: further terms leave the sum as
+#: it is).
+SERIES_TOL = 1e-17
 
 
 @jit(inline=True)
@@ -78,7 +82,8 @@ def advance(q, v, p0, p1, w, z, h):
     """Exact state after ``h`` of ``q'' + 2 z w q' + w^2 q = p`` with ``p`` linear p0 -> p1.
 
     Closed form (Nigam & Jennings 1969; Chopra, Table 5.2.1) for ``w h >= 0.05``, else a
-    Taylor series of the exact solution (the closed form cancels digits for short steps).
+    Taylor series of the exact solution (the closed form cancels digits for short steps) to
+    :data:`SERIES_TOL`.
     """
     if h == 0.0:
         return q, v
@@ -89,6 +94,7 @@ def advance(q, v, p0, p1, w, z, h):
         qs = q + v * h
         vs = v
         tv = 1.0
+        r = 1.0  # (w h)^(k+1) / (k+1)!: the terms left, relative to the state's scale
         for k in range(24):
             pk = p0 if k == 0 else (slope if k == 1 else 0.0)
             d2 = pk - 2.0 * z * w * d1 - w * w * d0  # d_{k+2}
@@ -97,6 +103,9 @@ def advance(q, v, p0, p1, w, z, h):
             qs += d2 * tv * h / (k + 2)
             d0 = d1
             d1 = d2
+            r = r * w * h / (k + 1)
+            if k >= 1 and r < SERIES_TOL:
+                break  # the rest is below round-off (w h < 0.05: 9 terms at most)
         return qs, vs
     k = w * w
     sq = math.sqrt(1.0 - z * z)
