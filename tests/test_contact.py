@@ -78,3 +78,26 @@ def test_relation_of_another_law_is_refused():
     assert contact.reported_xi("jankowski", 0.6, None) == pytest.approx(
         math.sqrt(5) * 0.64 / (2 * math.pi * 0.6)
     )
+
+
+def test_registry_parameters_and_stored_energy_follow_each_law():
+    # the scene keys each law takes (stiffness, then its damping parameter), and the stored elastic
+    # energy of each kernel the integral of its elastic force (phase 2, dd = 0): beta d^2.5 / 2.5
+    # for the Hertz-type laws, k d^2 / 2 for the springs, checked by quadrature
+    from scipy.integrate import quad
+
+    keys = {
+        name: tuple(p.key for p in law.parameters) for name, law in contact.CONTACT_MODELS.items()
+    }
+    assert keys == {
+        "jankowski": ("gap_m", "beta", "xi"),
+        "linear": ("gap_m", "k_N_per_m"),
+        "kelvin": ("gap_m", "k_N_per_m", "xi"),
+        "hertz": ("gap_m", "beta"),
+        "hertzdamp": ("gap_m", "beta", "e"),
+    }
+    for law in contact.CONTACT_MODELS.values():
+        assert law.stiffness_units == law.parameters[1].units
+        k, d = law.kernel, 2e-3
+        work, _ = quad(lambda s, k=k: k.force(s, 0.0, 2.75e9, 1e3, 0.5, 2), 0.0, d)
+        assert k.stored(d, 2.75e9) == pytest.approx(work, rel=1e-9)

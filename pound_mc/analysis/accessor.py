@@ -21,7 +21,7 @@ so ``left_period_s=0.3`` works although the stored value is ``0.3000000000000000
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -146,6 +146,24 @@ def _axes_of(fig, ax):
     return axes[0] if axes.size == 1 else axes
 
 
+def _chart_method(name: str, chart: Callable, returns: str, doc: str, **fixed: Any) -> Callable:
+    """A :class:`PoundPlot` method ``name`` that draws ``chart`` of the dataset.
+
+    The method takes ``path``, ``ax`` and the chart's keywords (``fixed`` ones given here), and
+    returns what :func:`_axes_of` gives; ``returns`` is its return annotation, ``doc`` its
+    docstring.
+    """
+
+    def method(self, path: str | Path | None = None, *, ax: Axes | None = None, **kwargs: Any):
+        return _axes_of(chart(self._ds, path, ax=ax, **fixed, **kwargs), ax)
+
+    method.__name__ = name
+    method.__qualname__ = f"PoundPlot.{name}"
+    method.__doc__ = doc
+    method.__annotations__["return"] = returns
+    return method
+
+
 class PoundPlot:
     """Charts of a study dataset (``ds.pound.plot``), in the manner of xarray's ``ds.plot``.
 
@@ -158,60 +176,62 @@ class PoundPlot:
     def __init__(self, ds: xr.Dataset):
         self._ds = ds
 
-    def spectrum(
-        self, path: str | Path | None = None, *, ax: Axes | None = None, **kwargs: Any
-    ) -> Axes:
+    spectrum = _chart_method(
+        "spectrum",
+        spectrum_chart,
+        "Axes",
         """Impact force spectrum (:func:`pound_mc.analysis.plot.spectrum_chart`).
 
         ``record="median"`` (default, the median over records), ``"each"`` (a line per record)
         or one record's index or name.
-        """
-        return _axes_of(spectrum_chart(self._ds, path, ax=ax, **kwargs), ax)
-
-    def probability(
-        self, path: str | Path | None = None, *, ax: Axes | None = None, **kwargs: Any
-    ) -> Axes:
-        """Pounding probability against gap (:func:`pound_mc.analysis.plot.probability_chart`)."""
-        return _axes_of(probability_chart(self._ds, path, ax=ax, **kwargs), ax)
+        """,
+    )
+    probability = _chart_method(
+        "probability",
+        probability_chart,
+        "Axes",
+        "Pounding probability against gap (:func:`pound_mc.analysis.plot.probability_chart`).",
+    )
 
     def fragility(self, path: str | Path | None = None, **kwargs: Any) -> np.ndarray:
         """Fragility panels (:func:`pound_mc.analysis.risk_chart.fragility_panels`)."""
         return _axes_of(fragility_panels(self._ds, path, **kwargs), None)
 
-    def required_gap(
-        self, path: str | Path | None = None, *, ax: Axes | None = None, **kwargs: Any
-    ) -> Axes:
-        """Probability against gap with the required gap marked (``required_gap_chart``)."""
-        return _axes_of(required_gap_chart(self._ds, path, ax=ax, **kwargs), ax)
-
-    def distribution(
-        self, path: str | Path | None = None, *, ax: Axes | None = None, **kwargs: Any
-    ) -> np.ndarray:
+    required_gap = _chart_method(
+        "required_gap",
+        required_gap_chart,
+        "Axes",
+        "Probability against gap with the required gap marked (``required_gap_chart``).",
+    )
+    distribution = _chart_method(
+        "distribution",
+        distribution_chart,
+        "np.ndarray",
         """Peak force distribution (:func:`pound_mc.analysis.plot.distribution_chart`).
 
         Two panels: ``ax`` is a sequence of two Axes (box plot, histograms).
-        """
-        return _axes_of(distribution_chart(self._ds, path, ax=ax, **kwargs), ax)
-
-    def contacts(
-        self, path: str | Path | None = None, *, ax: Axes | None = None, **kwargs: Any
-    ) -> Axes:
-        """Peak force at each contact (:func:`pound_mc.analysis.profiles.contacts_chart`)."""
-        return _axes_of(contacts_chart(self._ds, path, ax=ax, **kwargs), ax)
-
-    def drift(
-        self, path: str | Path | None = None, *, ax: Axes | None = None, **kwargs: Any
-    ) -> np.ndarray:
-        """Peak storey drift profiles (:func:`pound_mc.analysis.profiles.profile_chart`)."""
-        fig = profile_chart(self._ds, path, quantity="drift", ax=ax, **kwargs)
-        return _axes_of(fig, ax)
-
-    def ductility(
-        self, path: str | Path | None = None, *, ax: Axes | None = None, **kwargs: Any
-    ) -> np.ndarray:
-        """Peak ductility profiles (:func:`pound_mc.analysis.profiles.profile_chart`)."""
-        fig = profile_chart(self._ds, path, quantity="ductility", ax=ax, **kwargs)
-        return _axes_of(fig, ax)
+        """,
+    )
+    contacts = _chart_method(
+        "contacts",
+        contacts_chart,
+        "Axes",
+        "Peak force at each contact (:func:`pound_mc.analysis.profiles.contacts_chart`).",
+    )
+    drift = _chart_method(
+        "drift",
+        profile_chart,
+        "np.ndarray",
+        "Peak storey drift profiles (:func:`pound_mc.analysis.profiles.profile_chart`).",
+        quantity="drift",
+    )
+    ductility = _chart_method(
+        "ductility",
+        profile_chart,
+        "np.ndarray",
+        "Peak ductility profiles (:func:`pound_mc.analysis.profiles.profile_chart`).",
+        quantity="ductility",
+    )
 
     def restitution(
         self, path: str | Path | None = None, *, ax: Axes | None = None, **kwargs: Any

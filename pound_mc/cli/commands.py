@@ -85,6 +85,9 @@ INIT_DESCRIPTION = (
     "NAME, list the shipped studies."
 )
 
+#: Sub-commands with a description for their ``--help`` (the others show their help line).
+DESCRIPTIONS = {"plot": PLOT_DESCRIPTION, "compile": COMPILE_DESCRIPTION, "init": INIT_DESCRIPTION}
+
 #: Arguments that several sub-commands share, declared once: name -> (flag, keywords of
 #: ``add_argument``); a sub-command adds them with :func:`_shared`.
 SHARED_ARGUMENTS: dict[str, tuple[str, dict]] = {
@@ -121,6 +124,18 @@ def _json_and_plot(parser: argparse.ArgumentParser, plot_help: str) -> None:
     parser.add_argument("--plot", metavar="FILE.png", help=plot_help)
 
 
+def _command(sub: argparse._SubParsersAction, command: str, **keywords) -> argparse.ArgumentParser:
+    """Add the parser of ``command`` (a key of :data:`COMMANDS`; its last word names the parser).
+
+    ``keywords`` go to ``add_parser`` (with the command's :data:`DESCRIPTIONS` entry); the parsed
+    arguments carry ``handler=command``, the key :func:`pound_mc.cli.main` dispatches on.
+    """
+    keywords.setdefault("description", DESCRIPTIONS.get(command))
+    parser = sub.add_parser(command.split()[-1], **keywords)
+    parser.set_defaults(handler=command)
+    return parser
+
+
 def _shared(parser: argparse.ArgumentParser, *names: str) -> None:
     """Add the :data:`SHARED_ARGUMENTS` ``names`` to ``parser``, in that order."""
     for name in names:
@@ -146,13 +161,12 @@ def _use_formatter(sub: argparse._SubParsersAction) -> None:
 
 def _physics(sub: argparse._SubParsersAction) -> None:
     """The physics sub-commands: ``materials``, ``calibrate``, ``droptest``."""
-    p = sub.add_parser("materials", help="the seed paper's Tables 1-3 (measured e and beta)")
+    p = _command(sub, "materials", help="the seed paper's Tables 1-3 (measured e and beta)")
     p.add_argument("--table", type=int, choices=(1, 2, 3), help="only this table")
     p.add_argument("--json", action="store_true", help="print the tables as JSON")
     p.add_argument("--plot", metavar="FILE.png", help="chart of Table 2 against impact velocity")
-    p.set_defaults(handler="materials")
 
-    p = sub.add_parser("calibrate", help="impact damping ratio xi for a restitution e")
+    p = _command(sub, "calibrate", help="impact damping ratio xi for a restitution e")
     p.add_argument("--e", type=float, required=True, help="coefficient of restitution (0, 1]")
     p.add_argument(
         "--relation",
@@ -160,9 +174,8 @@ def _physics(sub: argparse._SubParsersAction) -> None:
         help=f"relation for 'xi' in --json ({', '.join(RELATIONS)}; default jankowski2008)",
     )
     p.add_argument("--json", action="store_true", help="print one JSON object")
-    p.set_defaults(handler="calibrate")
 
-    p = sub.add_parser("droptest", help="virtual drop test of the seed's experiment")
+    p = _command(sub, "droptest", help="virtual drop test of the seed's experiment")
     p.add_argument("--material", default="concrete", choices=MATERIALS, help="ball material")
     p.add_argument("--mass", type=float, help="ball mass [kg] (default: middle ball of Table 1)")
     p.add_argument("--velocity", type=float, default=1.0, help="impact velocity [m/s]")
@@ -178,7 +191,6 @@ def _physics(sub: argparse._SubParsersAction) -> None:
         metavar="DIR",
         help="write the drop-test, relations and Table 2 charts into DIR",
     )
-    p.set_defaults(handler="droptest")
 
 
 def _records(sub: argparse._SubParsersAction) -> None:
@@ -187,11 +199,12 @@ def _records(sub: argparse._SubParsersAction) -> None:
     actions = p.add_subparsers(dest="records_command", metavar="ACTION")
     actions.required = True
 
-    q = actions.add_parser("list", help="the built-in records (builtin:NAME) and record suites")
+    q = _command(
+        actions, "records list", help="the built-in records (builtin:NAME) and record suites"
+    )
     q.add_argument("--json", action="store_true", help="print the catalogue as JSON")
-    q.set_defaults(handler="records list")
 
-    q = actions.add_parser("info", help="PGA, duration and step of a record")
+    q = _command(actions, "records info", help="PGA, duration and step of a record")
     q.add_argument(
         "source",
         metavar="NAME|PATH",
@@ -206,19 +219,18 @@ def _records(sub: argparse._SubParsersAction) -> None:
         action="store_true",
         help="keep the record's mean (default: demeaned as in studies)",
     )
-    q.set_defaults(handler="records info")
 
 
 def _scene(sub: argparse._SubParsersAction) -> None:
     """Single scenes and the numerics: ``simulate``, ``bench``, ``stability``."""
-    p = sub.add_parser("simulate", help="run one scene (TOML) and print its results")
+    p = _command(sub, "simulate", help="run one scene (TOML) and print its results")
     p.add_argument("scene", metavar="SCENE.toml")
     _json_and_plot(p, "chart of displacements, penetration, force")
     p.add_argument("--method", help="override [integrator] method")
     p.add_argument("--dt", type=float, metavar="S", help="override [integrator] dt_s")
-    p.set_defaults(handler="simulate")
 
-    p = sub.add_parser(
+    p = _command(
+        sub,
         "bench",
         help="speed against accuracy: B1 head to head (ratios), then every method's sweep",
     )
@@ -237,16 +249,14 @@ def _scene(sub: argparse._SubParsersAction) -> None:
         action="store_true",
         help="only the interleaved B1 comparison and its ratios (no work-precision sweep)",
     )
-    p.set_defaults(handler="bench")
 
-    p = sub.add_parser("stability", help="map the largest stable step against contact stiffness")
+    p = _command(sub, "stability", help="map the largest stable step against contact stiffness")
     _shared(p, "table-out", "table-json")
-    p.set_defaults(handler="stability")
 
 
 def _study(sub: argparse._SubParsersAction) -> None:
     """Studies: ``run`` and ``check``."""
-    p = sub.add_parser("run", help="run a study and write <out>/<name>.nc and a spectrum chart")
+    p = _command(sub, "run", help="run a study and write <out>/<name>.nc and a spectrum chart")
     _shared(p, "study")
     p.add_argument("--out", default="outputs", metavar="DIR", help="output folder")
     p.add_argument("--threads", type=int, metavar="N", help="numba threads (in-process run)")
@@ -270,9 +280,8 @@ def _study(sub: argparse._SubParsersAction) -> None:
         metavar="S",
         help="Dask: give up when the scheduler does not answer or no chunk finishes for S s (600)",
     )
-    p.set_defaults(handler="run")
 
-    p = sub.add_parser("check", help="validate a study and print its plan; writes nothing")
+    p = _command(sub, "check", help="validate a study and print its plan; writes nothing")
     _shared(p, "study")
     p.add_argument("--threads", type=int, metavar="N", help="threads for the estimate")
     _shared(p, "chunk-size")
@@ -282,12 +291,11 @@ def _study(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--out", default="outputs", metavar="DIR", help="output folder of the disk estimate"
     )
-    p.set_defaults(handler="check")
 
-    p = sub.add_parser(
+    p = _command(
+        sub,
         "compile",
         help="compile the kernels into the on-disk cache (cluster images, Dask workers)",
-        description=COMPILE_DESCRIPTION,
     )
     p.add_argument("--methods", nargs="+", metavar="METHOD", help="methods (default all)")
     p.add_argument("--laws", nargs="+", metavar="LAW", help="contact laws (default all)")
@@ -298,24 +306,21 @@ def _study(sub: argparse._SubParsersAction) -> None:
         default=["sdof", "shear"],
         help="building pairs (default both)",
     )
-    p.set_defaults(handler="compile")
-    p = sub.add_parser(
-        "init",
-        help="write a shipped study (and its scene files) into the current folder",
-        description=INIT_DESCRIPTION,
+
+    p = _command(
+        sub, "init", help="write a shipped study (and its scene files) into the current folder"
     )
     p.add_argument("name", nargs="?", metavar="NAME", help="shipped study (e.g. quickstart)")
     p.add_argument("--dir", default=".", metavar="DIR", help="folder to write into")
     p.add_argument("--force", action="store_true", help="overwrite files that exist")
-    p.set_defaults(handler="init")
 
 
 def _analysis(sub: argparse._SubParsersAction) -> None:
     """Results: ``plot`` and ``report``."""
-    p = sub.add_parser(
+    p = _command(
+        sub,
         "plot",
         help="draw a chart of a study dataset, a bench/stability CSV or a scene",
-        description=PLOT_DESCRIPTION,
         formatter_class=HelpFormatter,
     )
     p.add_argument("file", metavar="FILE", help="RESULT.nc, bench.csv, stability.csv or SCENE.toml")
@@ -340,16 +345,13 @@ def _analysis(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--probability", type=float, default=0.1, help="target probability (required-gap)"
     )
-    p.set_defaults(handler="plot")
 
-    p = sub.add_parser("fragility", help="fit lognormal fragility curves to a study dataset")
+    p = _command(sub, "fragility", help="fit lognormal fragility curves to a study dataset")
     p.add_argument("file", metavar="RESULT.nc")
     _shared(p, "im", "event")
     p.add_argument("--n-boot", type=int, default=1000, metavar="N", help="bootstrap replicates")
     p.add_argument("--json", action="store_true", help="print one JSON object")
-    p.set_defaults(handler="fragility")
 
-    p = sub.add_parser("report", help="write a self-contained HTML results page of a study")
+    p = _command(sub, "report", help="write a self-contained HTML results page of a study")
     p.add_argument("file", metavar="RESULT.nc")
     p.add_argument("--out", metavar="FILE.html", help="page to write (default next to RESULT.nc)")
-    p.set_defaults(handler="report")

@@ -36,6 +36,7 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike
 
+from pound_mc._docstring import fill
 from pound_mc._jit import jit
 from pound_mc.errors import InputError
 from pound_mc.physics.relations import HERTZDAMP_RELATIONS, RELATIONS
@@ -60,6 +61,15 @@ __all__ = [
     "contact_duration_hertz",
     "max_penetration_elastic",
 ]
+
+
+#: Parameter descriptions the public force functions share (:func:`pound_mc._docstring.fill`).
+_force_doc = fill(
+    motion="delta : float\n    Penetration [m].\ndelta_dot : float\n    Penetration rate [m/s].",
+    motion_unused="delta : float\n    Penetration [m].\n"
+    "delta_dot : float\n    Penetration rate [m/s] (unused).",
+    unused="xi : float\n    Unused.\nm_eff : float\n    Unused.",
+)
 
 
 @jit
@@ -101,6 +111,7 @@ def jankowski_damping(delta: float, beta: float, xi: float, m_eff: float) -> flo
 
 
 @jit
+@_force_doc
 def jankowski_force(delta: float, delta_dot: float, beta: float, xi: float, m_eff: float) -> float:
     """Non-linear viscoelastic impact force [N], Jankowski (2008) eq. (1.1).
 
@@ -109,10 +120,7 @@ def jankowski_force(delta: float, delta_dot: float, beta: float, xi: float, m_ef
 
     Parameters
     ----------
-    delta : float
-        Penetration [m].
-    delta_dot : float
-        Penetration rate [m/s].
+    %(motion)s
     beta : float
         Impact stiffness parameter [N/m^1.5].
     xi : float
@@ -129,6 +137,7 @@ def jankowski_force(delta: float, delta_dot: float, beta: float, xi: float, m_ef
 
 
 @jit
+@_force_doc
 def linear_force(delta: float, delta_dot: float, k: float, xi: float, m_eff: float) -> float:
     """Linear elastic spring ``F = k delta`` [N] (Maison & Kasai 1992).
 
@@ -136,16 +145,10 @@ def linear_force(delta: float, delta_dot: float, k: float, xi: float, m_eff: flo
 
     Parameters
     ----------
-    delta : float
-        Penetration [m].
-    delta_dot : float
-        Penetration rate [m/s] (unused).
+    %(motion_unused)s
     k : float
         Impact spring stiffness [N/m].
-    xi : float
-        Unused.
-    m_eff : float
-        Unused.
+    %(unused)s
     """
     if delta <= 0.0:
         return 0.0
@@ -153,6 +156,7 @@ def linear_force(delta: float, delta_dot: float, k: float, xi: float, m_eff: flo
 
 
 @jit
+@_force_doc
 def kelvin_force(delta: float, delta_dot: float, k: float, xi: float, m_eff: float) -> float:
     """Linear viscoelastic (Kelvin-Voigt) force ``F = k delta + c delta_dot`` [N].
 
@@ -161,10 +165,7 @@ def kelvin_force(delta: float, delta_dot: float, k: float, xi: float, m_eff: flo
 
     Parameters
     ----------
-    delta : float
-        Penetration [m].
-    delta_dot : float
-        Penetration rate [m/s].
+    %(motion)s
     k : float
         Impact spring stiffness [N/m].
     xi : float
@@ -178,21 +179,16 @@ def kelvin_force(delta: float, delta_dot: float, k: float, xi: float, m_eff: flo
 
 
 @jit
+@_force_doc
 def hertz_force(delta: float, delta_dot: float, beta: float, xi: float, m_eff: float) -> float:
     """Hertz elastic contact ``F = beta delta^1.5`` [N] (no dissipation).
 
     Parameters
     ----------
-    delta : float
-        Penetration [m].
-    delta_dot : float
-        Penetration rate [m/s] (unused).
+    %(motion_unused)s
     beta : float
         Hertz stiffness [N/m^1.5].
-    xi : float
-        Unused.
-    m_eff : float
-        Unused.
+    %(unused)s
     """
     if delta <= 0.0:
         return 0.0
@@ -200,6 +196,7 @@ def hertz_force(delta: float, delta_dot: float, beta: float, xi: float, m_eff: f
 
 
 @jit
+@_force_doc
 def hertzdamp_force(
     delta: float, delta_dot: float, beta: float, zeta: float, m_eff: float
 ) -> float:
@@ -211,10 +208,7 @@ def hertzdamp_force(
 
     Parameters
     ----------
-    delta : float
-        Penetration [m].
-    delta_dot : float
-        Penetration rate [m/s].
+    %(motion)s
     beta : float
         Hertz stiffness [N/m^1.5].
     zeta : float
@@ -483,37 +477,52 @@ _K = Parameter("k_N_per_m", "N m-1", "impact spring stiffness")
 _XI = Parameter("xi", "1", "impact damping ratio (or e with a relation)")
 _E = Parameter("e", "1", "coefficient of restitution")
 
+#: What a law's stiffness parameter brings with it: the parameter, the elastic energy stored at
+#: a penetration and the contact duration that sizes sub-steps (``beta``: F ~ delta^1.5, Hertz;
+#: ``k_N_per_m``: F ~ delta, a spring).
+_STIFFNESS = {
+    "beta": (_BETA, _stored_power15, _duration_hertz),
+    "k_N_per_m": (_K, _stored_linear, _duration_linear),
+}
+#: The parameter a scene sets a law's damping with, by what the damping relation gives.
+_DAMPING = {"xi": (_XI,), "zeta": (_E,), None: ()}
+
+
+def _declare(name, stiffness_key, damping, relations, reference) -> ContactLaw:
+    """The :class:`ContactLaw` of law ``name``, its functions found by their names.
+
+    The public force is ``{name}_force``, the compiled ones ``_{name}_k``, ``_{name}_rate`` and
+    ``_{name}_grad``; the stiffness key fixes the units, stored energy and duration
+    (:data:`_STIFFNESS`), the damping its parameter (:data:`_DAMPING`).
+    """
+    parameter, stored, duration = _STIFFNESS[stiffness_key]
+    here = globals()
+    compiled = (here[f"_{name}_{part}"] for part in ("k", "rate", "grad"))
+    return ContactLaw(
+        name,
+        here[f"{name}_force"],
+        stiffness_key,
+        parameter.units,
+        damping,
+        tuple(relations),
+        (_GAP, parameter, *_DAMPING[damping]),
+        KernelLaw(*compiled, stored, duration),
+        reference,
+    )
+
+
 #: Contact laws by name, in the order the compiled kernels number them.
 CONTACT_MODELS: dict[str, ContactLaw] = {
-    "jankowski": ContactLaw(
-        "jankowski", jankowski_force, "beta", "N m-1.5", "xi",
-        ("jankowski2008", "jankowski2006", "exact"), (_GAP, _BETA, _XI),
-        KernelLaw(_jankowski_k, _jankowski_rate, _jankowski_grad, _stored_power15,
-                  _duration_hertz),
-        "Jankowski (2008) eq. (1.1)",
-    ),
-    "linear": ContactLaw(
-        "linear", linear_force, "k_N_per_m", "N m-1", None, (), (_GAP, _K),
-        KernelLaw(_linear_k, _linear_rate, _linear_grad, _stored_linear, _duration_linear),
-        "Maison & Kasai (1992)",
-    ),
-    "kelvin": ContactLaw(
-        "kelvin", kelvin_force, "k_N_per_m", "N m-1", "xi", ("kelvin",), (_GAP, _K, _XI),
-        KernelLaw(_kelvin_k, _kelvin_rate, _kelvin_grad, _stored_linear, _duration_linear),
-        "Anagnostopoulos & Spiliopoulos (1992)",
-    ),
-    "hertz": ContactLaw(
-        "hertz", hertz_force, "beta", "N m-1.5", None, (), (_GAP, _BETA),
-        KernelLaw(_hertz_k, _hertz_rate, _hertz_grad, _stored_power15, _duration_hertz),
-        "Hertz elastic contact",
-    ),
-    "hertzdamp": ContactLaw(
-        "hertzdamp", hertzdamp_force, "beta", "N m-1.5", "zeta",
-        tuple(HERTZDAMP_RELATIONS), (_GAP, _BETA, _E),
-        KernelLaw(_hertzdamp_k, _hertzdamp_rate, _hertzdamp_grad, _stored_power15,
-                  _duration_hertz),
-        "Muthukumar & DesRoches (2006); Ye, Li & Zhu (2009)",
-    ),
+    law.name: law
+    for law in (
+        _declare("jankowski", "beta", "xi", ("jankowski2008", "jankowski2006", "exact"),
+                 "Jankowski (2008) eq. (1.1)"),
+        _declare("linear", "k_N_per_m", None, (), "Maison & Kasai (1992)"),
+        _declare("kelvin", "k_N_per_m", "xi", ("kelvin",), "Anagnostopoulos & Spiliopoulos (1992)"),
+        _declare("hertz", "beta", None, (), "Hertz elastic contact"),
+        _declare("hertzdamp", "beta", "zeta", HERTZDAMP_RELATIONS,
+                 "Muthukumar & DesRoches (2006); Ye, Li & Zhu (2009)"),
+    )
 }  # fmt: skip
 
 

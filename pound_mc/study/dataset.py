@@ -66,13 +66,17 @@ RESULT_VARIABLES = {
     ),
 }
 #: Per-simulation, per-contact outputs of studies with a shear building (an extra trailing
-#: ``contact`` dimension): name -> (units, long_name, dtype).
+#: ``contact`` dimension): name -> (units, long_name, dtype).  Each is ``contact_`` and the
+#: per-simulation quantity of :data:`RESULT_VARIABLES` it takes its units and dtype from.
 CONTACT_VARIABLES = {
-    "contact_peak_force": ("N", "peak impact force at the contact", "f8"),
-    "contact_impacts": ("1", "number of impacts (contact episodes) at the contact", "i4"),
-    "contact_max_penetration": ("m", "maximum penetration delta at the contact", "f8"),
-    "contact_impulse": ("N s", "impulse of the impact force at the contact", "f8"),
-    "contact_max_impact_velocity": ("m s-1", "largest prior-impact velocity at the contact", "f8"),
+    f"contact_{name}": (RESULT_VARIABLES[name][0], long_name, RESULT_VARIABLES[name][2])
+    for name, long_name in {
+        "peak_force": "peak impact force at the contact",
+        "impacts": "number of impacts (contact episodes) at the contact",
+        "max_penetration": "maximum penetration delta at the contact",
+        "impulse": "impulse of the impact force at the contact",
+        "max_impact_velocity": "largest prior-impact velocity at the contact",
+    }.items()
 }
 #: Per-simulation outputs of studies with yielding buildings (DESIGN.md section 9): name ->
 #: (units, long_name, dtype).  Drift ratios are NaN for an SDOF without ``height_m``, the
