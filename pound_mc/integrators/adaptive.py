@@ -47,6 +47,7 @@ from pound_mc.integrators.toolkit import (
     rowdot,
     run_sizes,
     track_floors,
+    turning_screen,
 )
 
 # event kinds located inside a contact sub-step
@@ -146,20 +147,17 @@ def _screen_onsets(q, v, q1, v1, p0s, slope, s, hh, dc0, ddc0, dc1, ddc1, omega,
         ddc1[c] = dd1
         crossing = d1 > 0.0
         t_hi = hh
-        if not crossing and dd0 > 0.0 and dd1 < 0.0:
-            hm, _ = hermite_max(d0, dd0, d1, dd1, hh)
-            margin = 0.05 * (abs(dd0) + abs(dd1)) * hh
-            if hm > -margin:
-                # exact maximum of delta in the step: root of delta_dot
-                _, tg = hermite_max(d0, dd0, d1, dd1, hh)
-                tm = exact_root(q, v, p0s, slope, s, tg, 0.0, hh, 1, c, omega, zeta, gamma, psi,
-                                gap)  # fmt: skip
-                dm, _, _ = exact_delta(q, v, p0s, slope, s, tm, c, omega, zeta, gamma, psi, gap)
-                if dm > 0.0:
-                    crossing = True
-                    t_hi = tm
-                    d1 = dm
-                    dd1 = 0.0
+        look, tg = turning_screen(d0, dd0, d1, dd1, hh) if not crossing else (False, 0.0)
+        if look:
+            # exact maximum of delta in the step: root of delta_dot
+            tm = exact_root(q, v, p0s, slope, s, tg, 0.0, hh, 1, c, omega, zeta, gamma, psi,
+                            gap)  # fmt: skip
+            dm, _, _ = exact_delta(q, v, p0s, slope, s, tm, c, omega, zeta, gamma, psi, gap)
+            if dm > 0.0:
+                crossing = True
+                t_hi = tm
+                d1 = dm
+                dd1 = 0.0
         if crossing and d0 <= 0.0:
             # locate delta = 0 on the exact solution (safeguarded Newton)
             tg = hermite_root(d0, dd0, d1, dd1, t_hi)

@@ -37,6 +37,7 @@ import numpy as np
 
 from pound_mc._jit import jit
 from pound_mc.errors import InputError
+from pound_mc.integrators import outputs
 from pound_mc.integrators.adaptive_pair import (
     ONSET_TOL,
     RAMP_GROWTH,
@@ -56,22 +57,6 @@ from pound_mc.integrators.adaptive_pair import (
 )
 from pound_mc.integrators.hysteretic import S_ALPHA, S_BW, S_K, S_YIELD, storey_outputs
 from pound_mc.integrators.laws import LAW_CODES, duration, episode_zeta, stored, substep_peaks
-from pound_mc.integrators.outputs import (
-    C_IMPACTS,
-    C_IMPULSE,
-    C_MAX_IMPACT_VELOCITY,
-    C_MAX_PENETRATION,
-    C_PEAK_FORCE,
-    IMPACT_MIN_PENETRATION_M,
-    STATUS_NOT_CONVERGED,
-    STATUS_OK,
-    STATUS_UNSTABLE,
-    finish,
-    finish_impacts,
-    impact_log,
-    log_impact,
-    log_max,
-)
 from pound_mc.integrators.toolkit import (
     advance,
     coefficients,
@@ -221,7 +206,7 @@ def adaptive_bilinear(
     zhd = e_in = e_d = w_c = w_p = e_h = 0.0
     peak_f = peak_t = impacts = impulse = 0.0
     pending = False
-    _, vlog, _ = impact_log(1)  # onset velocity of every impact
+    _, vlog, _ = outputs.impact_log(1)  # onset velocity of every impact
     nlog = 0
     v_ep = math.nan
     maxpen = -_INF
@@ -238,7 +223,7 @@ def adaptive_bilinear(
         if pot
         else (RAMP_START, RAMP_GROWTH, TAIL, TAIL_MIN)
     )
-    status = STATUS_OK
+    status = outputs.STATUS_OK
     changed = True  # the branches changed: their frequencies and shifts are due
     fsal = False
     fc_end = 0.0
@@ -252,7 +237,7 @@ def adaptive_bilinear(
         while s < dt_rec * (1.0 - 1e-12):
             steps += 1
             if steps > budget:
-                status = STATUS_NOT_CONVERGED
+                status = outputs.STATUS_NOT_CONVERGED
                 break
             if changed:
                 gpe = gp
@@ -418,10 +403,10 @@ def adaptive_bilinear(
                         peak_f = fm
                         peak_t = i * dt_rec + s + tm
                     maxpen = max(maxpen, dm)
-                    if pending and dm > IMPACT_MIN_PENETRATION_M:
+                    if pending and dm > outputs.IMPACT_MIN_PENETRATION_M:
                         impacts += 1.0
                         pending = False
-                        vlog, nlog = log_impact(vlog, nlog, v_ep)
+                        vlog, nlog = outputs.log_impact(vlog, nlog, v_ep)
                 for j in range(2):
                     peaks[j] = _track_floor(ff[j] * q[j], ff[j] * v[j], ff[j] * (nq[j] + sh[j]),
                                             ff[j] * nv[j], hh, peaks[j])  # fmt: skip
@@ -480,21 +465,21 @@ def adaptive_bilinear(
                     br[j] = 0
                 changed = True
             if not math.isfinite(q[0] + q[1] + v[0] + v[1]):
-                status = STATUS_UNSTABLE
+                status = outputs.STATUS_UNSTABLE
                 break
         if status != 0:
             break
-    cout[0, C_PEAK_FORCE], cout[0, C_IMPACTS] = peak_f, impacts
-    cout[0, C_MAX_PENETRATION], cout[0, C_IMPULSE] = maxpen, impulse
-    cout[0, C_MAX_IMPACT_VELOCITY] = log_max(vlog, nlog)
+    cout[0, outputs.C_PEAK_FORCE], cout[0, outputs.C_IMPACTS] = peak_f, impacts
+    cout[0, outputs.C_MAX_PENETRATION], cout[0, outputs.C_IMPULSE] = maxpen, impulse
+    cout[0, outputs.C_MAX_IMPACT_VELOCITY] = outputs.log_max(vlog, nlog)
     ph = np.full(1, phase, dtype=np.int64)
     stored_energy = 0.0
     if phase != 0:
         stored_energy = stored(model, ps[0] * q[0] + ps[1] * q[1] - gp, b)
     # the plastic load's work enters the balance as a negative damping work
-    finish(out, cout, peaks, side, ph, q, v, omega, e0, e_in, e_d - w_p, w_c, stored_energy,
+    outputs.finish(out, cout, peaks, side, ph, q, v, omega, e0, e_in, e_d - w_p, w_c, stored_energy,
            peak_f, peak_t, steps, status)  # fmt: skip
-    finish_impacts(out, cout, vlog, nlog, math.nan)  # fixed restitution: set by the batch
+    outputs.finish_impacts(out, cout, vlog, nlog, math.nan)  # fixed restitution: set by the batch
     drift = np.array([ff[0] * q[0], ff[1] * q[1]])
     storey_outputs(out, store, peaks, drift, peak_acc, side, e_h, sout)
 

@@ -59,6 +59,7 @@ from pound_mc.integrators.toolkit import (
     hermite_root,
     newton_in_bracket,
     step_size,
+    turning_screen,
 )
 
 __all__ = ["adaptive_pair"]
@@ -577,18 +578,16 @@ def adaptive_pair(
                 ddc1 = dd1
                 crossing = d1 > 0.0
                 t_hi = hh
-                if not crossing and dd0 > 0.0 and dd1 < 0.0:
-                    hm, tg = hermite_max(d0, dd0, d1, dd1, hh)
-                    margin = 0.05 * (abs(dd0) + abs(dd1)) * hh
-                    if hm > -margin:
-                        # exact maximum of delta in the step: root of delta_dot
-                        dm, tm = _exact_max(q0, q1, v0, v1, p0s, slope, tg, hh, w0, z0, g0, w1,
-                                            z1, g1, ps0, ps1, gp)  # fmt: skip
-                        if dm > 0.0:
-                            crossing = True
-                            t_hi = tm
-                            d1 = dm
-                            dd1 = 0.0
+                look, tg = turning_screen(d0, dd0, d1, dd1, hh) if not crossing else (False, 0.0)
+                if look:
+                    # exact maximum of delta in the step: root of delta_dot
+                    dm, tm = _exact_max(q0, q1, v0, v1, p0s, slope, tg, hh, w0, z0, g0, w1, z1,
+                                        g1, ps0, ps1, gp)  # fmt: skip
+                    if dm > 0.0:
+                        crossing = True
+                        t_hi = tm
+                        d1 = dm
+                        dd1 = 0.0
                 onset = False
                 if crossing and d0 <= 0.0:
                     # locate delta = 0 on the exact solution (safeguarded Newton)

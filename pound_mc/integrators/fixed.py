@@ -160,14 +160,22 @@ def newmark_arrays(n, nc, nf):
 
 
 @jit(inline=True)
-def initial_contacts(model, psi, q, v, gap, beta, cd, zhd, dpen, ddpen, fc, was_in):
-    """Penetrations, their rates, forces and contact flags of the initial state."""
+def initial_state(model, psi, q, v, gap, beta, cd, zhd, dpen, ddpen, fc, was_in, ag0, omega,
+                  zeta, gamma, a):  # fmt: skip
+    """The initial state's penetrations, rates, forces, contact flags and accelerations.
+
+    Fills ``dpen, ddpen, fc, was_in`` and ``a``; returns the input, damping and contact powers
+    [W] at the start (ground acceleration ``ag0``).
+    """
     for c in range(gap.size):
         dpen[c] = rowdot(psi, c, q) - gap[c]
         ddpen[c] = rowdot(psi, c, v)
         fc[c] = force(model, dpen[c], ddpen[c], beta[c], cd[c], zhd[c],
                       phase_of(dpen[c], ddpen[c]))  # fmt: skip
         was_in[c] = dpen[c] > 0.0
+    accel(q, v, ag0, omega, zeta, gamma, psi, fc, a)
+    pin, pd = powers(v, ag0, omega, zeta, gamma)
+    return pin, pd, contact_power(fc, ddpen)
 
 
 @jit(inline=True)
@@ -374,17 +382,15 @@ def fixed(
     outputs.reset_contacts(cout)
     ikhat, zw2, g = newmark_matrices(omega, zeta, h, psi)
     # initial contact state and accelerations
-    initial_contacts(model, psi, q, v, gap, beta, cd, zhd, dpen, ddpen, fc, was_in)
-    accel(q, v, ag[0], omega, zeta, gamma, psi, fc, a)
+    pin_prev, pd_prev, pc_prev = initial_state(model, psi, q, v, gap, beta, cd, zhd, dpen,
+                                               ddpen, fc, was_in, ag[0], omega, zeta, gamma,
+                                               a)  # fmt: skip
     if method == CENTRAL_DIFFERENCE:
         for j in range(n):
             qprev[j] = q[j] - h * v[j] + 0.5 * h * h * a[j]
     e_in = e_d = w_c = 0.0  # input, damping and contact work
-    peak_f = 0.0
-    peak_t = 0.0
+    peak_f = peak_t = 0.0
     status = outputs.STATUS_OK
-    pin_prev, pd_prev = powers(v, ag[0], omega, zeta, gamma)
-    pc_prev = contact_power(fc, ddpen)
     steps = 0
     inv_m = 1.0 / m_sub
     for step in range(n_steps):

@@ -41,14 +41,13 @@ from pound_mc.integrators.fixed import (
     final_contacts,
     impact_start,
     impulses,
-    initial_contacts,
+    initial_state,
     newmark_arrays,
     newmark_matrices,
     newmark_rates,
     newmark_solve,
 )
 from pound_mc.integrators.toolkit import (
-    accel,
     mechanical_energy,
     powers,
     rowdot,
@@ -221,16 +220,14 @@ def newmark_hysteretic(
     ikhat, zw2, g = newmark_matrices(omega, zeta, h, psi)
     ep, vlog, peak_e = impact_start(settings, xi, beta, meff, cd, zhd)
     nlog = 0
-    initial_contacts(model, psi, q, v, gap, beta, cd, zhd, dpen, ddpen, fc, was_in)
-    accel(q, v, ag[0], omega, zeta, gamma, psi, fc, a)
+    pin_prev, pd_prev, pc_prev = initial_state(model, psi, q, v, gap, beta, cd, zhd, dpen,
+                                               ddpen, fc, was_in, ag[0], omega, zeta, gamma,
+                                               a)  # fmt: skip
     e_in = e_d = w_c = 0.0  # input, damping and contact work
     w_p = 0.0  # work of the plastic load
     e_h = 0.0  # hysteretic dissipation
-    peak_f = 0.0
-    peak_t = 0.0
+    peak_f = peak_t = 0.0
     status = outputs.STATUS_OK
-    pin_prev, pd_prev = powers(v, ag[0], omega, zeta, gamma)
-    pc_prev = contact_power(fc, ddpen)
     pp_prev = 0.0
     steps = 0
     inv_m = 1.0 / m_sub

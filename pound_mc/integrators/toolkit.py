@@ -187,6 +187,22 @@ def hermite_max(y0, yp0, y1, yp1, h):
     return best, tbest
 
 
+@jit(inline=True)
+def turning_screen(d0, dd0, d1, dd1, hh):
+    """Whether a penetration that turns inside a step may reach zero there.
+
+    ``d, dd``: the penetration [m] and its rate at the step's ends.  Where the rate turns from
+    + to -, the step holds one maximum; its cubic Hermite estimate, within a margin of 5 % of
+    the rates times the step ``hh`` [s], decides whether the exact maximum is looked for.
+    Returns ``(look, tg)``: that decision and the Hermite estimate of its time [s].
+    """
+    if dd0 > 0.0 and dd1 < 0.0:
+        hm, tg = hermite_max(d0, dd0, d1, dd1, hh)
+        margin = 0.05 * (abs(dd0) + abs(dd1)) * hh
+        return hm > -margin, tg
+    return False, 0.0
+
+
 @jit
 def hermite_root(y0, yp0, y1, yp1, h):
     """First root in ``(0, h]`` of the cubic Hermite interpolant.
