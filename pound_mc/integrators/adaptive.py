@@ -96,7 +96,8 @@ def rk4(
         pin, pd = powers(wk[9], ag, omega, zeta, gamma)
         pc = 0.0
         for c in range(nc):
-            pc += fc[c] * rowdot(psi, c, wk[9])
+            if fc[c] != 0.0:
+                pc += fc[c] * rowdot(psi, c, wk[9])
         wgt = (1.0 if stage == 0 or stage == 3 else 2.0) * hs / 6.0
         e_in += wgt * pin
         e_d += wgt * pd
@@ -256,28 +257,31 @@ def _locate_switch(q, v, q1, v1, a0, a1, psi, gap, phase, hs):
     c_ev = -1
     kind = 0
     for c in range(gap.size):
-        d0 = rowdot(psi, c, q) - gap[c]
-        d1 = rowdot(psi, c, q1) - gap[c]
-        dd0 = rowdot(psi, c, v)
-        dd1 = rowdot(psi, c, v1)
-        ddd0 = rowdot(psi, c, a0)
-        ddd1 = rowdot(psi, c, a1)
+        # each row product only where the contact's phase needs it (most contacts are open)
         te = np.inf
         kd = 0
         if phase[c] == 0:
+            d0 = rowdot(psi, c, q) - gap[c]
+            d1 = rowdot(psi, c, q1) - gap[c]
             if d1 > 0.0 and d0 <= 0.0:
-                te = hermite_root(d0, dd0, d1, dd1, hs)
+                te = hermite_root(d0, rowdot(psi, c, v), d1, rowdot(psi, c, v1), hs)
                 kd = _ONSET
         elif phase[c] == 1:
+            dd0 = rowdot(psi, c, v)
+            dd1 = rowdot(psi, c, v1)
             if dd1 <= 0.0 and dd0 > 0.0:
-                te = hermite_root(dd0, ddd0, dd1, ddd1, hs)
+                te = hermite_root(dd0, rowdot(psi, c, a0), dd1, rowdot(psi, c, a1), hs)
                 kd = _TO_RESTITUTION
         else:
+            d0 = rowdot(psi, c, q) - gap[c]
+            d1 = rowdot(psi, c, q1) - gap[c]
+            dd0 = rowdot(psi, c, v)
+            dd1 = rowdot(psi, c, v1)
             if d1 <= 0.0 and d0 > 0.0:
                 te = hermite_root(d0, dd0, d1, dd1, hs)
                 kd = _SEPARATION
             if dd1 > 0.0 and dd0 <= 0.0:
-                t2 = hermite_root(dd0, ddd0, dd1, ddd1, hs)
+                t2 = hermite_root(dd0, rowdot(psi, c, a0), dd1, rowdot(psi, c, a1), hs)
                 if t2 < te:
                     te = t2
                     kd = _TO_APPROACH
@@ -557,7 +561,7 @@ def adaptive(
                     q, v, q1, v1, a0, a1, psi, gap, beta, cd, zhd, phase, model, fc0, fc, cimp,
                     cout, pending, hs, i * dt_rec + s, peak_f, peak_t, ep, vlog, nlog, peak_e,
                 )  # fmt: skip
-                track_floors(phi, side, q, v, q1, v1, hs, peaks)
+                track_floors(phi, xf0, xfd0, q1, v1, hs, peaks)  # xf0, xfd0 move on
                 for j in range(n):
                     q[j] = q1[j]
                     v[j] = v1[j]

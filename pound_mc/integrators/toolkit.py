@@ -279,17 +279,23 @@ def powers(v, ag, omega, zeta, gamma):
 
 
 @jit
-def track_floors(phi, side, q0, v0, q1, v1, h, peaks):
-    """Update the continuous-time peak |x| of every floor over a step (Hermite)."""
+def track_floors(phi, xf, xfd, q1, v1, h, peaks):
+    """Update the continuous-time peak |x| of every floor over a step (Hermite).
+
+    ``xf, xfd``: every floor's displacement and velocity at the step's start, replaced by
+    those at its end (state ``q1, v1``): the next step starts where this one ends.
+    """
     nf = phi.shape[0]
     for f in range(nf):
-        x0 = rowdot(phi, f, q0)
+        x0 = xf[f]
+        xd0 = xfd[f]
         x1 = rowdot(phi, f, q1)
+        xd1 = rowdot(phi, f, v1)
+        xf[f] = x1
+        xfd[f] = xd1
         m = abs(x1)
         if m > peaks[f]:
             peaks[f] = m
-        xd0 = rowdot(phi, f, v0)
-        xd1 = rowdot(phi, f, v1)
         if (xd0 > 0.0) != (xd1 > 0.0):
             hm, _ = hermite_max(x0, xd0, x1, xd1, h)
             if hm > peaks[f]:
