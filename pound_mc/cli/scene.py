@@ -15,7 +15,7 @@ from pound_mc.analysis.plot_numerics import (
 )
 from pound_mc.errors import InputError
 from pound_mc.integrators import METHODS
-from pound_mc.numerics.bench import SCENES, benchmark, head_to_head
+from pound_mc.numerics.bench import SCENES, benchmark, head_to_head, shear_scaling
 from pound_mc.numerics.stability import stability_map
 from pound_mc.scene import load_scene, simulate
 
@@ -56,7 +56,9 @@ def bench_command(args) -> int:
 
     ``--json`` prints one object: ``head_to_head`` (rows), ``ratios``, ``overheads``,
     ``load_before`` / ``load_after`` (``os.getloadavg()``), ``repeats``, and ``sweep`` (the
-    work-precision rows, also written to ``bench.csv``; absent with ``--head-to-head-only``).
+    work-precision rows, also written to ``bench.csv``) and ``shear_scaling`` (``adaptive`` on
+    shear pairs of 3+5, 10+10 and 20+20 storeys); the last two absent with
+    ``--head-to-head-only``.
     """
     for m in args.methods or []:
         if m not in METHODS:
@@ -76,19 +78,23 @@ def bench_command(args) -> int:
             print(json.dumps({"head_to_head": duel.to_dict(orient="records"), **info}, indent=1))
         return 0
     table = benchmark(args.scenes, args.methods, repeats=args.repeats, progress=not args.json)
+    scaling = shear_scaling(repeats=args.repeats)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     table.to_csv(out / "bench.csv", index=False)
     work_precision_chart(table, out / "work_precision.png")
     if args.json:
         sweep = json.loads(table.to_json(orient="records"))
+        scaling_rows = scaling.to_dict(orient="records")
         print(json.dumps({"head_to_head": duel.to_dict(orient="records"), **info,
-                          "sweep": sweep}, indent=1))  # fmt: skip
+                          "sweep": sweep, "shear_scaling": scaling_rows}, indent=1))  # fmt: skip
         return 0
     cols = ["scene", "method", "dt_s", "substeps", "seconds", "impacts", "err_peak_force",
             "err_peak_disp_left", "err_peak_disp_right", "status"]  # fmt: skip
     print("\nwork-precision sweep (median of each point after compilation, one thread):")
     print(table[cols].to_string(index=False, float_format=lambda x: f"{x:.3g}"))
+    print("\nadaptive on shear pairs of growing size (median, one thread, interleaved):")
+    print(scaling.to_string(index=False, float_format=lambda x: f"{x:.3g}"))
     print(f"wrote {out / 'bench.csv'} and {out / 'work_precision.png'}")
     return 0
 

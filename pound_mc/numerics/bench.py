@@ -12,7 +12,8 @@ average.  :func:`benchmark` is the work-precision sweep: for scene B1
 sub-steps per contact duration for ``adaptive``).  Time per simulation is the median of repeated
 runs after compilation, on one thread; errors are relative to a reference run: the SciPy
 reference solution (:mod:`pound_mc.integrators.reference`) for B1, else ``adaptive`` with 256
-sub-steps at ``dt_s`` / 10.
+sub-steps at ``dt_s`` / 10.  :func:`shear_scaling` times ``adaptive`` on shear-building pairs
+of growing size (3+5, 10+10, 20+20 storeys): the cost against the number of modes.
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ from __future__ import annotations
 import math
 import os
 import time
+import tomllib
 from pathlib import Path
 
 import numba
@@ -30,7 +32,7 @@ from tqdm import tqdm
 from pound_mc.integrators import run_kernel
 from pound_mc.integrators.reference import reference_solution
 from pound_mc.motions import record_arrays
-from pound_mc.scene import load_scene, simulate
+from pound_mc.scene import load_scene, scene_from_dict, simulate
 
 __all__ = [
     "SCENES",
@@ -38,6 +40,8 @@ __all__ = [
     "CONTENDERS",
     "benchmark",
     "head_to_head",
+    "shear_pair",
+    "shear_scaling",
     "textbook_newmark",
     "reference_values",
 ]
@@ -132,6 +136,70 @@ def benchmark(scenes=("B1", "shear-3-5"), methods=None, *, repeats: int = 7, pro
                 rows.append(row)
     finally:
         numba.set_num_threads(old)
+    return pd.DataFrame(rows)
+
+
+# -- cost against modes ----------------------------------------------------------------------------
+
+#: Storeys of the shear pairs of :func:`shear_scaling` (left, right).
+SHEAR_SIZES = ((3, 5), (10, 10), (20, 20))
+
+
+def shear_pair(n_left: int, n_right: int):
+    """The shear pair of ``studies/scenes/shear_3_5.toml`` with ``n_left`` and ``n_right`` storeys.
+
+    Storeys of 1e6 kg and 3 m; storey stiffness falling linearly up the building as in the
+    scene, from 1.2e9 to 0.8e9 N/m (left) and from 0.9e9 to 0.5e9 N/m (right); the scene's
+    record, contact and integrator; the contacts at every common floor.  ``shear_pair(3, 5)``
+    is the scene itself.
+    """
+    path = _STUDIES / SCENES["shear-3-5"]
+    data = tomllib.loads(path.read_text())
+    for side, n, k0, k1 in (("left", n_left, 1.2e9, 0.8e9), ("right", n_right, 0.9e9, 0.5e9)):
+        data[side].update({
+            "storey_mass_kg": [1.0e6] * n,
+            "storey_stiffness_N_per_m": [float(k) for k in np.linspace(k0, k1, n)],
+            "storey_height_m": [3.0] * n,
+        })  # fmt: skip
+    return scene_from_dict(data, file=path)
+
+
+def shear_scaling(sizes=SHEAR_SIZES, *, repeats: int = 7) -> pd.DataFrame:
+    """Time ``adaptive`` on shear pairs of growing size (:func:`shear_pair`), interleaved.
+
+    One thread; every round runs each pair once, in turn, after an untimed first run
+    (compilation).  Returns one row per pair: ``storeys`` (``"3+5"``), ``modes``,
+    ``contacts``, ``seconds`` (median of ``repeats`` rounds), ``us_per_mode_step`` (the time
+    per mode and integration step [us]), ``steps``, ``impacts``, ``peak_force`` [N].
+    """
+    scenes = {f"{a}+{b}": shear_pair(a, b) for a, b in sizes}
+    results = {label: simulate(sc) for label, sc in scenes.items()}  # compile, read the record
+    times = {label: [] for label in scenes}
+    old = numba.get_num_threads()
+    try:
+        numba.set_num_threads(1)
+        for _ in range(repeats):
+            for label, sc in scenes.items():
+                t0 = time.perf_counter()
+                simulate(sc)
+                times[label].append(time.perf_counter() - t0)
+    finally:
+        numba.set_num_threads(old)
+    rows = []
+    for label, sc in scenes.items():
+        o = results[label].outputs
+        modes = sc.kernel_arrays()["omega"].size
+        seconds = float(np.median(times[label]))
+        rows.append({
+            "storeys": label,
+            "modes": modes,
+            "contacts": len(sc.contacts),
+            "seconds": seconds,
+            "us_per_mode_step": seconds / (modes * o["steps"]) * 1e6,
+            "steps": int(o["steps"]),
+            "impacts": int(o["impacts"]),
+            "peak_force": o["peak_force"],
+        })  # fmt: skip
     return pd.DataFrame(rows)
 
 
