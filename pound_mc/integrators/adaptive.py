@@ -41,6 +41,7 @@ from pound_mc.integrators.toolkit import (
     grid_step,
     hermite_max,
     hermite_root,
+    matvec_t,
     mechanical_energy,
     powers,
     refresh,
@@ -130,7 +131,7 @@ def _exact_step(q, v, q1, v1, coef, regular, p0s, p1s, omega, zeta, gamma, hh):
 
 @jit(inline=True)
 def _screen_onsets(q, v, q1, v1, p0s, slope, s, hh, dc0, ddc0, dc1, ddc1, omega, zeta, gamma,
-                   psi, gap):  # fmt: skip
+                   psi, psi_t, gap):  # fmt: skip
     """First contact onset inside a linear step: ``(contact, time)``, ``(-1, inf)`` for none.
 
     A contact whose penetration ends the step positive crosses zero inside it; one that turns
@@ -139,13 +140,14 @@ def _screen_onsets(q, v, q1, v1, p0s, slope, s, hh, dc0, ddc0, dc1, ddc1, omega,
     """
     tau_on = np.inf
     c_on = -1
+    matvec_t(psi_t, q1, dc1)
+    matvec_t(psi_t, v1, ddc1)
     for c in range(gap.size):
         d0 = dc0[c]
         dd0 = ddc0[c]
-        d1 = rowdot(psi, c, q1) - gap[c]
-        dd1 = rowdot(psi, c, v1)
-        dc1[c] = d1
-        ddc1[c] = dd1
+        dc1[c] -= gap[c]
+        d1 = dc1[c]
+        dd1 = ddc1[c]
         crossing = d1 > 0.0
         t_hi = hh
         look, tg = turning_screen(d0, dd0, d1, dd1, hh) if not crossing else (False, 0.0)
@@ -184,12 +186,17 @@ def _linear_energies(hh, p0s, p1s, slope, en0, en1):
 
 
 @jit(inline=True)
-def _linear_floor_peaks(q, v, q1, v1, p0s, slope, s, hh, phi, nphi, zf, xf0, xfd0, peaks,
-                        herm_tol, omega, zeta, gamma):  # fmt: skip
-    """Continuous-time peak |x| of every floor over a linear step; ``xf0, xfd0`` move on."""
+def _linear_floor_peaks(q, v, q1, v1, p0s, slope, s, hh, phi, phi_t, nphi, zf, xf0, xfd0,
+                        peaks, herm_tol, omega, zeta, gamma, xb, xdb):  # fmt: skip
+    """Continuous-time peak |x| of every floor over a linear step; ``xf0, xfd0`` move on.
+
+    ``xb, xdb``: scratch of one value per floor.
+    """
+    matvec_t(phi_t, q1, xb)
+    matvec_t(phi_t, v1, xdb)
     for f in range(phi.shape[0]):
-        x1 = rowdot(phi, f, q1)
-        xd1 = rowdot(phi, f, v1)
+        x1 = xb[f]
+        xd1 = xdb[f]
         m = abs(x1)
         if m > peaks[f]:
             peaks[f] = m
@@ -247,12 +254,15 @@ def _substep_length(q, v, psi, gap, phase, hc, t, t_onset, room):
 
 
 @jit(inline=True)
-def _locate_switch(q, v, q1, v1, a0, a1, psi, gap, phase, hs):
+def _locate_switch(q, v, q1, v1, a0, a1, psi, psi_t, gap, phase, hs, pw0, pw1):
     """First switch of a force law inside a sub-step: ``(time, contact, kind)``.
 
     Kinds: onset, approach -> restitution, separation, restitution -> approach; located on
     the cubic Hermite interpolant of the penetration (or its rate).  ``(inf, -1, 0)``: none.
+    ``pw0, pw1``: scratch of one value per contact.
     """
+    matvec_t(psi_t, q, pw0)  # every contact's penetration (plus gap) at both ends
+    matvec_t(psi_t, q1, pw1)
     t_ev = np.inf
     c_ev = -1
     kind = 0
@@ -261,8 +271,8 @@ def _locate_switch(q, v, q1, v1, a0, a1, psi, gap, phase, hs):
         te = np.inf
         kd = 0
         if phase[c] == 0:
-            d0 = rowdot(psi, c, q) - gap[c]
-            d1 = rowdot(psi, c, q1) - gap[c]
+            d0 = pw0[c] - gap[c]
+            d1 = pw1[c] - gap[c]
             if d1 > 0.0 and d0 <= 0.0:
                 te = hermite_root(d0, rowdot(psi, c, v), d1, rowdot(psi, c, v1), hs)
                 kd = _ONSET
@@ -273,8 +283,8 @@ def _locate_switch(q, v, q1, v1, a0, a1, psi, gap, phase, hs):
                 te = hermite_root(dd0, rowdot(psi, c, a0), dd1, rowdot(psi, c, a1), hs)
                 kd = _TO_RESTITUTION
         else:
-            d0 = rowdot(psi, c, q) - gap[c]
-            d1 = rowdot(psi, c, q1) - gap[c]
+            d0 = pw0[c] - gap[c]
+            d1 = pw1[c] - gap[c]
             dd0 = rowdot(psi, c, v)
             dd1 = rowdot(psi, c, v1)
             if d1 <= 0.0 and d0 > 0.0:
@@ -453,6 +463,13 @@ def adaptive(
     en0 = np.empty(4)
     en1 = np.empty(4)
     nphi = -phi
+    # transposed for matrix-vector products whose inner loop runs over floors or contacts
+    phi_t = np.ascontiguousarray(phi.T)
+    psi_t = np.ascontiguousarray(psi.T)
+    xb = np.empty(nf)
+    xdb = np.empty(nf)
+    pw0 = np.empty(nc)
+    pw1 = np.empty(nc)
     zf = np.zeros(nf)
     herm_tol = _hermite_tolerance(omega, h)
     e_in = 0.0
@@ -509,7 +526,8 @@ def adaptive(
                             en0)  # fmt: skip
                     fresh = True
                 c_on, tau_on = _screen_onsets(q, v, q1, v1, p0s, slope, s, hh, dc0, ddc0, dc1,
-                                              ddc1, omega, zeta, gamma, psi, gap)  # fmt: skip
+                                              ddc1, omega, zeta, gamma, psi, psi_t,
+                                              gap)  # fmt: skip
                 if c_on >= 0 and mode == outputs.PRE_RUN_TO_CONTACT:
                     return
                 if c_on >= 0:
@@ -523,8 +541,9 @@ def adaptive(
                 de_in, de_d = _linear_energies(hh, p0s, p1s, slope, en0, en1)
                 e_in += de_in
                 e_d += de_d
-                _linear_floor_peaks(q, v, q1, v1, p0s, slope, s, hh, phi, nphi, zf, xf0, xfd0,
-                                    peaks, herm_tol, omega, zeta, gamma)  # fmt: skip
+                _linear_floor_peaks(q, v, q1, v1, p0s, slope, s, hh, phi, phi_t, nphi, zf, xf0,
+                                    xfd0, peaks, herm_tol, omega, zeta, gamma, xb,
+                                    xdb)  # fmt: skip
                 _shift(q, v, q1, v1, dc0, ddc0, dc1, ddc1, en0, en1)
                 s += hh
                 if c_on >= 0:
@@ -546,7 +565,8 @@ def adaptive(
                     a0[j] = wk[4, j]
                 contact_forces(q1, v1, psi, gap, beta, cd, zhd, phase, model, fc)
                 accel(q1, v1, ag0 + slope * (s + hs), omega, zeta, gamma, psi, fc, a1)
-                t_ev, c_ev, kind = _locate_switch(q, v, q1, v1, a0, a1, psi, gap, phase, hs)
+                t_ev, c_ev, kind = _locate_switch(q, v, q1, v1, a0, a1, psi, psi_t, gap, phase,
+                                                  hs, pw0, pw1)  # fmt: skip
                 if c_ev >= 0 and t_ev < hs:
                     hs = t_ev
                     de_in, de_d, dw_c = rk4(q, v, s, hs, ag0, slope, omega, zeta, gamma, psi,
@@ -561,7 +581,7 @@ def adaptive(
                     q, v, q1, v1, a0, a1, psi, gap, beta, cd, zhd, phase, model, fc0, fc, cimp,
                     cout, pending, hs, i * dt_rec + s, peak_f, peak_t, ep, vlog, nlog, peak_e,
                 )  # fmt: skip
-                track_floors(phi, xf0, xfd0, q1, v1, hs, peaks)  # xf0, xfd0 move on
+                track_floors(phi_t, xf0, xfd0, q1, v1, hs, peaks, xb, xdb)  # xf0, xfd0 move on
                 for j in range(n):
                     q[j] = q1[j]
                     v[j] = v1[j]

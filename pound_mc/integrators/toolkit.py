@@ -256,6 +256,21 @@ def rowdot(mat, r, x):
 
 
 @jit(inline=True)
+def matvec_t(mat_t, x, out):
+    """``out = mat x`` from the transpose ``mat_t`` of ``mat`` (C order).
+
+    Every ``out[r]`` is summed over ``j`` in the order :func:`rowdot` sums it (the same
+    number), but the inner loop runs over the rows, whose sums do not wait on one another.
+    """
+    for r in range(out.size):
+        out[r] = 0.0
+    for j in range(x.size):
+        xj = x[j]
+        for r in range(out.size):
+            out[r] += mat_t[j, r] * xj
+
+
+@jit(inline=True)
 def accel(q, v, ag, omega, zeta, gamma, psi, fc, a):
     """Modal accelerations into ``a`` for ground acceleration ``ag`` and contact forces."""
     n = q.size
@@ -279,18 +294,20 @@ def powers(v, ag, omega, zeta, gamma):
 
 
 @jit
-def track_floors(phi, xf, xfd, q1, v1, h, peaks):
+def track_floors(phi_t, xf, xfd, q1, v1, h, peaks, xb, xdb):
     """Update the continuous-time peak |x| of every floor over a step (Hermite).
 
-    ``xf, xfd``: every floor's displacement and velocity at the step's start, replaced by
-    those at its end (state ``q1, v1``): the next step starts where this one ends.
+    ``phi_t``: the transposed mode shapes; ``xf, xfd``: every floor's displacement and
+    velocity at the step's start, replaced by those at its end (state ``q1, v1``): the next
+    step starts where this one ends; ``xb, xdb``: scratch of one value per floor.
     """
-    nf = phi.shape[0]
-    for f in range(nf):
+    matvec_t(phi_t, q1, xb)
+    matvec_t(phi_t, v1, xdb)
+    for f in range(xb.size):
         x0 = xf[f]
         xd0 = xfd[f]
-        x1 = rowdot(phi, f, q1)
-        xd1 = rowdot(phi, f, v1)
+        x1 = xb[f]
+        xd1 = xdb[f]
         xf[f] = x1
         xfd[f] = xd1
         m = abs(x1)
