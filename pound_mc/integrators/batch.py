@@ -27,6 +27,7 @@ this one boundary.
 
 from __future__ import annotations
 
+import functools
 import math
 from concurrent.futures import ThreadPoolExecutor
 from typing import NamedTuple
@@ -286,6 +287,16 @@ def _named(out):
     return result
 
 
+#: The empty ``pre`` of a plain run (kernels never write an empty array).
+_NO_PRE = np.zeros(0)
+
+
+@functools.lru_cache(maxsize=64)
+def _no_histories(nf: int, nc: int) -> tuple:
+    """Empty history arrays of a run without histories (shared: nothing writes them)."""
+    return np.zeros((0, nf)), np.zeros((0, nc)), np.zeros((0, nc))
+
+
 def run_kernel(
     ag,
     dt_rec,
@@ -351,10 +362,10 @@ def run_kernel(
     v = np.zeros(n) if v0 is None else np.array(v0, dtype=float)
     out = np.empty(N_OUT)
     cout = np.empty((nc, N_COUT))
-    nh = ag.size if history else 0
-    hx = np.zeros((nh, nf))
-    hd = np.zeros((nh, nc))
-    hf = np.zeros((nh, nc))
+    if history:
+        hx, hd, hf = np.zeros((ag.size, nf)), np.zeros((ag.size, nc)), np.zeros((ag.size, nc))
+    else:
+        hx, hd, hf = _no_histories(nf, nc)
     f8 = np.float64
     run = _RUNS[settings.method]
     if run is _run_adaptive and pair:
@@ -370,7 +381,7 @@ def run_kernel(
         np.ascontiguousarray(side, dtype=np.int64), np.ascontiguousarray(psi, dtype=f8),
         np.ascontiguousarray(gap, dtype=f8), np.ascontiguousarray(meff, dtype=f8),
         np.ascontiguousarray(beta, dtype=f8), np.ascontiguousarray(xi, dtype=f8),
-        settings, q, v, out, cout, hx, hd, hf, np.zeros(0),
+        settings, q, v, out, cout, hx, hd, hf, _NO_PRE,
     )  # fmt: skip
     fixed_restitution(out, settings, xi[0] if np.size(xi) else 0.0)
     if settings.method != ADAPTIVE:

@@ -106,6 +106,18 @@ def kernel_settings(
     InputError
         For an unknown law or method, or a relation the law does not accept.
     """
+    if restitution is None:
+        return _plain_settings(model, method, relation, float(dt_s), float(substeps))
+    return _settings(model, method, relation, dt_s, substeps, restitution)
+
+
+@functools.lru_cache(maxsize=256)
+def _plain_settings(model, method, relation, dt_s, substeps) -> KernelSettings:
+    """:func:`kernel_settings` with one restitution for every impact, made once per set."""
+    return _settings(model, method, relation, dt_s, substeps, None)
+
+
+def _settings(model, method, relation, dt_s, substeps, restitution) -> KernelSettings:
     relation = check_relation(model, relation)
     if method not in _METHOD_CODES:
         raise InputError(

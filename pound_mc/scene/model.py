@@ -11,6 +11,7 @@ yielding storeys (their storey tables and free-vibration tail).
 
 from __future__ import annotations
 
+import copy
 import math
 import tomllib
 from dataclasses import dataclass, field, replace
@@ -133,11 +134,11 @@ class Scene:
 
         Read it, do not modify it: the array is shared by every later call.
         """
-        key = (repr(sorted(self.record.items())), self.base_dir)
         hit = self._cache.get("record")
-        if hit is None or hit[0] != key:
-            hit = self._cache["record"] = (key, record_arrays(self.load_record()))
-        return hit[1]
+        if hit is None or not _same_record(hit[0], self.record) or hit[1] != self.base_dir:
+            spec = copy.deepcopy(self.record)  # a change of the scene's record reads it again
+            hit = self._cache["record"] = (spec, self.base_dir, record_arrays(self.load_record()))
+        return hit[2]
 
     def modal_arrays(self) -> dict[str, np.ndarray]:
         """Arrays the kernels take: modes of both buildings, floor maps and contacts.
@@ -655,6 +656,14 @@ def load_scene(path: str | Path) -> Scene:
     except (OSError, UnicodeDecodeError) as exc:
         raise InputError(f"cannot read the scene file: {exc}", file=str(path)) from None
     return scene_from_dict(data, file=path)
+
+
+def _same_record(cached: dict, record: dict) -> bool:
+    """Whether ``record`` still equals the cached copy of the record table."""
+    try:
+        return bool(cached == record)
+    except ValueError:  # values without a truth value of their equality (arrays)
+        return False
 
 
 def simulate(
