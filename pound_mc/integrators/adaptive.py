@@ -41,10 +41,12 @@ from pound_mc.integrators.toolkit import (
     grid_step,
     hermite_max,
     hermite_root,
+    matvec_spans,
     matvec_t,
     mechanical_energy,
     powers,
     refresh,
+    row_spans,
     rowdot,
     run_sizes,
     track_floors,
@@ -58,13 +60,14 @@ _ONSET, _TO_RESTITUTION, _SEPARATION, _TO_APPROACH = 1, 2, 3, 4
 @jit
 def rk4(
     q, v, s, hs, ag0, slope, omega, zeta, gamma, psi, gap, beta, cd, zhd, phase, model,
-    qn, vn, wk, fc, cimp, fc0,
+    qn, vn, wk, fc, cimp, fc0, rate,
 ):  # fmt: skip
     """One classical Runge-Kutta step of length ``hs`` from local time ``s``.
 
     Writes the new state into ``qn, vn``, the contact impulses of the step into ``cimp`` and
     the forces at the start into ``fc0`` (the accelerations at the start are ``wk[4]``);
-    returns the increments of input energy, damping energy and contact work.
+    returns the increments of input energy, damping energy and contact work.  ``rate``:
+    scratch of one value per contact.
     """
     n = q.size
     nc = fc.size
@@ -87,7 +90,7 @@ def rk4(
                 wk[8, j] = q[j] + fac * wk[stage - 1, j]
                 wk[9, j] = v[j] + fac * wk[4 + stage - 1, j]
         ag = ag0 + slope * (s + tau)
-        contact_forces(wk[8], wk[9], psi, gap, beta, cd, zhd, phase, model, fc)
+        contact_forces(wk[8], wk[9], psi, gap, beta, cd, zhd, phase, model, fc, rate)
         accel(wk[8], wk[9], ag, omega, zeta, gamma, psi, fc, wk[4 + stage])
         if stage == 0:
             for c in range(nc):
@@ -98,7 +101,7 @@ def rk4(
         pc = 0.0
         for c in range(nc):
             if fc[c] != 0.0:
-                pc += fc[c] * rowdot(psi, c, wk[9])
+                pc += fc[c] * rate[c]  # a closed contact: its rate at this stage
         wgt = (1.0 if stage == 0 or stage == 3 else 2.0) * hs / 6.0
         e_in += wgt * pin
         e_d += wgt * pd
@@ -186,14 +189,14 @@ def _linear_energies(hh, p0s, p1s, slope, en0, en1):
 
 
 @jit(inline=True)
-def _linear_floor_peaks(q, v, q1, v1, p0s, slope, s, hh, phi, phi_t, nphi, zf, xf0, xfd0,
-                        peaks, herm_tol, omega, zeta, gamma, xb, xdb):  # fmt: skip
+def _linear_floor_peaks(q, v, q1, v1, p0s, slope, s, hh, phi, phi_t, flo, fhi, nphi, zf, xf0,
+                        xfd0, peaks, herm_tol, omega, zeta, gamma, xb, xdb):  # fmt: skip
     """Continuous-time peak |x| of every floor over a linear step; ``xf0, xfd0`` move on.
 
     ``xb, xdb``: scratch of one value per floor.
     """
-    matvec_t(phi_t, q1, xb)
-    matvec_t(phi_t, v1, xdb)
+    matvec_spans(phi_t, q1, xb, flo, fhi)
+    matvec_spans(phi_t, v1, xdb, flo, fhi)
     for f in range(phi.shape[0]):
         x1 = xb[f]
         xd1 = xdb[f]
@@ -466,6 +469,7 @@ def adaptive(
     # transposed for matrix-vector products whose inner loop runs over floors or contacts
     phi_t = np.ascontiguousarray(phi.T)
     psi_t = np.ascontiguousarray(psi.T)
+    flo, fhi = row_spans(phi_t)  # a mode moves the floors of its own building only
     xb = np.empty(nf)
     xdb = np.empty(nf)
     pw0 = np.empty(nc)
@@ -541,8 +545,8 @@ def adaptive(
                 de_in, de_d = _linear_energies(hh, p0s, p1s, slope, en0, en1)
                 e_in += de_in
                 e_d += de_d
-                _linear_floor_peaks(q, v, q1, v1, p0s, slope, s, hh, phi, phi_t, nphi, zf, xf0,
-                                    xfd0, peaks, herm_tol, omega, zeta, gamma, xb,
+                _linear_floor_peaks(q, v, q1, v1, p0s, slope, s, hh, phi, phi_t, flo, fhi, nphi,
+                                    zf, xf0, xfd0, peaks, herm_tol, omega, zeta, gamma, xb,
                                     xdb)  # fmt: skip
                 _shift(q, v, q1, v1, dc0, ddc0, dc1, ddc1, en0, en1)
                 s += hh
@@ -560,10 +564,10 @@ def adaptive(
                                      dt_rec - s)  # fmt: skip
                 de_in, de_d, dw_c = rk4(q, v, s, hs, ag0, slope, omega, zeta, gamma, psi, gap,
                                         beta, cd, zhd, phase, model, q1, v1, wk, fc, cimp,
-                                        fc0)  # fmt: skip
+                                        fc0, pw0)  # fmt: skip
                 for j in range(n):
                     a0[j] = wk[4, j]
-                contact_forces(q1, v1, psi, gap, beta, cd, zhd, phase, model, fc)
+                contact_forces(q1, v1, psi, gap, beta, cd, zhd, phase, model, fc, pw0)
                 accel(q1, v1, ag0 + slope * (s + hs), omega, zeta, gamma, psi, fc, a1)
                 t_ev, c_ev, kind = _locate_switch(q, v, q1, v1, a0, a1, psi, psi_t, gap, phase,
                                                   hs, pw0, pw1)  # fmt: skip
@@ -571,8 +575,8 @@ def adaptive(
                     hs = t_ev
                     de_in, de_d, dw_c = rk4(q, v, s, hs, ag0, slope, omega, zeta, gamma, psi,
                                             gap, beta, cd, zhd, phase, model, q1, v1, wk, fc,
-                                            cimp, fc0)  # fmt: skip
-                    contact_forces(q1, v1, psi, gap, beta, cd, zhd, phase, model, fc)
+                                            cimp, fc0, pw0)  # fmt: skip
+                    contact_forces(q1, v1, psi, gap, beta, cd, zhd, phase, model, fc, pw0)
                     accel(q1, v1, ag0 + slope * (s + hs), omega, zeta, gamma, psi, fc, a1)
                 e_in += de_in
                 e_d += de_d
@@ -581,7 +585,8 @@ def adaptive(
                     q, v, q1, v1, a0, a1, psi, gap, beta, cd, zhd, phase, model, fc0, fc, cimp,
                     cout, pending, hs, i * dt_rec + s, peak_f, peak_t, ep, vlog, nlog, peak_e,
                 )  # fmt: skip
-                track_floors(phi_t, xf0, xfd0, q1, v1, hs, peaks, xb, xdb)  # xf0, xfd0 move on
+                # floor peaks over the sub-step; xf0, xfd0 move on to its end
+                track_floors(phi_t, flo, fhi, xf0, xfd0, q1, v1, hs, peaks, xb, xdb)
                 for j in range(n):
                     q[j] = q1[j]
                     v[j] = v1[j]

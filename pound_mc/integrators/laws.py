@@ -76,14 +76,18 @@ def force(model, d, dd, beta, c0, zeta, phase):
 
 
 @jit(inline=True)
-def contact_forces(q, v, psi, gap, beta, cd, zeta, phase, model, fc):
-    """Forces of every contact at state ``q, v`` into ``fc`` [N] (0 for open contacts)."""
+def contact_forces(q, v, psi, gap, beta, cd, zeta, phase, model, fc, rate):
+    """Forces of every contact at state ``q, v`` into ``fc`` [N] (0 for open contacts).
+
+    ``rate`` receives the penetration rate [m/s] of every closed contact.
+    """
     for c in range(fc.size):
         if phase[c] == 0:
             fc[c] = 0.0  # as force() for an open contact, without its row products
             continue
         d = rowdot(psi, c, q) - gap[c]
         dd = rowdot(psi, c, v)
+        rate[c] = dd
         fc[c] = force(model, d, dd, beta[c], cd[c], zeta[c], phase[c])
 
 

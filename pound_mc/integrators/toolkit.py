@@ -271,6 +271,38 @@ def matvec_t(mat_t, x, out):
 
 
 @jit(inline=True)
+def row_spans(mat):
+    """First and one past the last non-zero column of every row (unsigned: no wraparound).
+
+    Of the transposed mode shapes: the floors of the building a mode belongs to.
+    """
+    nr, ncol = mat.shape
+    lo = np.zeros(nr, dtype=np.uint64)
+    hi = np.zeros(nr, dtype=np.uint64)
+    for r in range(nr):
+        for j in range(ncol):
+            if mat[r, j] != 0.0:
+                if hi[r] == 0:
+                    lo[r] = j
+                hi[r] = j + 1
+    return lo, hi
+
+
+@jit(inline=True)
+def matvec_spans(mat_t, x, out, lo, hi):
+    """:func:`matvec_t` over the non-zero span of each row of ``mat_t`` (:func:`row_spans`).
+
+    The same numbers: the terms left out are zero products, which leave a finite sum as it is.
+    """
+    for r in range(out.size):
+        out[r] = 0.0
+    for j in range(x.size):
+        xj = x[j]
+        for r in range(lo[j], hi[j]):
+            out[r] += mat_t[j, r] * xj
+
+
+@jit(inline=True)
 def accel(q, v, ag, omega, zeta, gamma, psi, fc, a):
     """Modal accelerations into ``a`` for ground acceleration ``ag`` and contact forces."""
     n = q.size
@@ -294,15 +326,16 @@ def powers(v, ag, omega, zeta, gamma):
 
 
 @jit
-def track_floors(phi_t, xf, xfd, q1, v1, h, peaks, xb, xdb):
+def track_floors(phi_t, flo, fhi, xf, xfd, q1, v1, h, peaks, xb, xdb):
     """Update the continuous-time peak |x| of every floor over a step (Hermite).
 
-    ``phi_t``: the transposed mode shapes; ``xf, xfd``: every floor's displacement and
+    ``phi_t``: the transposed mode shapes, ``flo, fhi`` their spans (:func:`row_spans`);
+    ``xf, xfd``: every floor's displacement and
     velocity at the step's start, replaced by those at its end (state ``q1, v1``): the next
     step starts where this one ends; ``xb, xdb``: scratch of one value per floor.
     """
-    matvec_t(phi_t, q1, xb)
-    matvec_t(phi_t, v1, xdb)
+    matvec_spans(phi_t, q1, xb, flo, fhi)
+    matvec_spans(phi_t, v1, xdb, flo, fhi)
     for f in range(xb.size):
         x0 = xf[f]
         xd0 = xfd[f]
