@@ -126,7 +126,7 @@ def _run_adaptive(
              q, v, out, cout, hx, hd, hf, pre)  # fmt: skip
 
 
-@jit
+@jit(inline=True)
 def _run_adaptive_pair(
     ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi, settings,
     q, v, out, cout, hx, hd, hf, pre,
@@ -134,7 +134,7 @@ def _run_adaptive_pair(
     """One run of ``adaptive`` on an SDOF pair: the scalar-state kernel (histories included).
 
     Chosen in Python (:func:`_is_sdof_pair`), so that SDOF studies never compile the general
-    modal kernel.
+    modal kernel; inlined into the batch kernel (one compiled layer fewer on a first run).
     """
     if _endless(ag, dt_rec, settings):
         fail(out, cout, STATUS_NOT_CONVERGED)
@@ -429,41 +429,34 @@ def _sdof_arrays(k, tl, zl, ml, tr, zr, mr, gap, beta, xi):
 
 
 @jit
-def _sdof_groups(ag, dt_rec, tl, zl, ml, tr, zr, mr, gap, beta, xi, dt_s, settings, first,
-                 shared, lo, hi):  # fmt: skip
-    """``adaptive``: the linear response up to the first contact of groups ``lo:hi``.
+def _sdof_adaptive(ag, dt_rec, tl, zl, ml, tr, zr, mr, gap, beta, xi, dt_s, settings, out,
+                   index, group, shared, groups, lo, hi):  # fmt: skip
+    """``adaptive``: simulations ``index[lo:hi]``, or the linear response of groups ``lo:hi``.
 
-    A group gathers the simulations that differ only in contact parameters; its response is
-    run once, from ``first`` (a member of it), and every member resumes from ``shared``.
+    A group gathers the simulations that differ only in contact parameters.  With ``groups``,
+    its linear response up to the first contact is run once, from member ``index[g]``, into
+    ``shared[g]``; else every simulation ``k`` resumes from ``shared[group[k]]``.  One kernel
+    for both passes: the SDOF-pair kernel is linked into one compiled caller, not two.
     """
     empty = np.zeros((0, 2))
     empty1 = np.zeros((0, 1))
-    for gi in range(lo, hi):
-        k = first[gi]
+    for i in range(lo, hi):
+        k = index[i]
         omega, zeta, gamma, phi, side, psi, g, me, be, x = _sdof_arrays(
             k, tl, zl, ml, tr, zr, mr, gap, beta, xi
         )
-        shared[gi, PRE_MODE] = PRE_RUN_TO_CONTACT
+        if groups:
+            pre = shared[i]
+            pre[PRE_MODE] = PRE_RUN_TO_CONTACT
+            o = np.empty(N_OUT)
+        else:
+            pre = shared[group[k]].copy()
+            o = out[k]
         _run_adaptive_pair(ag, dt_rec, omega, zeta, gamma, phi, side, psi, g, me, be, x,
-                      _with_step(settings, dt_s[k]), np.zeros(2), np.zeros(2), np.empty(N_OUT),
-                      np.empty((1, N_COUT)), empty, empty1, empty1, shared[gi])  # fmt: skip
-        shared[gi, PRE_MODE] = PRE_RESUME
-
-
-@jit
-def _sdof_adaptive(ag, dt_rec, tl, zl, ml, tr, zr, mr, gap, beta, xi, dt_s, settings, out,
-                   group, shared, lo, hi):  # fmt: skip
-    """``adaptive``: simulations ``lo:hi``, each resumed from its group's shared state."""
-    empty = np.zeros((0, 2))
-    empty1 = np.zeros((0, 1))
-    for k in range(lo, hi):
-        omega, zeta, gamma, phi, side, psi, g, me, be, x = _sdof_arrays(
-            k, tl, zl, ml, tr, zr, mr, gap, beta, xi
-        )
-        _run_adaptive_pair(ag, dt_rec, omega, zeta, gamma, phi, side, psi, g, me, be, x,
-                      _with_step(settings, dt_s[k]), np.zeros(2), np.zeros(2), out[k],
-                      np.empty((1, N_COUT)), empty, empty1, empty1,
-                      shared[group[k]].copy())  # fmt: skip
+                           _with_step(settings, dt_s[k]), np.zeros(2), np.zeros(2), o,
+                           np.empty((1, N_COUT)), empty, empty1, empty1, pre)  # fmt: skip
+        if groups:
+            pre[PRE_MODE] = PRE_RESUME
 
 
 @jit
@@ -546,14 +539,17 @@ def simulate_sdof_pairs(
     shared = np.zeros((first.size, pre_size(2, 2)))
     first = first.astype(np.int64)
     group = group.ravel().astype(np.int64)
-    _threaded(_sdof_groups, first.size, acc, dt_rec, *arrays, settings, first, shared)
-    _threaded(_sdof_adaptive, nsim, acc, dt_rec, *arrays, settings, out, group, shared)
+    _threaded(_sdof_adaptive, first.size, acc, dt_rec, *arrays, settings, out, first, group,
+              shared, True)  # fmt: skip
+    everyone = np.arange(nsim, dtype=np.int64)
+    _threaded(_sdof_adaptive, nsim, acc, dt_rec, *arrays, settings, out, everyone, group, shared,
+              False)  # fmt: skip
     fixed_restitution(out, settings, arrays[8])
     if not accuracy_check:
         return _named(out)
     _check_substeps(out, settings, lambda hit, finer, fine: _threaded(
-        _sdof_adaptive, hit.size, acc, dt_rec, *[a[hit] for a in arrays], finer, fine, group[hit],
-        shared,
+        _sdof_adaptive, hit.size, acc, dt_rec, *[a[hit] for a in arrays], finer, fine,
+        np.arange(hit.size, dtype=np.int64), group[hit], shared, False,
     ))  # fmt: skip
     return _named(out)
 
