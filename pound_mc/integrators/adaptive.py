@@ -42,7 +42,6 @@ from pound_mc.integrators.toolkit import (
     hermite_max,
     hermite_root,
     matvec_spans,
-    matvec_t,
     mechanical_energy,
     powers,
     refresh,
@@ -134,7 +133,7 @@ def _exact_step(q, v, q1, v1, coef, regular, p0s, p1s, omega, zeta, gamma, hh):
 
 @jit(inline=True)
 def _screen_onsets(q, v, q1, v1, p0s, slope, s, hh, dc0, ddc0, dc1, ddc1, omega, zeta, gamma,
-                   psi, psi_t, gap):  # fmt: skip
+                   psi, psi_t, clo, chi, gap):  # fmt: skip
     """First contact onset inside a linear step: ``(contact, time)``, ``(-1, inf)`` for none.
 
     A contact whose penetration ends the step positive crosses zero inside it; one that turns
@@ -143,8 +142,8 @@ def _screen_onsets(q, v, q1, v1, p0s, slope, s, hh, dc0, ddc0, dc1, ddc1, omega,
     """
     tau_on = np.inf
     c_on = -1
-    matvec_t(psi_t, q1, dc1)
-    matvec_t(psi_t, v1, ddc1)
+    matvec_spans(psi_t, q1, dc1, clo, chi)
+    matvec_spans(psi_t, v1, ddc1, clo, chi)
     for c in range(gap.size):
         d0 = dc0[c]
         dd0 = ddc0[c]
@@ -257,20 +256,20 @@ def _substep_length(q, v, psi, gap, phase, hc, t, t_onset, room):
 
 
 @jit(inline=True)
-def _locate_switch(q, v, q1, v1, a0, a1, psi, psi_t, gap, phase, hs, pw0, pw1):
+def _locate_switch(q, v, q1, v1, a0, a1, psi, psi_t, clo, chi, gap, phase, hs, pw0, pw1):
     """First switch of a force law inside a sub-step: ``(time, contact, kind)``.
 
     Kinds: onset, approach -> restitution, separation, restitution -> approach; located on
     the cubic Hermite interpolant of the penetration (or its rate).  ``(inf, -1, 0)``: none.
     ``pw0, pw1``: scratch of one value per contact.
     """
-    matvec_t(psi_t, q, pw0)  # every contact's penetration (plus gap) at both ends
-    matvec_t(psi_t, q1, pw1)
+    matvec_spans(psi_t, q, pw0, clo, chi)  # every contact's penetration (plus gap) at both ends
+    matvec_spans(psi_t, q1, pw1, clo, chi)
     t_ev = np.inf
     c_ev = -1
     kind = 0
     for c in range(gap.size):
-        # each row product only where the contact's phase needs it (most contacts are open)
+        # the rates only where the contact's phase needs them (most contacts are open)
         te = np.inf
         kd = 0
         if phase[c] == 0:
@@ -470,10 +469,12 @@ def adaptive(
     phi_t = np.ascontiguousarray(phi.T)
     psi_t = np.ascontiguousarray(psi.T)
     flo, fhi = row_spans(phi_t)  # a mode moves the floors of its own building only
+    clo, chi = row_spans(psi_t)
     xb = np.empty(nf)
     xdb = np.empty(nf)
     pw0 = np.empty(nc)
     pw1 = np.empty(nc)
+    rate = np.empty(nc)  # penetration rates of the closed contacts (contact_forces)
     zf = np.zeros(nf)
     herm_tol = _hermite_tolerance(omega, h)
     e_in = 0.0
@@ -530,8 +531,8 @@ def adaptive(
                             en0)  # fmt: skip
                     fresh = True
                 c_on, tau_on = _screen_onsets(q, v, q1, v1, p0s, slope, s, hh, dc0, ddc0, dc1,
-                                              ddc1, omega, zeta, gamma, psi, psi_t,
-                                              gap)  # fmt: skip
+                                              ddc1, omega, zeta, gamma, psi, psi_t, clo,
+                                              chi, gap)  # fmt: skip
                 if c_on >= 0 and mode == outputs.PRE_RUN_TO_CONTACT:
                     return
                 if c_on >= 0:
@@ -564,19 +565,19 @@ def adaptive(
                                      dt_rec - s)  # fmt: skip
                 de_in, de_d, dw_c = rk4(q, v, s, hs, ag0, slope, omega, zeta, gamma, psi, gap,
                                         beta, cd, zhd, phase, model, q1, v1, wk, fc, cimp,
-                                        fc0, pw0)  # fmt: skip
+                                        fc0, rate)  # fmt: skip
                 for j in range(n):
                     a0[j] = wk[4, j]
-                contact_forces(q1, v1, psi, gap, beta, cd, zhd, phase, model, fc, pw0)
+                contact_forces(q1, v1, psi, gap, beta, cd, zhd, phase, model, fc, rate)
                 accel(q1, v1, ag0 + slope * (s + hs), omega, zeta, gamma, psi, fc, a1)
-                t_ev, c_ev, kind = _locate_switch(q, v, q1, v1, a0, a1, psi, psi_t, gap, phase,
-                                                  hs, pw0, pw1)  # fmt: skip
+                t_ev, c_ev, kind = _locate_switch(q, v, q1, v1, a0, a1, psi, psi_t, clo, chi, gap,
+                                                  phase, hs, pw0, pw1)  # fmt: skip
                 if c_ev >= 0 and t_ev < hs:
                     hs = t_ev
                     de_in, de_d, dw_c = rk4(q, v, s, hs, ag0, slope, omega, zeta, gamma, psi,
                                             gap, beta, cd, zhd, phase, model, q1, v1, wk, fc,
-                                            cimp, fc0, pw0)  # fmt: skip
-                    contact_forces(q1, v1, psi, gap, beta, cd, zhd, phase, model, fc, pw0)
+                                            cimp, fc0, rate)  # fmt: skip
+                    contact_forces(q1, v1, psi, gap, beta, cd, zhd, phase, model, fc, rate)
                     accel(q1, v1, ag0 + slope * (s + hs), omega, zeta, gamma, psi, fc, a1)
                 e_in += de_in
                 e_d += de_d

@@ -483,14 +483,14 @@ def adaptive_pair(
             # stops at).  A loop of its own: its state stays in registers (B1: the linear
             # phases 2.5 times faster than as a branch of the interval loop)
             while i < npts - 1:
-                if k_grid == 0:
+                if k_grid == 0:  # a new record interval
                     if mode == PRE_RUN_TO_CONTACT:
                         _snapshot_pair(pre, i, e_in, e_d, steps, e0, q0, q1, v0, v1, pk0, pk1)
                     if store:
                         _store_pair(i, q0, q1, v0, v1, f0, f1, ps0, ps1, gp, b, cd, zhd, phase,
                                     model, hx, hd, hf)  # fmt: skip
-                ag0 = ag[i]
-                slope = (ag[i + 1] - ag[i]) * inv_dt
+                    ag0 = ag[i]
+                    slope = (ag[i + 1] - ag[i]) * inv_dt
                 _, hh, p0s, p1s, quiet = grid_step(k_grid, m_sub, h, dt_rec, s, ag0, slope)
                 if not quiet:
                     break  # not a whole step: the general step below takes it

@@ -256,25 +256,11 @@ def rowdot(mat, r, x):
 
 
 @jit(inline=True)
-def matvec_t(mat_t, x, out):
-    """``out = mat x`` from the transpose ``mat_t`` of ``mat`` (C order).
-
-    Every ``out[r]`` is summed over ``j`` in the order :func:`rowdot` sums it (the same
-    number), but the inner loop runs over the rows, whose sums do not wait on one another.
-    """
-    for r in range(out.size):
-        out[r] = 0.0
-    for j in range(x.size):
-        xj = x[j]
-        for r in range(out.size):
-            out[r] += mat_t[j, r] * xj
-
-
-@jit(inline=True)
 def row_spans(mat):
     """First and one past the last non-zero column of every row (unsigned: no wraparound).
 
-    Of the transposed mode shapes: the floors of the building a mode belongs to.
+    Of the transposed mode shapes: the floors of the building a mode belongs to; of the
+    transposed contact rows: the contacts a mode takes part in.
     """
     nr, ncol = mat.shape
     lo = np.zeros(nr, dtype=np.uint64)
@@ -290,9 +276,11 @@ def row_spans(mat):
 
 @jit(inline=True)
 def matvec_spans(mat_t, x, out, lo, hi):
-    """:func:`matvec_t` over the non-zero span of each row of ``mat_t`` (:func:`row_spans`).
+    """``out = mat x`` from the transpose ``mat_t`` of ``mat`` and its spans (:func:`row_spans`).
 
-    The same numbers: the terms left out are zero products, which leave a finite sum as it is.
+    Every ``out[r]`` is summed over ``j`` in the order :func:`rowdot` sums it, and to the same
+    number: the terms left out, outside the spans, are zero products, which leave a finite sum
+    as it is.  The inner loop runs over ``r``, whose sums do not wait on one another.
     """
     for r in range(out.size):
         out[r] = 0.0
@@ -330,9 +318,9 @@ def track_floors(phi_t, flo, fhi, xf, xfd, q1, v1, h, peaks, xb, xdb):
     """Update the continuous-time peak |x| of every floor over a step (Hermite).
 
     ``phi_t``: the transposed mode shapes, ``flo, fhi`` their spans (:func:`row_spans`);
-    ``xf, xfd``: every floor's displacement and
-    velocity at the step's start, replaced by those at its end (state ``q1, v1``): the next
-    step starts where this one ends; ``xb, xdb``: scratch of one value per floor.
+    ``xf, xfd``: every floor's displacement and velocity at the step's start, replaced by those
+    at its end (state ``q1, v1``): the next step starts where this one ends; ``xb, xdb``:
+    scratch of one value per floor.
     """
     matvec_spans(phi_t, q1, xb, flo, fhi)
     matvec_spans(phi_t, v1, xdb, flo, fhi)
