@@ -207,6 +207,22 @@ def test_check_prints_plan_and_writes_nothing(study_file, tmp_path, capsys, monk
     assert sorted(p.name for p in tmp_path.iterdir()) == before
 
 
+def test_calibrate_times_the_count_asked_or_enough_for_min_s(make_study):
+    # 3 periods x 2 gaps x 64 samples = 384 simulations of a 4-s record
+    engine = StudyEngine(load_study(make_study(sampling={"n": 64})))
+    per_sim, _, timed = engine.calibrate(workers=1, n=4)
+    assert timed == 4 and per_sim > 0.0
+    # no count: 64, then more until the run lasts min_s (here never: the whole study)
+    _, _, timed = engine.calibrate(workers=1, min_s=600.0)
+    assert timed == 384
+    # ... and no more than min_s needs (the first 64 already last a microsecond)
+    _, _, timed = engine.calibrate(workers=1, min_s=1e-6)
+    assert timed == 64
+    # a budget below one simulation's time runs one
+    _, _, timed = engine.calibrate(workers=1, min_s=600.0, budget_s=1e-9)
+    assert timed == 1
+
+
 def test_default_chunk_size():
     assert default_chunk_size(10) == 256
     assert default_chunk_size(100_000) == 2000

@@ -286,7 +286,10 @@ def _study(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--threads", type=int, metavar="N", help="threads for the estimate")
     _shared(p, "chunk-size")
     p.add_argument(
-        "--calibrate", type=int, default=64, metavar="N", help="simulations timed for the estimate"
+        "--calibrate",
+        type=int,
+        metavar="N",
+        help="simulations timed for the estimate (default: at least 64, and enough for 1 s)",
     )
     p.add_argument(
         "--out", default="outputs", metavar="DIR", help="output folder of the disk estimate"

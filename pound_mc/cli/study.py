@@ -150,7 +150,9 @@ def check_command(args) -> int:
 
     The estimate times the study itself: the kernels are first compiled (or loaded from the
     cache, see :mod:`pound_mc._jit`) by one warm-up simulation, then ``--calibrate``
-    simulations spread evenly over the study run with the given threads; their time per
+    simulations (default: at least 64, and enough to last a second,
+    :meth:`~pound_mc.study.engine.StudyEngine.calibrate`) spread evenly over the study run
+    with the given threads; their time per
     simulation times the study's size, plus a fixed cost per chunk, is the estimate of the
     run's chunk time (compile time excluded: the run warms up the same way, and after this
     check the kernels are cached).
@@ -162,7 +164,7 @@ def check_command(args) -> int:
             raise InputError(f"must be >= 1, got {value}", key="--" + key.replace("_", "-"))
     engine = StudyEngine(study)
     warm_s, did_compile = warm_up(engine)
-    seconds, _ = engine.calibrate(workers=args.threads, n=args.calibrate)
+    seconds, _, timed = engine.calibrate(workers=args.threads, n=args.calibrate)
     chunk_size = args.chunk_size or study.chunk_size or default_chunk_size(study.n_simulations)
     n_chunks = len(chunk_ranges(study.n_simulations, chunk_size))
     per_sim = seconds + n_chunks * CHUNK_OVERHEAD_S / study.n_simulations
@@ -180,7 +182,7 @@ def check_command(args) -> int:
     else:
         where = f"kernels loaded from the cache in {warm_s:.2f} s; a run"
     print(
-        f"  calibration: {min(args.calibrate, study.n_simulations)} simulations spread over the "
+        f"  calibration: {timed:,} simulations spread over the "
         f"study, plus {CHUNK_OVERHEAD_S * 1e3:.0f} ms per chunk; compile time not included "
         f"({where} does not compile)"
     )

@@ -129,6 +129,17 @@ def load_traces(study) -> list:
     return out
 
 
+#: Simulations :meth:`StudyEngine.calibrate` times at least, unless told a number.
+CALIBRATION_SIZE = 64
+#: Seconds the timed calibration run lasts at least, unless told a number [s].
+CALIBRATION_MIN_S = 1.0
+
+
+def _spread(total: int, n: int) -> np.ndarray:
+    """``n`` flat indices spread evenly over ``range(total)`` (fewer where they coincide)."""
+    return np.unique(np.linspace(0, total - 1, max(1, min(n, total))).round().astype(np.int64))
+
+
 class StudyEngine:
     """Records, samples and base scene of a study, ready to run ranges of simulations.
 
@@ -487,12 +498,21 @@ class StudyEngine:
         return out
 
     def calibrate(
-        self, workers: int | None = None, n: int = 64, budget_s: float = 20.0
-    ) -> tuple[float, float]:
-        """Time a short run of ``n`` simulations spread evenly over the study.
+        self,
+        workers: int | None = None,
+        n: int | None = None,
+        budget_s: float = 20.0,
+        min_s: float = CALIBRATION_MIN_S,
+    ) -> tuple[float, float, int]:
+        """Time a short run of simulations spread evenly over the study.
 
-        Fewer are run when the first (after compilation) shows that ``n`` would take more
-        than ``budget_s`` seconds.
+        ``n`` simulations, or with ``n`` None at least :data:`CALIBRATION_SIZE` and as many
+        more as make the timed run last ``min_s`` seconds (or the whole study): a short run
+        overstates the time per simulation, since the thread start-up and the linear
+        response a study's samples share before their first contact are then spread over
+        few simulations (``studies/benchmark.toml`` on 2 threads: 64 simulations gave
+        1.7 times the run's time per simulation).  Fewer are run when the first (after
+        compilation) shows that they would take more than ``budget_s`` seconds.
 
         Returns
         -------
@@ -500,19 +520,31 @@ class StudyEngine:
             Measured after compilation, with ``workers`` threads.
         compile_seconds : float
             Time of the first (compiling, or cache-loading) call.
+        timed : int
+            The number of simulations timed.
         """
         total = self.study.n_simulations
-        n = max(1, min(n, total))
-        indices = np.unique(np.linspace(0, total - 1, n).round().astype(np.int64))
+        grow = n is None
+        n = max(1, min(CALIBRATION_SIZE if n is None else n, total))
         with numba_threads(workers):
             t0 = time.perf_counter()
-            self.run_indices(indices[:1])  # compile (or load numba's cache)
+            self.run_indices(np.zeros(1, dtype=np.int64))  # compile (or load numba's cache)
             t1 = time.perf_counter()
-            keep = int(max(1, min(indices.size, budget_s / max(t1 - t0, 1e-9))))
-            indices = indices[np.linspace(0, indices.size - 1, keep).round().astype(np.int64)]
-            self.run_indices(indices)
-            t2 = time.perf_counter()
-        return (t2 - t1) / indices.size, t1 - t0
+            n = int(max(1, min(n, budget_s / max(t1 - t0, 1e-9))))
+            while True:
+                indices = _spread(total, n)
+                t1 = time.perf_counter()
+                self.run_indices(indices)
+                elapsed = time.perf_counter() - t1
+                per_sim = elapsed / indices.size
+                if not grow or elapsed >= min_s or indices.size >= total:
+                    break
+                # enough to last min_s at this rate (and no more than the budget allows)
+                want = min(total, 2 * min_s / per_sim, budget_s / per_sim)
+                if want <= 1.5 * indices.size:
+                    break
+                n = int(want)
+        return per_sim, t1 - t0, int(indices.size)
 
     # -- dataset ----------------------------------------------------------------------------
     def dataset_parameters(self) -> dict[str, tuple[tuple[str, ...], np.ndarray]]:
