@@ -11,9 +11,20 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pound_mc.integrators import kernel_settings, run_kernel, simulate_sdof_pairs
+from pound_mc.integrators import batch, kernel_settings, run_kernel, simulate_sdof_pairs
 from pound_mc.integrators.adaptive import adaptive
-from pound_mc.integrators.outputs import CONTACT_OUTPUTS, N_COUT, N_OUT, OUTPUTS
+from pound_mc.integrators.outputs import (
+    CONTACT_OUTPUTS,
+    N_COUT,
+    N_OUT,
+    OUTPUTS,
+    PEAK_FORCE,
+    PRE_RESUME,
+    PRE_RESUME_PEAK,
+    PRE_RUN_TO_CONTACT,
+    STATUS,
+    pre_size,
+)
 from pound_mc.motions import record_arrays
 from pound_mc.scene import load_scene, scene_from_dict
 
@@ -155,6 +166,35 @@ def test_shared_linear_response_in_batches():
         for key in COMPARED:
             tol = RTOL_DISSIPATED if key == "dissipated_energy" else RTOL_JANKOWSKI
             assert close(res[key][k], ref[key], tol), (k, key)
+
+
+def test_peak_only_pass_gives_the_full_runs_peak_force():
+    # the accuracy check's finer run resumes in pre mode 3: no energies, no floor peaks, which
+    # never move the state, so its peak force is bitwise a full run's; every other output NaN.
+    # Left periods 0.3 (two steps per record sample), 0.5, 0.7 s; gaps 0 to 0.02 m; soft to
+    # stiff, lightly to heavily damped contacts
+    scene = make("b1")
+    dt, acc = record_arrays(scene.load_record())
+    n = 12
+    arrays = [
+        np.repeat([0.3, 0.5, 0.7], 4), np.full(n, 0.05), np.full(n, 1.0e6), np.full(n, 1.0),
+        np.full(n, 0.05), np.full(n, 1.0e6), np.tile([0.0, 0.01, 0.01, 0.02], 3),
+        np.tile([1.0e9, 2.75e9, 1.0e10, 2.75e9], 3), np.tile([0.35, 0.2, 0.35, 0.6], 3),
+        np.full(n, 0.01),
+    ]  # fmt: skip
+    settings = kernel_settings("jankowski", "adaptive", substeps=32)
+    every = np.arange(n, dtype=np.int64)
+    shared = np.zeros((n, pre_size(2, 2)))
+    runs = {}
+    for mode in (PRE_RUN_TO_CONTACT, PRE_RESUME, PRE_RESUME_PEAK):
+        runs[mode] = np.empty((n, N_OUT))
+        batch._sdof_adaptive(acc, dt, *arrays, settings, runs[mode], every, every, shared, mode,
+                             0, n)  # fmt: skip
+    full, peak = runs[PRE_RESUME], runs[PRE_RESUME_PEAK]
+    assert (full[:, STATUS] == 0).all() and (full[:, PEAK_FORCE] > 0.0).all()
+    np.testing.assert_array_equal(peak[:, PEAK_FORCE], full[:, PEAK_FORCE])
+    np.testing.assert_array_equal(peak[:, STATUS], full[:, STATUS])
+    assert np.isnan(np.delete(peak, [PEAK_FORCE, STATUS], axis=1)).all()
 
 
 def test_no_contact_pair():

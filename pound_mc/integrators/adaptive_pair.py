@@ -33,15 +33,18 @@ from pound_mc.integrators.outputs import (
     C_MAX_PENETRATION,
     C_PEAK_FORCE,
     IMPACT_MIN_PENETRATION_M,
+    PEAK_FORCE,
     PRE_E0,
     PRE_E_D,
     PRE_E_IN,
     PRE_INTERVAL,
     PRE_MODE,
     PRE_RESUME,
+    PRE_RESUME_PEAK,
     PRE_RUN_TO_CONTACT,
     PRE_STATE,
     PRE_STEPS,
+    STATUS,
     STATUS_NOT_CONVERGED,
     STATUS_OK,
     STATUS_UNSTABLE,
@@ -193,12 +196,14 @@ def _mode_step(q, v, p0s, p1s, g, cf):
 
 
 @jit(inline=True)
-def _ends(q0, q1, v0, v1, ag, k0, ww0, g0, k1, ww1, g1, zw2_0, zw2_1, zw4_0, zw4_1):
+def _ends(q0, q1, v0, v1, ag, km):
     """Sums for the energy integrals without contact force (``toolkit.end_values``).
 
+    ``km``: ``(k_0, ww_0, g_0, k_1, ww_1, g_1, zw2_0, zw2_1, zw4_0, zw4_1)`` with
     ``k_j = -2 z_j w_j``, ``ww_j = w_j^2``, ``zw2_j = 2 z_j w_j``, ``zw4_j = 4 z_j w_j``.
     Returns ``sum g v``, ``sum g a``, the damping power and its rate.
     """
+    k0, ww0, g0, k1, ww1, g1, zw2_0, zw2_1, zw4_0, zw4_1 = km
     a0 = k0 * v0 - ww0 * q0 - g0 * ag
     a1 = k1 * v1 - ww1 * q1 - g1 * ag
     sgv = g0 * v0
@@ -213,19 +218,23 @@ def _ends(q0, q1, v0, v1, ag, k0, ww0, g0, k1, ww1, g1, zw2_0, zw2_1, zw4_0, zw4
 
 
 @jit(inline=True)
-def _energy_step(hh, slope, p0s, p1s, s0, s1, s2, s3, e0, e1, e2, e3):
+def _energy_step(hh, slope, p0s, p1s, start, q0, q1, v0, v1, km):
     """Input and damping energy of a linear step of length ``hh`` [s] (per unit modal mass).
 
     The corrected trapezoidal rule (exact to O(h^5) per step) on the sums of :func:`_ends` at
-    the step's start (``s0..s3``) and end (``e0..e3``); ``p0s, p1s``: ground accelerations.
+    the step's start (``start``) and at its end state ``q0, q1, v0, v1``; ``p0s, p1s``: ground
+    accelerations.  Returns both energies and the end's sums (the next step's ``start``).
     """
+    s0, s1, s2, s3 = start
+    end = _ends(q0, q1, v0, v1, p1s, km)
+    e0, e1, e2, e3 = end
     pin0 = -p0s * s0
     pin1 = -p1s * e0
     dpin0 = -(slope * s0 + p0s * s1)
     dpin1 = -(slope * e0 + p1s * e1)
     hh12 = hh * hh * _TWELFTH
     de_in = 0.5 * hh * (pin0 + pin1) + hh12 * (dpin0 - dpin1)
-    return de_in, 0.5 * hh * (s2 + e2) + hh12 * (s3 - e3)
+    return de_in, 0.5 * hh * (s2 + e2) + hh12 * (s3 - e3), end
 
 
 @jit(inline=True)
@@ -419,6 +428,7 @@ def adaptive_pair(
     ww0, ww1 = w0 * w0, w1 * w1
     zw2_0, zw2_1 = 2.0 * z0 * w0, 2.0 * z1 * w1
     zw4_0, zw4_1 = 4.0 * z0 * w0, 4.0 * z1 * w1
+    km = (k0, ww0, g0, k1, ww1, g1, zw2_0, zw2_1, zw4_0, zw4_1)
     ps0, ps1, f0, f1 = psi[0, 0], psi[0, 1], phi[0, 0], phi[1, 1]
     gp, b, me, xi0 = gap[0], beta[0], meff[0], xi[0]
     cd = 2.0 * xi0 * math.sqrt(b * me)  # damping constant c0 of the force laws
@@ -437,7 +447,8 @@ def adaptive_pair(
     steps = 0
     hc = h
     fresh = False
-    dc0 = ddc0 = xf0 = xf1 = xfd0 = xfd1 = en0_0 = en0_1 = en0_2 = en0_3 = 0.0
+    dc0 = ddc0 = xf0 = xf1 = xfd0 = xfd1 = 0.0
+    en0 = (0.0, 0.0, 0.0, 0.0)  # the energy sums at a linear step's start (_ends)
     # error bound of the cubic Hermite maximum in a linear step, (omega h)^4 / 384 of the
     # amplitude, with a safety factor of 4: a candidate below the peak by more is no new peak
     wmax = max(w0, w1)
@@ -463,8 +474,10 @@ def adaptive_pair(
     status = STATUS_OK
     store = hx.shape[0] > 0
     mode = int(pre[PRE_MODE]) if pre.size > 0 else 0
+    # the peak force alone: no energies and no floor peaks (neither moves the state)
+    lean = mode == PRE_RESUME_PEAK
     i_first = 0
-    if mode == PRE_RESUME:
+    if mode == PRE_RESUME or lean:
         i_first = int(pre[PRE_INTERVAL])
         e_in = pre[PRE_E_IN]
         e_d = pre[PRE_E_D]
@@ -506,27 +519,25 @@ def adaptive_pair(
                     margin = 0.05 * (abs(ddc0) + abs(dd1)) * hh
                     bnd = max(dc0, d1) + _hermite_spread(dc0, ddc0, d1, dd1, hh)
                     quiet = bnd < -margin * (1.0 + 1e-9)
-                if quiet and (xfd0 > 0.0) != (xdb0 > 0.0):
+                if quiet and not lean and (xfd0 > 0.0) != (xdb0 > 0.0):
                     bnd = max(abs(xf0), abs(xb0)) + _hermite_spread(xf0, xfd0, xb0, xdb0, hh)
                     quiet = bnd * (1.0 + herm_tol + 1e-9) < pk0
-                if quiet and (xfd1 > 0.0) != (xdb1 > 0.0):
+                if quiet and not lean and (xfd1 > 0.0) != (xdb1 > 0.0):
                     bnd = max(abs(xf1), abs(xb1)) + _hermite_spread(xf1, xfd1, xb1, xdb1, hh)
                     quiet = bnd * (1.0 + herm_tol + 1e-9) < pk1
                 if not quiet:
                     break  # the general step below takes this grid step
                 steps += 1
-                en1_0, en1_1, en1_2, en1_3 = _ends(nq0, nq1, nv0, nv1, p1s, k0, ww0, g0, k1, ww1,
-                                                   g1, zw2_0, zw2_1, zw4_0, zw4_1)  # fmt: skip
-                de_in, de_d = _energy_step(hh, slope, p0s, p1s, en0_0, en0_1, en0_2, en0_3,
-                                           en1_0, en1_1, en1_2, en1_3)  # fmt: skip
-                e_in += de_in
-                e_d += de_d
-                pk0 = max(pk0, abs(xb0))
-                pk1 = max(pk1, abs(xb1))
-                xf0, xfd0, xf1, xfd1 = xb0, xdb0, xb1, xdb1
+                if not lean:
+                    de_in, de_d, en0 = _energy_step(hh, slope, p0s, p1s, en0, nq0, nq1, nv0, nv1,
+                                                    km)  # fmt: skip
+                    e_in += de_in
+                    e_d += de_d
+                    pk0 = max(pk0, abs(xb0))
+                    pk1 = max(pk1, abs(xb1))
+                    xf0, xfd0, xf1, xfd1 = xb0, xdb0, xb1, xdb1
                 dc0 = d1
                 ddc0 = dd1
-                en0_0, en0_1, en0_2, en0_3 = en1_0, en1_1, en1_2, en1_3
                 q0, q1, v0, v1 = nq0, nq1, nv0, nv1
                 if not math.isfinite(q0 + q1 + v0 + v1):
                     status = STATUS_UNSTABLE
@@ -570,9 +581,7 @@ def adaptive_pair(
                     xf1 = f1 * q1
                     xfd0 = f0 * v0
                     xfd1 = f1 * v1
-                    en0_0, en0_1, en0_2, en0_3 = _ends(
-                        q0, q1, v0, v1, p0s, k0, ww0, g0, k1, ww1, g1, zw2_0, zw2_1, zw4_0, zw4_1
-                    )
+                    en0 = _ends(q0, q1, v0, v1, p0s, km)
                     fresh = True
                 # onset screening
                 d0 = dc0
@@ -619,23 +628,21 @@ def adaptive_pair(
                     nq1, nv1 = advance(q1, v1, -g1 * p0s, -g1 * p1s, w1, z1, hh)
                     dc1 = ps0 * nq0 + ps1 * nq1 - gp
                     ddc1 = ps0 * nv0 + ps1 * nv1
-                # energies by the corrected trapezoidal rule (exact to O(h^5) per step)
-                en1_0, en1_1, en1_2, en1_3 = _ends(nq0, nq1, nv0, nv1, p1s, k0, ww0, g0, k1, ww1,
-                                                   g1, zw2_0, zw2_1, zw4_0, zw4_1)  # fmt: skip
-                de_in, de_d = _energy_step(hh, slope, p0s, p1s, en0_0, en0_1, en0_2, en0_3, en1_0,
-                                           en1_1, en1_2, en1_3)  # fmt: skip
-                e_in += de_in
-                e_d += de_d
-                # peak floor displacements: where the cubic Hermite bound says an extremum
-                # inside the step may be a new peak, find it on the exact solution
-                pk0 = _floor_peak(f0, 0, xf0, xfd0, f0 * nq0, f0 * nv0, pk0, q0, q1, v0, v1, p0s,
-                                  slope, hh, w0, z0, g0, w1, z1, g1, herm_tol)  # fmt: skip
-                pk1 = _floor_peak(f1, 1, xf1, xfd1, f1 * nq1, f1 * nv1, pk1, q0, q1, v0, v1, p0s,
-                                  slope, hh, w0, z0, g0, w1, z1, g1, herm_tol)  # fmt: skip
-                xf0, xfd0, xf1, xfd1 = f0 * nq0, f0 * nv0, f1 * nq1, f1 * nv1
+                if not lean:
+                    # energies by the corrected trapezoidal rule (exact to O(h^5) per step)
+                    de_in, de_d, en0 = _energy_step(hh, slope, p0s, p1s, en0, nq0, nq1, nv0, nv1,
+                                                    km)  # fmt: skip
+                    e_in += de_in
+                    e_d += de_d
+                    # peak floor displacements: where the cubic Hermite bound says an extremum
+                    # inside the step may be a new peak, find it on the exact solution
+                    pk0 = _floor_peak(f0, 0, xf0, xfd0, f0 * nq0, f0 * nv0, pk0, q0, q1, v0, v1,
+                                      p0s, slope, hh, w0, z0, g0, w1, z1, g1, herm_tol)  # fmt: skip
+                    pk1 = _floor_peak(f1, 1, xf1, xfd1, f1 * nq1, f1 * nv1, pk1, q0, q1, v0, v1,
+                                      p0s, slope, hh, w0, z0, g0, w1, z1, g1, herm_tol)  # fmt: skip
+                    xf0, xfd0, xf1, xfd1 = f0 * nq0, f0 * nv0, f1 * nq1, f1 * nv1
                 dc0 = dc1
                 ddc0 = ddc1
-                en0_0, en0_1, en0_2, en0_3 = en1_0, en1_1, en1_2, en1_3
                 q0, q1, v0, v1 = nq0, nq1, nv0, nv1
                 s += hh
                 if onset:
@@ -740,9 +747,10 @@ def adaptive_pair(
                         impacts += 1.0  # the episode is an impact
                         pending = False
                         vlog, nlog = log_impact(vlog, nlog, v_ep)
-                # peak floor displacements over the sub-step (Hermite)
-                pk0 = _track_floor(f0 * q0, f0 * v0, f0 * nq0, f0 * nv0, hs, pk0)
-                pk1 = _track_floor(f1 * q1, f1 * v1, f1 * nq1, f1 * nv1, hs, pk1)
+                if not lean:
+                    # peak floor displacements over the sub-step (Hermite)
+                    pk0 = _track_floor(f0 * q0, f0 * v0, f0 * nq0, f0 * nv0, hs, pk0)
+                    pk1 = _track_floor(f1 * q1, f1 * v1, f1 * nq1, f1 * nv1, hs, pk1)
                 q0, q1, v0, v1 = nq0, nq1, nv0, nv1
                 s += hs
                 # the force and accelerations at the end start the next sub-step (first same as
@@ -784,6 +792,11 @@ def adaptive_pair(
     if mode == PRE_RUN_TO_CONTACT:
         # no contact in the whole record: the end state is shared
         _snapshot_pair(pre, npts - 1, e_in, e_d, steps, e0, q0, q1, v0, v1, pk0, pk1)
+        return
+    if lean:
+        out[:] = np.nan  # the peak force alone (and the status that says whether it holds)
+        out[PEAK_FORCE] = peak_f if status == STATUS_OK else np.nan
+        out[STATUS] = status
         return
     if store and status == STATUS_OK:
         _store_pair(npts - 1, q0, q1, v0, v1, f0, f1, ps0, ps1, gp, b, cd, zhd, phase, model,

@@ -58,6 +58,7 @@ from pound_mc.integrators.outputs import (
     PEAK_FORCE,
     PRE_MODE,
     PRE_RESUME,
+    PRE_RESUME_PEAK,
     PRE_RUN_TO_CONTACT,
     STATUS,
     STATUS_NOT_CONVERGED,
@@ -430,16 +431,19 @@ def _sdof_arrays(k, tl, zl, ml, tr, zr, mr, gap, beta, xi):
 
 @jit
 def _sdof_adaptive(ag, dt_rec, tl, zl, ml, tr, zr, mr, gap, beta, xi, dt_s, settings, out,
-                   index, group, shared, groups, lo, hi):  # fmt: skip
+                   index, group, shared, mode, lo, hi):  # fmt: skip
     """``adaptive``: simulations ``index[lo:hi]``, or the linear response of groups ``lo:hi``.
 
-    A group gathers the simulations that differ only in contact parameters.  With ``groups``,
-    its linear response up to the first contact is run once, from member ``index[g]``, into
-    ``shared[g]``; else every simulation ``k`` resumes from ``shared[group[k]]``.  One kernel
-    for both passes: the SDOF-pair kernel is linked into one compiled caller, not two.
+    A group gathers the simulations that differ only in contact parameters.  With ``mode``
+    ``PRE_RUN_TO_CONTACT``, its linear response up to the first contact is run once, from
+    member ``index[g]``, into ``shared[g]``; else every simulation ``k`` resumes from
+    ``shared[group[k]]`` in that mode (``PRE_RESUME``, or ``PRE_RESUME_PEAK`` for the peak
+    force alone, :mod:`~pound_mc.integrators.outputs`).  One kernel for every pass: the
+    SDOF-pair kernel is linked into one compiled caller, not several.
     """
     empty = np.zeros((0, 2))
     empty1 = np.zeros((0, 1))
+    groups = mode == PRE_RUN_TO_CONTACT
     for i in range(lo, hi):
         k = index[i]
         omega, zeta, gamma, phi, side, psi, g, me, be, x = _sdof_arrays(
@@ -451,6 +455,7 @@ def _sdof_adaptive(ag, dt_rec, tl, zl, ml, tr, zr, mr, gap, beta, xi, dt_s, sett
             o = np.empty(N_OUT)
         else:
             pre = shared[group[k]].copy()
+            pre[PRE_MODE] = mode
             o = out[k]
         _run_adaptive_pair(ag, dt_rec, omega, zeta, gamma, phi, side, psi, g, me, be, x,
                            _with_step(settings, dt_s[k]), np.zeros(2), np.zeros(2), o,
@@ -540,16 +545,17 @@ def simulate_sdof_pairs(
     first = first.astype(np.int64)
     group = group.ravel().astype(np.int64)
     _threaded(_sdof_adaptive, first.size, acc, dt_rec, *arrays, settings, out, first, group,
-              shared, True)  # fmt: skip
+              shared, PRE_RUN_TO_CONTACT)  # fmt: skip
     everyone = np.arange(nsim, dtype=np.int64)
     _threaded(_sdof_adaptive, nsim, acc, dt_rec, *arrays, settings, out, everyone, group, shared,
-              False)  # fmt: skip
+              PRE_RESUME)  # fmt: skip
     fixed_restitution(out, settings, arrays[8])
     if not accuracy_check:
         return _named(out)
+    # the finer run gives only its peak force (the same as a full run's, faster)
     _check_substeps(out, settings, lambda hit, finer, fine: _threaded(
         _sdof_adaptive, hit.size, acc, dt_rec, *[a[hit] for a in arrays], finer, fine,
-        np.arange(hit.size, dtype=np.int64), group[hit], shared, False,
+        np.arange(hit.size, dtype=np.int64), group[hit], shared, PRE_RESUME_PEAK,
     ))  # fmt: skip
     return _named(out)
 
