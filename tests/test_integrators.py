@@ -18,7 +18,8 @@ import numpy as np
 import pytest
 from scipy.linalg import expm
 
-from pound_mc.integrators import run_kernel
+from pound_mc.integrators import batch, kernel_settings, run_kernel
+from pound_mc.integrators.outputs import N_COUT, N_OUT, PEAK_FORCE, STATUS
 from pound_mc.integrators.reference import reference_solution
 from pound_mc.motions import record_arrays
 from pound_mc.scene import load_scene, scene_from_dict, simulate
@@ -420,3 +421,31 @@ def test_shear_buildings_pound_at_common_floors():
     np.testing.assert_allclose(res.contacts["peak_force"], ref["contact_peak_force"], rtol=1e-3)
     for key in ("peak_force", "max_penetration", "peak_disp_left", "peak_disp_right"):
         assert rel(o[key], ref[key]) < 1e-3, key
+
+
+def test_shear_peak_only_run_gives_the_full_runs_peak_force():
+    # the accuracy check's finer run of the general kernel starts from a PRE_RESUME_PEAK state
+    # at rest: no energies, no floor peaks, which never move the state, so its peak force is
+    # bitwise a full run's; every other output NaN.  3 + 5 storeys, soft to stiff contacts
+    scene = make_scene(
+        uniform_shear(3, 1.0e6, 0.3), uniform_shear(5, 1.0e6, 0.6), JANKOWSKI,
+        {"source": "builtin:elcentro", "duration_s": 10.0, "pga_g": 0.4},
+    )  # fmt: skip
+    dt_rec, acc = record_arrays(scene.load_record())
+    a = scene.modal_arrays()
+    nsim, nc = 4, a["gap"].size
+    gap = np.array([[0.0] * nc, [0.01] * nc, [0.01] * nc, [0.02] * nc])
+    beta, xi = np.array([1.0e9, 2.75e9, 1.0e10, 2.75e9]), np.array([0.35, 0.2, 0.35, 0.6])
+    settings = kernel_settings("jankowski", "adaptive", substeps=16)
+    pair = [acc, dt_rec, *(a[k] for k in ("omega", "zeta", "gamma", "phi", "side", "psi", "meff"))]
+    runs = {}
+    for name, pre in (("full", np.zeros(0)), ("peak", batch._peak_only_from_rest(
+            a["omega"].size, a["phi"].shape[0]))):  # fmt: skip
+        runs[name] = np.empty((nsim, N_OUT)), np.empty((nsim, nc, N_COUT))
+        batch._scene_adaptive(*pair, gap, beta, xi, np.full(nsim, 0.01), settings, *runs[name],
+                              pre, 0, nsim)  # fmt: skip
+    full, peak = runs["full"][0], runs["peak"][0]
+    assert (full[:, STATUS] == 0).all() and (full[:, PEAK_FORCE] > 0.0).all()
+    np.testing.assert_array_equal(peak[:, PEAK_FORCE], full[:, PEAK_FORCE])
+    np.testing.assert_array_equal(peak[:, STATUS], full[:, STATUS])
+    assert np.isnan(np.delete(peak, [PEAK_FORCE, STATUS], axis=1)).all()

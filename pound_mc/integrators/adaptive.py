@@ -494,8 +494,10 @@ def adaptive(
     store = hx.shape[0] > 0
     outputs.reset_contacts(cout)
     mode = int(pre[outputs.PRE_MODE]) if pre.size > 0 else 0
+    # the peak force alone: no energies and no floor peaks (neither moves the state)
+    lean = mode == outputs.PRE_RESUME_PEAK
     i_first = 0
-    if mode == outputs.PRE_RESUME:
+    if mode == outputs.PRE_RESUME or lean:
         i_first = int(pre[outputs.PRE_INTERVAL])
         e_in = pre[outputs.PRE_E_IN]
         e_d = pre[outputs.PRE_E_D]
@@ -542,13 +544,14 @@ def adaptive(
                     for c in range(nc):
                         dc1[c] = rowdot(psi, c, q1) - gap[c]
                         ddc1[c] = rowdot(psi, c, v1)
-                end_values(q1, v1, p1s, omega, zeta, gamma, en1)
-                de_in, de_d = _linear_energies(hh, p0s, p1s, slope, en0, en1)
-                e_in += de_in
-                e_d += de_d
-                _linear_floor_peaks(q, v, q1, v1, p0s, slope, s, hh, phi, phi_t, flo, fhi, nphi,
-                                    zf, xf0, xfd0, peaks, herm_tol, omega, zeta, gamma, xb,
-                                    xdb)  # fmt: skip
+                if not lean:
+                    end_values(q1, v1, p1s, omega, zeta, gamma, en1)
+                    de_in, de_d = _linear_energies(hh, p0s, p1s, slope, en0, en1)
+                    e_in += de_in
+                    e_d += de_d
+                    _linear_floor_peaks(q, v, q1, v1, p0s, slope, s, hh, phi, phi_t, flo, fhi,
+                                        nphi, zf, xf0, xfd0, peaks, herm_tol, omega, zeta, gamma,
+                                        xb, xdb)  # fmt: skip
                 _shift(q, v, q1, v1, dc0, ddc0, dc1, ddc1, en0, en1)
                 s += hh
                 if c_on >= 0:
@@ -587,7 +590,8 @@ def adaptive(
                     cout, pending, hs, i * dt_rec + s, peak_f, peak_t, ep, vlog, nlog, peak_e,
                 )  # fmt: skip
                 # floor peaks over the sub-step; xf0, xfd0 move on to its end
-                track_floors(phi_t, flo, fhi, xf0, xfd0, q1, v1, hs, peaks, xb, xdb)
+                if not lean:
+                    track_floors(phi_t, flo, fhi, xf0, xfd0, q1, v1, hs, peaks, xb, xdb)
                 for j in range(n):
                     q[j] = q1[j]
                     v[j] = v1[j]
@@ -618,6 +622,9 @@ def adaptive(
     if mode == outputs.PRE_RUN_TO_CONTACT:
         # no contact in the whole record: the end state is shared
         outputs.snapshot(pre, npts - 1, e_in, e_d, steps, e0, q, v, peaks)
+        return
+    if lean:
+        outputs.peak_only(out, cout, peak_f, status)
         return
     if store and status == outputs.STATUS_OK:
         _store_history(npts - 1, q, v, phi, psi, gap, beta, cd, zhd, phase, model, hx, hd, hf)

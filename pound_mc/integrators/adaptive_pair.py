@@ -33,7 +33,6 @@ from pound_mc.integrators.outputs import (
     C_MAX_PENETRATION,
     C_PEAK_FORCE,
     IMPACT_MIN_PENETRATION_M,
-    PEAK_FORCE,
     PRE_E0,
     PRE_E_D,
     PRE_E_IN,
@@ -44,7 +43,6 @@ from pound_mc.integrators.outputs import (
     PRE_RUN_TO_CONTACT,
     PRE_STATE,
     PRE_STEPS,
-    STATUS,
     STATUS_NOT_CONVERGED,
     STATUS_OK,
     STATUS_UNSTABLE,
@@ -53,6 +51,7 @@ from pound_mc.integrators.outputs import (
     impact_log,
     log_impact,
     log_max,
+    peak_only,
 )
 from pound_mc.integrators.toolkit import (
     advance,
@@ -794,9 +793,7 @@ def adaptive_pair(
         _snapshot_pair(pre, npts - 1, e_in, e_d, steps, e0, q0, q1, v0, v1, pk0, pk1)
         return
     if lean:
-        out[:] = np.nan  # the peak force alone (and the status that says whether it holds)
-        out[PEAK_FORCE] = peak_f if status == STATUS_OK else np.nan
-        out[STATUS] = status
+        peak_only(out, cout, peak_f, status)
         return
     if store and status == STATUS_OK:
         _store_pair(npts - 1, q0, q1, v0, v1, f0, f1, ps0, ps1, gp, b, cd, zhd, phase, model,

@@ -586,7 +586,7 @@ def _check_substeps(out, settings, rerun) -> None:
 
 @jit(inline=True)
 def _scene_args(k, ag, dt_rec, omega, zeta, gamma, phi, side, psi, meff, gap, beta, xi, dt_s,
-                settings, out, cout):  # fmt: skip
+                settings, out, cout, pre):  # fmt: skip
     """The kernel arguments of simulation ``k`` of one pair of buildings (no histories)."""
     n = omega.size
     nc = psi.shape[0]
@@ -594,25 +594,39 @@ def _scene_args(k, ag, dt_rec, omega, zeta, gamma, phi, side, psi, meff, gap, be
     return (ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap[k].copy(), meff,
             np.full(nc, beta[k]), np.full(nc, xi[k]), _with_step(settings, dt_s[k]), np.zeros(n),
             np.zeros(n), out[k], cout[k], np.zeros((0, phi.shape[0])), empty1, empty1,
-            np.zeros(0))  # fmt: skip
+            pre)  # fmt: skip
 
 
 @jit
 def _scene_adaptive(ag, dt_rec, omega, zeta, gamma, phi, side, psi, meff, gap, beta, xi, dt_s,
-                    settings, out, cout, lo, hi):  # fmt: skip
-    """``adaptive``: simulations ``lo:hi`` of one pair of buildings."""
+                    settings, out, cout, pre, lo, hi):  # fmt: skip
+    """``adaptive``: simulations ``lo:hi`` of one pair of buildings, from rest.
+
+    ``pre``: empty, or (read only) a ``PRE_RESUME_PEAK`` state at rest for the peak force
+    alone (:func:`_peak_only_from_rest`).
+    """
     for k in range(lo, hi):
         _run_adaptive(*_scene_args(k, ag, dt_rec, omega, zeta, gamma, phi, side, psi, meff, gap,
-                                   beta, xi, dt_s, settings, out, cout))  # fmt: skip
+                                   beta, xi, dt_s, settings, out, cout, pre))  # fmt: skip
 
 
 @jit
 def _scene_fixed(ag, dt_rec, omega, zeta, gamma, phi, side, psi, meff, gap, beta, xi, dt_s,
-                 settings, out, cout, lo, hi):  # fmt: skip
-    """A fixed-step method: simulations ``lo:hi`` of one pair of buildings."""
+                 settings, out, cout, pre, lo, hi):  # fmt: skip
+    """A fixed-step method: simulations ``lo:hi`` of one pair of buildings (``pre`` empty)."""
     for k in range(lo, hi):
         _run_fixed(*_scene_args(k, ag, dt_rec, omega, zeta, gamma, phi, side, psi, meff, gap,
-                                beta, xi, dt_s, settings, out, cout))  # fmt: skip
+                                beta, xi, dt_s, settings, out, cout, pre))  # fmt: skip
+
+
+def _peak_only_from_rest(n_modes: int, n_floors: int) -> np.ndarray:
+    """A ``pre`` that runs the general ``adaptive`` kernel from rest for its peak force alone.
+
+    Resuming at the record's start from a state at rest with no energy is a run from rest.
+    """
+    pre = np.zeros(pre_size(n_modes, n_floors))
+    pre[PRE_MODE] = PRE_RESUME_PEAK
+    return pre
 
 
 def simulate_scene_batch(
@@ -690,21 +704,24 @@ def simulate_scene_batch(
         beta,
         xi,
     )  # fmt: skip
-    _threaded(kernel, nsim, *pair, dt_s, settings, out, cout)
+    _threaded(kernel, nsim, *pair, dt_s, settings, out, cout, _NO_PRE)
     if settings.method != ADAPTIVE:
         half = None
         if accuracy_check:
             half = np.empty_like(out)  # step doubling (pound_mc.integrators.accuracy)
-            _threaded(kernel, nsim, *pair, dt_s / 2, settings, half, np.empty_like(cout))
+            _threaded(kernel, nsim, *pair, dt_s / 2, settings, half, np.empty_like(cout),
+                      _NO_PRE)  # fmt: skip
         meff = np.asarray(arrays["meff"], dtype=f8)[None, :]
         t_c = shortest_contact_s(contact_model, cout[:, :, C_MAX_PENETRATION], beta[:, None], meff)
         t_c = t_c.min(axis=1)
         out[:, STATUS] = flag_inaccurate(out[:, STATUS], out[:, IMPACTS], t_c, dt_s,
                                          *_peaks(out, half))  # fmt: skip
     elif accuracy_check:
+        # the finer run gives only its peak force (the same as a full run's, faster)
+        lean = _peak_only_from_rest(arrays["omega"].size, arrays["phi"].shape[0])
         _check_substeps(out, settings, lambda hit, finer, fine: _threaded(
             kernel, hit.size, *pair[:-3], gap[hit], beta[hit], xi[hit], dt_s[hit], finer, fine,
-            np.empty((hit.size, nc, N_COUT)),
+            np.empty((hit.size, nc, N_COUT)), lean,
         ))  # fmt: skip
     contacts = {name: cout[:, :, k] for k, name in enumerate(CONTACT_OUTPUTS)}
     contacts["impacts"] = contacts["impacts"].astype(np.int32)

@@ -195,6 +195,18 @@ def finish(out, cout, peaks, side, phase, q, v, omega, e0, e_in, e_d, w_c, store
                 cout[c, C_MAX_PENETRATION] = 0.0
 
 
+@jit(inline=True)
+def peak_only(out, cout, peak_f, status):
+    """The outputs of a run for its peak force alone (``PRE_RESUME_PEAK``): that and the status.
+
+    Every other output is NaN; the peak force too unless the run is ok.
+    """
+    out[:] = np.nan
+    cout[:] = np.nan
+    out[PEAK_FORCE] = peak_f if status == STATUS_OK else np.nan
+    out[STATUS] = status
+
+
 # Impact velocities (the relative velocity at contact onset, the prior-impact velocity of the
 # seed's Table 2) and the restitution of each episode: ``episodes`` has a row per contact with
 # the onset velocity [m/s] and the restitution [-] of its current episode (NaN: fixed
