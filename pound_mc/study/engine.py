@@ -129,15 +129,9 @@ def load_traces(study) -> list:
     return out
 
 
-#: Simulations :meth:`StudyEngine.calibrate` times at least, unless told a number.
-CALIBRATION_SIZE = 64
-#: Seconds the timed calibration run lasts at least, unless told a number [s].
-CALIBRATION_MIN_S = 1.0
-
-
-def _spread(total: int, n: int) -> np.ndarray:
-    """``n`` flat indices spread evenly over ``range(total)`` (fewer where they coincide)."""
-    return np.unique(np.linspace(0, total - 1, max(1, min(n, total))).round().astype(np.int64))
+#: :meth:`StudyEngine.calibrate` times at least this many simulations, and for at least
+#: this long [s], unless told a number.
+CALIBRATION_SIZE, CALIBRATION_MIN_S = 64, 1.0
 
 
 class StudyEngine:
@@ -498,30 +492,19 @@ class StudyEngine:
         return out
 
     def calibrate(
-        self,
-        workers: int | None = None,
-        n: int | None = None,
-        budget_s: float = 20.0,
+        self, workers: int | None = None, n: int | None = None, budget_s: float = 20.0,
         min_s: float = CALIBRATION_MIN_S,
-    ) -> tuple[float, float, int]:
+    ) -> tuple[float, float, int]:  # fmt: skip
         """Time a short run of simulations spread evenly over the study.
 
-        ``n`` simulations, or with ``n`` None at least :data:`CALIBRATION_SIZE` and as many
-        more as make the timed run last ``min_s`` seconds (or the whole study): a short run
-        overstates the time per simulation, since the thread start-up and the linear
-        response a study's samples share before their first contact are then spread over
-        few simulations (``studies/benchmark.toml`` on 2 threads: 64 simulations gave
-        1.7 times the run's time per simulation).  Fewer are run when the first (after
-        compilation) shows that they would take more than ``budget_s`` seconds.
-
-        Returns
-        -------
-        seconds_per_simulation : float
-            Measured after compilation, with ``workers`` threads.
-        compile_seconds : float
-            Time of the first (compiling, or cache-loading) call.
-        timed : int
-            The number of simulations timed.
+        ``n`` simulations; ``None``: :data:`CALIBRATION_SIZE`, then as many more as last
+        ``min_s`` seconds (or the whole study), since a short run overstates the time per
+        simulation (thread start-up, and the linear response samples share before their
+        first contact, spread over few: ``studies/benchmark.toml`` on 2 threads, 64 gave 1.7
+        times the run's).  Fewer when the first (after compilation) shows that they would
+        take more than ``budget_s`` seconds.  Returns the seconds per simulation (after
+        compilation, ``workers`` threads), those of the first call (compiling, or loading
+        numba's cache) and the number timed.
         """
         total = self.study.n_simulations
         grow = n is None
@@ -529,22 +512,20 @@ class StudyEngine:
         with numba_threads(workers):
             t0 = time.perf_counter()
             self.run_indices(np.zeros(1, dtype=np.int64))  # compile (or load numba's cache)
-            t1 = time.perf_counter()
-            n = int(max(1, min(n, budget_s / max(t1 - t0, 1e-9))))
+            first_s = time.perf_counter() - t0
+            n = int(max(1, min(n, budget_s / max(first_s, 1e-9))))
             while True:
-                indices = _spread(total, n)
+                indices = np.unique(np.linspace(0, total - 1, n).round().astype(np.int64))
                 t1 = time.perf_counter()
                 self.run_indices(indices)
                 elapsed = time.perf_counter() - t1
                 per_sim = elapsed / indices.size
-                if not grow or elapsed >= min_s or indices.size >= total:
-                    break
-                # enough to last min_s at this rate (and no more than the budget allows)
+                # enough to last min_s at this rate, within the budget
                 want = min(total, 2 * min_s / per_sim, budget_s / per_sim)
-                if want <= 1.5 * indices.size:
+                if not grow or elapsed >= min_s or want <= 1.5 * indices.size:
                     break
                 n = int(want)
-        return per_sim, t1 - t0, int(indices.size)
+        return per_sim, first_s, int(indices.size)
 
     # -- dataset ----------------------------------------------------------------------------
     def dataset_parameters(self) -> dict[str, tuple[tuple[str, ...], np.ndarray]]:
