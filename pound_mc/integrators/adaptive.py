@@ -132,6 +132,19 @@ def _exact_step(q, v, q1, v1, coef, regular, p0s, p1s, omega, zeta, gamma, hh):
 
 
 @jit(inline=True)
+def _penetrations(q, v, psi_t, clo, chi, gap, d, dd):
+    """Every contact's penetration and its rate at state ``q, v`` into ``d, dd``.
+
+    Over the transposed contact rows and their spans
+    (:func:`~pound_mc.integrators.toolkit.matvec_spans`: the same numbers as ``rowdot``).
+    """
+    matvec_spans(psi_t, q, d, clo, chi)
+    matvec_spans(psi_t, v, dd, clo, chi)
+    for c in range(gap.size):
+        d[c] -= gap[c]
+
+
+@jit(inline=True)
 def _screen_onsets(q, v, q1, v1, p0s, slope, s, hh, dc0, ddc0, dc1, ddc1, omega, zeta, gamma,
                    psi, psi_t, clo, chi, gap):  # fmt: skip
     """First contact onset inside a linear step: ``(contact, time)``, ``(-1, inf)`` for none.
@@ -142,12 +155,10 @@ def _screen_onsets(q, v, q1, v1, p0s, slope, s, hh, dc0, ddc0, dc1, ddc1, omega,
     """
     tau_on = np.inf
     c_on = -1
-    matvec_spans(psi_t, q1, dc1, clo, chi)
-    matvec_spans(psi_t, v1, ddc1, clo, chi)
+    _penetrations(q1, v1, psi_t, clo, chi, gap, dc1, ddc1)
     for c in range(gap.size):
         d0 = dc0[c]
         dd0 = ddc0[c]
-        dc1[c] -= gap[c]
         d1 = dc1[c]
         dd1 = ddc1[c]
         crossing = d1 > 0.0
@@ -541,9 +552,7 @@ def adaptive(
                     hh = tau_on
                     p1s = ag0 + slope * (s + hh)
                     _exact_step(q, v, q1, v1, coef, False, p0s, p1s, omega, zeta, gamma, hh)
-                    for c in range(nc):
-                        dc1[c] = rowdot(psi, c, q1) - gap[c]
-                        ddc1[c] = rowdot(psi, c, v1)
+                    _penetrations(q1, v1, psi_t, clo, chi, gap, dc1, ddc1)
                 if not lean:
                     end_values(q1, v1, p1s, omega, zeta, gamma, en1)
                     de_in, de_d = _linear_energies(hh, p0s, p1s, slope, en0, en1)

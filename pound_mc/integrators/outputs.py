@@ -86,8 +86,8 @@ IMPACT_MIN_PENETRATION_M = 1.0e-9
 # the run mode, the record interval reached, input and damping energy, steps and initial
 # energy, then ``q`` (n), ``v`` (n) and the floors' peaks (nf).  Mode 1: run linearly to the
 # first contact onset and leave the state at the start of that interval; mode 2: resume;
-# mode 3 (SDOF-pair ``adaptive``): resume for the peak force alone (the accuracy check's finer
-# run): no energies, floor peaks or other outputs, the same trajectory and peak force.
+# mode 3 (``adaptive``, both kernels): resume for the peak force alone (the accuracy check's
+# finer run): no energies, floor peaks or other outputs, the same trajectory and peak force.
 PRE_MODE, PRE_INTERVAL, PRE_E_IN, PRE_E_D, PRE_STEPS, PRE_E0, PRE_STATE = range(7)
 PRE_RUN_TO_CONTACT, PRE_RESUME, PRE_RESUME_PEAK = 1, 2, 3
 

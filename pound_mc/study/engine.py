@@ -519,7 +519,7 @@ class StudyEngine:
                 t1 = time.perf_counter()
                 self.run_indices(indices)
                 elapsed = time.perf_counter() - t1
-                per_sim = elapsed / indices.size
+                per_sim = max(elapsed, 1e-9) / indices.size
                 # enough to last min_s at this rate, within the budget
                 want = min(total, 2 * min_s / per_sim, budget_s / per_sim)
                 if not grow or elapsed >= min_s or want <= 1.5 * indices.size:
