@@ -36,8 +36,8 @@ try:
 except ImportError:  # Windows: numba's own, unlocked index update
     fcntl = None
 
-import numba
-from numba.core import caching, config
+from numba.core import caching, config, types
+from numba.core.registry import CPUDispatcher
 
 _OPTIONS = {"nogil": True, "error_model": "numpy"}
 
@@ -170,6 +170,23 @@ def _inline_unless_scalar_kernel(expr, caller_info, callee_info) -> bool:
     return func_ir.func_id.modname not in SCALAR_KERNEL_MODULES
 
 
+class _Dispatcher(CPUDispatcher):
+    """numba's CPU dispatcher that compiles a call from compiled code for plain types only.
+
+    numba compiles a helper once per distinct argument type, and a constant argument (the
+    ``0`` of a variable's first value, a ``which`` flag) is a literal type of its own: without
+    this, a kernel compiled most of its helpers twice (the contact-law family for the literal
+    ``phase = 0`` and again for ``int64``).  The arithmetic is the same (LLVM propagates the
+    constants after linking), so results are bitwise unchanged.
+    """
+
+    def get_call_template(self, args, kws):
+        """The call template of numba's dispatcher, for the arguments' non-literal types."""
+        args = tuple(types.unliteral(a) for a in args)
+        kws = {k: types.unliteral(a) for k, a in kws.items()}
+        return super().get_call_template(args, kws)
+
+
 def jit(func=None, *, parallel: bool = False, inline: bool = False):
     """Compile ``func`` with the project's numba options (usable with or without arguments).
 
@@ -184,7 +201,9 @@ def jit(func=None, *, parallel: bool = False, inline: bool = False):
         options["inline"] = _inline_unless_scalar_kernel
 
     def decorate(f):
-        return _enable_cache(numba.njit(**options)(f), f)
+        if config.DISABLE_JIT:
+            return f
+        return _enable_cache(_Dispatcher(py_func=f, locals={}, targetoptions=options), f)
 
     if func is None:
         return decorate
