@@ -11,7 +11,9 @@ else ``~/.cache/pound-mc`` (numba's own ``NUMBA_CACHE_DIR``, when set, takes pre
 Entries are keyed by a hash of the package's compiled sources, so a fresh clone, a reinstall or
 a new Dask worker of the same version finds the kernels already compiled, while any edit of a
 kernel source compiles afresh.  Where that directory cannot be written, numba's default (a
-``__pycache__`` beside the source) is used.
+``__pycache__`` beside the source) is used.  The helpers' versions that only compiled code
+calls (no Python wrapper, :class:`_Dispatcher`) are kept under ``calls/`` there (never beside
+the source, where their file names would clash).
 
 What survives: a fresh clone, a reinstall (editable or not) and a new Dask worker of the same
 source on the same machine, or with the same cache directory mounted, find the kernels
@@ -36,10 +38,11 @@ try:
 except ImportError:  # Windows: numba's own, unlocked index update
     fcntl = None
 
-from numba.core import caching, config, types
+from numba.core import caching, config, sigutils, types
 from numba.core.registry import CPUDispatcher
 
-_OPTIONS = {"nogil": True, "error_model": "numpy"}
+#: ``no_cfunc_wrapper``: no kernel is passed to compiled code as a first-class function.
+_OPTIONS = {"nogil": True, "error_model": "numpy", "no_cfunc_wrapper": True}
 
 _PACKAGE = Path(__file__).resolve().parent
 
@@ -95,8 +98,21 @@ class _SharedCacheLocator(caching._SourceFileBackedLocatorMixin, caching._CacheL
         return super().from_function(py_func, py_file)
 
 
+class _CallsCacheLocator(_SharedCacheLocator):
+    """The compiled callers' versions (:class:`_Dispatcher`) under ``<source key>/calls``."""
+
+    def __init__(self, py_func, py_file):
+        super().__init__(py_func, py_file)
+        relative = Path(py_file).resolve().parent.relative_to(_PACKAGE)
+        self._cache_path = str(cache_root() / "numba" / source_key() / "calls" / relative)
+
+
 class _SharedCacheImpl(caching.CompileResultCacheImpl):
     _locator_classes = [_SharedCacheLocator, *caching.CompileResultCacheImpl._locator_classes]
+
+
+class _CallsCacheImpl(caching.CompileResultCacheImpl):
+    _locator_classes = [_CallsCacheLocator]  # never numba's places: their file names clash
 
 
 class _SharedFunctionCache(caching.FunctionCache):
@@ -135,6 +151,10 @@ class _SharedFunctionCache(caching.FunctionCache):
                 fcntl.flock(handle, fcntl.LOCK_UN)
 
 
+class _CallsFunctionCache(_SharedFunctionCache):
+    _impl_class = _CallsCacheImpl
+
+
 def _enable_cache(dispatcher, func):
     if not hasattr(dispatcher, "enable_caching"):  # NUMBA_DISABLE_JIT: a plain function
         return dispatcher
@@ -142,6 +162,9 @@ def _enable_cache(dispatcher, func):
         dispatcher._cache = _SharedFunctionCache(func)
     except Exception:  # noqa: BLE001  (numba's own cache beside the source instead)
         dispatcher.enable_caching()
+    if dispatcher._called is not None:
+        with contextlib.suppress(Exception):  # no place of its own: compiled in every process
+            dispatcher._called._cache = _CallsFunctionCache(func)
     return dispatcher
 
 
@@ -171,14 +194,21 @@ def _inline_unless_scalar_kernel(expr, caller_info, callee_info) -> bool:
 
 
 class _Dispatcher(CPUDispatcher):
-    """numba's CPU dispatcher that compiles a call from compiled code for plain types only.
+    """numba's CPU dispatcher, compiling the calls from compiled code for plain types only.
 
-    numba compiles a helper once per distinct argument type, and a constant argument (the
-    ``0`` of a variable's first value, a ``which`` flag) is a literal type of its own: without
-    this, a kernel compiled most of its helpers twice (the contact-law family for the literal
-    ``phase = 0`` and again for ``int64``).  The arithmetic is the same (LLVM propagates the
-    constants after linking), so results are bitwise unchanged.
+    A constant argument (the ``0`` of a variable's first value, a ``which`` flag) is a literal
+    type of its own: without this, a kernel compiled most of its helpers twice (the
+    contact-law family for the literal ``phase = 0`` and again for ``int64``).  The arithmetic
+    is the same (LLVM propagates the constants after linking), so results are bitwise
+    unchanged.
+
+    A helper (``jit`` without ``entry``) has a twin, ``_called``, that the calls from compiled
+    code type as: it compiles without the Python wrapper, which a helper never needs (building
+    the wrappers took about a third of a first run's compile), and takes over a version
+    already compiled for Python.  Its cache entries live apart (:class:`_CallsCacheLocator`).
     """
+
+    _called = None
 
     def get_call_template(self, args, kws):
         """The call template of numba's dispatcher, for the arguments' non-literal types."""
@@ -186,13 +216,34 @@ class _Dispatcher(CPUDispatcher):
         kws = {k: types.unliteral(a) for k, a in kws.items()}
         return super().get_call_template(args, kws)
 
+    @property
+    def _numba_type_(self):
+        return types.Dispatcher(self if self._called is None else self._called)
 
-def jit(func=None, *, parallel: bool = False, inline: bool = False):
+
+class _CalledDispatcher(_Dispatcher):
+    """The twin of a helper's dispatcher that compiled callers call (no Python wrapper)."""
+
+    def __init__(self, python, options):
+        super().__init__(python.py_func, python.locals, options)
+        self._python = python
+
+    def compile(self, sig):
+        """Compile ``sig``, or take over the Python side's version of it."""
+        args, _ = sigutils.normalize_signature(sig)
+        shared = self._python.overloads.get(tuple(args))
+        if shared is not None and tuple(args) not in self.overloads:
+            self.add_overload(shared)
+        return super().compile(sig)
+
+
+def jit(func=None, *, parallel: bool = False, inline: bool = False, entry: bool = False):
     """Compile ``func`` with the project's numba options (usable with or without arguments).
 
     ``inline=True`` inlines a small helper into its callers at numba's IR level (hot helpers
     of the integrators), except into :data:`SCALAR_KERNEL_MODULES`; it still works when called
-    from Python.
+    from Python.  ``entry=True``: a kernel that Python calls as well as compiled code (one
+    version, with its Python wrapper, for both; see :class:`_Dispatcher`).
     """
     options = dict(_OPTIONS)
     if parallel:
@@ -203,7 +254,11 @@ def jit(func=None, *, parallel: bool = False, inline: bool = False):
     def decorate(f):
         if config.DISABLE_JIT:
             return f
-        return _enable_cache(_Dispatcher(py_func=f, locals={}, targetoptions=options), f)
+        dispatcher = _Dispatcher(f, {}, options)
+        if not entry:
+            options_called = {**options, "no_cpython_wrapper": True}
+            dispatcher._called = _CalledDispatcher(dispatcher, options_called)
+        return _enable_cache(dispatcher, f)
 
     if func is None:
         return decorate

@@ -13,7 +13,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from numba import types
 
+from pound_mc._jit import jit
 from pound_mc.cli import main
 from pound_mc.numerics import bench
 from pound_mc.scene import load_scene, simulate
@@ -119,6 +121,36 @@ def test_check_says_compile_time_is_excluded(make_study, capsys):
     out = capsys.readouterr().out
     assert "estimated :" in out
     assert "compile time not included" in out
+
+
+@jit
+def _scaled(x, k):
+    return x * k
+
+
+@jit(entry=True)
+def _shifted(x, k):
+    return x + k
+
+
+@jit
+def _two_calls(x):
+    # literal arguments 0 and 1: one compiled version of each callee, for int64
+    return _scaled(x, 0) + _scaled(x, 1) + _shifted(x, 0) + _shifted(x, 1)
+
+
+def test_helpers_compile_once_for_plain_types():
+    assert _two_calls(2.0) == 2.0 + 2.0 + 3.0  # 2*0 + 2*1 + (2+0) + (2+1)
+    plain = (types.float64, types.int64)
+    # a helper: one version, without the Python wrapper, in its twin; none for Python yet
+    assert list(_scaled._called.overloads) == [plain]
+    assert _scaled.overloads == {}
+    assert _scaled(2.0, 3) == 6.0  # a Python call compiles the wrapped version
+    assert list(_scaled.overloads) == [plain]
+    # an entry: the same version for compiled callers and for Python
+    assert list(_shifted.overloads) == [plain]
+    assert _shifted(2.0, 3) == 5.0
+    assert len(_shifted.overloads) == 1
 
 
 def test_textbook_newmark_matches_the_package_scheme():

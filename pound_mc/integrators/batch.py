@@ -111,7 +111,7 @@ def _endless(ag, dt_rec, settings):
     return not (dt_s > 0.0) or (ag.size - 1) * dt_rec / dt_s > MAX_STEPS
 
 
-@jit
+@jit(entry=True)
 def _run_adaptive(
     ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi, settings,
     q, v, out, cout, hx, hd, hf, pre,
@@ -153,7 +153,7 @@ def _is_sdof_pair(omega, gap, phi) -> bool:
     )  # fmt: skip
 
 
-@jit
+@jit(entry=True)
 def _run_fixed(
     ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi, settings,
     q, v, out, cout, hx, hd, hf, pre,
