@@ -39,6 +39,7 @@ except ImportError:  # Windows: numba's own, unlocked index update
     fcntl = None
 
 from numba.core import caching, config, sigutils, types
+from numba.core.compiler_lock import global_compiler_lock
 from numba.core.registry import CPUDispatcher
 
 #: ``no_cfunc_wrapper``: no kernel is passed to compiled code as a first-class function.
@@ -230,11 +231,12 @@ class _CalledDispatcher(_Dispatcher):
 
     def compile(self, sig):
         """Compile ``sig``, or take over the Python side's version of it."""
-        args, _ = sigutils.normalize_signature(sig)
-        shared = self._python.overloads.get(tuple(args))
-        if shared is not None and tuple(args) not in self.overloads:
-            self.add_overload(shared)
-        return super().compile(sig)
+        with global_compiler_lock:
+            args, _ = sigutils.normalize_signature(sig)
+            shared = self._python.overloads.get(tuple(args))
+            if shared is not None and tuple(args) not in self.overloads:
+                self.add_overload(shared)
+            return super().compile(sig)
 
 
 def jit(func=None, *, parallel: bool = False, inline: bool = False, entry: bool = False):

@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from numba import types
+from numba.core.caching import NullCache
 
 from pound_mc._jit import jit
 from pound_mc.cli import main
@@ -140,6 +141,10 @@ def _two_calls(x):
 
 
 def test_helpers_compile_once_for_plain_types():
+    for f in (_scaled, _shifted, _two_calls):  # compiled here, never loaded from a cache
+        f._cache = NullCache()
+        if f._called is not None:
+            f._called._cache = NullCache()
     assert _two_calls(2.0) == 2.0 + 2.0 + 3.0  # 2*0 + 2*1 + (2+0) + (2+1)
     plain = (types.float64, types.int64)
     # a helper: one version, without the Python wrapper, in its twin; none for Python yet
