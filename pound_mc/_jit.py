@@ -12,8 +12,9 @@ Entries are keyed by a hash of the package's compiled sources, so a fresh clone,
 a new Dask worker of the same version finds the kernels already compiled, while any edit of a
 kernel source compiles afresh.  Where that directory cannot be written, numba's default (a
 ``__pycache__`` beside the source) is used.  The helpers' versions that only compiled code
-calls (no Python wrapper, :class:`_Dispatcher`) are kept under ``calls/`` there (never beside
-the source, where their file names would clash).
+calls (no Python wrapper, :class:`_Dispatcher`) are kept under ``calls/`` in the user cache
+directory; where numba's own place is used instead, they are not cached (their file names
+would clash there), which costs nothing once the kernels that call them are cached.
 
 What survives: a fresh clone, a reinstall (editable or not) and a new Dask worker of the same
 source on the same machine, or with the same cache directory mounted, find the kernels
