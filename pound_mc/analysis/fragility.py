@@ -400,9 +400,8 @@ def fit_fragility(
         "add stronger stripes",
         "all": "every simulation has the event: the median lies below the lowest intensity; "
         "add weaker stripes",
-        "separated": "the stripes are separated (every stripe up to one intensity has no event "
-        "and every stripe above it has only events), so the dispersion cannot be identified "
-        "(it tends to 0); add stripes or simulations in the transition",
+        "separated": "the stripes are separated (no event below one intensity, only events "
+        "above it): the dispersion tends to 0; add stripes near it",
         "decreasing": "the event fraction does not increase with the intensity, so no "
         "lognormal fragility fits (the dispersion tends to infinity)",
         "not converged": "the likelihood maximisation did not converge",
