@@ -77,11 +77,16 @@ def source_key() -> str:
 class _SharedCacheLocator(caching._SourceFileBackedLocatorMixin, caching._CacheLocator):
     """Cache files under ``cache_root()/numba/<source key>/<module folder>``."""
 
+    #: Folders between the source key and the module folder.
+    _folders: tuple[str, ...] = ()
+
     def __init__(self, py_func, py_file):
         self._py_file = py_file
         self._lineno = py_func.__code__.co_firstlineno
         relative = Path(py_file).resolve().parent.relative_to(_PACKAGE)
-        self._cache_path = str(cache_root() / "numba" / source_key() / relative)
+        self._cache_path = str(
+            cache_root().joinpath("numba", source_key(), *self._folders, relative)
+        )
 
     def get_cache_path(self):
         return self._cache_path
@@ -103,10 +108,7 @@ class _SharedCacheLocator(caching._SourceFileBackedLocatorMixin, caching._CacheL
 class _CallsCacheLocator(_SharedCacheLocator):
     """The compiled callers' versions (:class:`_Dispatcher`) under ``<source key>/calls``."""
 
-    def __init__(self, py_func, py_file):
-        super().__init__(py_func, py_file)
-        relative = Path(py_file).resolve().parent.relative_to(_PACKAGE)
-        self._cache_path = str(cache_root() / "numba" / source_key() / "calls" / relative)
+    _folders = ("calls",)
 
 
 class _SharedCacheImpl(caching.CompileResultCacheImpl):
@@ -233,9 +235,9 @@ class _CalledDispatcher(_Dispatcher):
     def compile(self, sig):
         """Compile ``sig``, or take over the Python side's version of it."""
         with global_compiler_lock:
-            args, _ = sigutils.normalize_signature(sig)
-            shared = self._python.overloads.get(tuple(args))
-            if shared is not None and tuple(args) not in self.overloads:
+            args = tuple(sigutils.normalize_signature(sig)[0])
+            shared = self._python.overloads.get(args)
+            if shared is not None and args not in self.overloads:
                 self.add_overload(shared)
             return super().compile(sig)
 
