@@ -237,6 +237,66 @@ def _energy_step(hh, slope, p0s, p1s, start, q0, q1, v0, v1, km):
 
 
 @jit(inline=True)
+def _quiet_start():
+    """The sums of an empty run of whole linear steps (:func:`_quiet_add`).
+
+    ``(n, s_in, s_d, pin, pd, sgv, slope, p, dpin0, dpd0, jumps)``: steps; the trapezoidal sums
+    of input and damping power (times 2); the two powers, ``sum g v``, the slope and the ground
+    acceleration at the run's last point; the rates of the input and damping powers at its
+    first point; the jumps of the input power's rate at record samples.
+    """
+    return (0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+
+
+@jit(inline=True)
+def _quiet_add(run, hh, slope, p0s, p1s, start, nv0, nv1, km):
+    """The sums of :func:`_quiet_start` after one more whole step ``hh`` [s] to ``nv0, nv1``.
+
+    The corrected trapezoidal rule of :func:`_energy_step`, step after step, is the plain
+    trapezoidal sum plus ``h^2 / 12`` times the power's rate at the run's start less its rate at
+    the run's end: the rates at the points between cancel, except the input power's at record
+    samples, where the ground acceleration's slope changes (its jump times ``sum g v``).  So a
+    step needs the powers only, not the accelerations (``start``: the sums of :func:`_ends` at
+    the run's first point, ``p0s`` its ground acceleration).
+    """
+    n, s_in, s_d, pin, pd, sgv, slope0, p, dpin0, dpd0, jumps = run
+    if n == 0:
+        pin = -p0s * start[0]
+        pd = start[2]
+        dpin0 = -(slope * start[0] + p0s * start[1])
+        dpd0 = start[3]
+    elif slope != slope0:
+        jumps += (slope - slope0) * sgv
+    k0, ww0, g0, k1, ww1, g1, zw2_0, zw2_1, zw4_0, zw4_1 = km
+    sgv = g0 * nv0
+    sgv += g1 * nv1
+    pin1 = -p1s * sgv
+    pd1 = zw2_0 * nv0 * nv0
+    pd1 += zw2_1 * nv1 * nv1
+    s_in += hh * (pin + pin1)
+    s_d += hh * (pd + pd1)
+    return (n + 1, s_in, s_d, pin1, pd1, sgv, slope, p1s, dpin0, dpd0, jumps)
+
+
+@jit(inline=True)
+def _quiet_close(run, e_in, e_d, en0, q0, q1, v0, v1, km, h):
+    """Energies and the next step's ``start`` sums after a run, and an empty run.
+
+    ``q0, q1, v0, v1``: the state at the run's last point; ``h`` the whole step [s].  Without
+    a step in the run, everything is returned as it was.
+    """
+    n, s_in, s_d, pin, pd, sgv, slope, p, dpin0, dpd0, jumps = run
+    if n == 0:
+        return e_in, e_d, en0, run
+    end = _ends(q0, q1, v0, v1, p, km)
+    dpin1 = -(slope * end[0] + p * end[1])
+    h12 = h * h * _TWELFTH
+    e_in += 0.5 * s_in + h12 * (dpin0 - dpin1 - jumps)
+    e_d += 0.5 * s_d + h12 * (dpd0 - end[3])
+    return e_in, e_d, end, _quiet_start()
+
+
+@jit(inline=True)
 def _stage(q0, q1, v0, v1, ag, k0, ww0, g0, k1, ww1, g1, ps0, ps1, gp, b, cd, zhd, phase,
            model):  # fmt: skip
     """Contact force [N], penetration rate [m/s] and modal accelerations at one state."""
@@ -493,10 +553,14 @@ def adaptive_pair(
             # onset, no turning penetration, no floor extremum; the same arithmetic as the
             # general linear step below, which takes the others (from the grid point this loop
             # stops at).  A loop of its own: its state stays in registers (B1: the linear
-            # phases 2.5 times faster than as a branch of the interval loop)
+            # phases 2.5 times faster than as a branch of the interval loop).  Its energies are
+            # the general step's corrected trapezoidal rule summed over the run (_quiet_add)
+            run = _quiet_start()
             while i < npts - 1:
                 if k_grid == 0:  # a new record interval
                     if mode == PRE_RUN_TO_CONTACT:
+                        e_in, e_d, en0, run = _quiet_close(run, e_in, e_d, en0, q0, q1, v0, v1,
+                                                           km, h)  # fmt: skip
                         _snapshot_pair(pre, i, e_in, e_d, steps, e0, q0, q1, v0, v1, pk0, pk1)
                     if store:
                         _store_pair(i, q0, q1, v0, v1, f0, f1, ps0, ps1, gp, b, cd, zhd, phase,
@@ -528,10 +592,7 @@ def adaptive_pair(
                     break  # the general step below takes this grid step
                 steps += 1
                 if not lean:
-                    de_in, de_d, en0 = _energy_step(hh, slope, p0s, p1s, en0, nq0, nq1, nv0, nv1,
-                                                    km)  # fmt: skip
-                    e_in += de_in
-                    e_d += de_d
+                    run = _quiet_add(run, hh, slope, p0s, p1s, en0, nv0, nv1, km)
                     pk0 = max(pk0, abs(xb0))
                     pk1 = max(pk1, abs(xb1))
                     xf0, xfd0, xf1, xfd1 = xb0, xdb0, xb1, xdb1
@@ -547,6 +608,8 @@ def adaptive_pair(
                     s = 0.0
                     k_grid = 0
                     i += 1
+            if not lean:
+                e_in, e_d, en0, run = _quiet_close(run, e_in, e_d, en0, q0, q1, v0, v1, km, h)
             if status != 0 or i >= npts - 1:
                 break
         else:
