@@ -71,6 +71,9 @@ _TWELFTH = 1.0 / 12.0
 #: Contact onset located to this fraction of the step [-] (1e-12 of a 0.01 s step: the
 #: penetration at the located onset is ~1e-14 v0, far below anything the contact phase resolves).
 ONSET_TOL = 1e-12
+#: An onset within this fraction of the step from the cubic Hermite guess is the root of the
+#: second-order Taylor polynomial at the guess (:func:`_exact_root_pair`).
+QUADRATIC_ROOT_SPAN = 1e-4
 _JANKOWSKI = laws.LAW_CODES["jankowski"]
 #: Sub-steps after onset grow geometrically from ``RAMP_START`` of the contact sub-step by a
 #: factor ``1 + RAMP_GROWTH``; Jankowski's approach phase integrates ``u = v + psi D(delta)``
@@ -148,9 +151,18 @@ def _exact_root_pair(
     t = guess
     if not (lo < t < hi):
         t = 0.5 * (lo + hi)
-    for _ in range(60):
+    for it in range(60):
         d, dd, ddd = _exact_pen(q0, q1, v0, v1, p0s, slope, t, w0, z0, g0, w1, z1, g1, c0, c1,
                                 off)  # fmt: skip
+        if it == 0 and which == 0 and dd > 0.0:
+            # the guess (cubic Hermite) is close: the root of the Taylor polynomial at it,
+            # d + dd x + ddd x^2 / 2 (two Newton steps from x = 0), is the root to round-off
+            # where |x| <= QUADRATIC_ROOT_SPAN of the bracket's end (the cubic term, third
+            # derivative x^3 / 6, below 1e-18 of the amplitude); one exact evaluation, not four
+            x = -d / dd
+            x -= (d + x * (dd + 0.5 * ddd * x)) / (dd + ddd * x)
+            if abs(x) <= QUADRATIC_ROOT_SPAN * hi and lo <= t + x <= hi:
+                return t + x
         t, lo, hi, done = newton_in_bracket(t, d, dd, ddd, which, lo, hi, tol)
         if done:
             break
@@ -894,7 +906,7 @@ def _contact_bound(hs, d, dd, model, b, cd, zhd, phase, loc_k, loc_c):
     point of the step bounds it); ``loc_c`` is ``LOCAL_DAMPING_SHARE m_eff / substeps``.
     """
     reach = max(dd, 0.0)
-    for k in range(2):
+    for k in range(1 if reach == 0.0 else 2):  # without a rate both points are ``d``
         dk = d + reach * hs if k == 1 else d
         if dk > 0.0:
             e = laws.stored(model, dk, b)
