@@ -109,7 +109,7 @@ def _print_head_to_head(duel, info) -> None:
     for r in duel.itertuples():
         print(f"{r.label:28s} {r.seconds * 1e3:10.3f} {r.x_adaptive:10.2f} "
               f"{r.err_peak_force:17.2e} {r.impacts:7d}")  # fmt: skip
-    print("ratios (time over time):")
+    print("ratios (median over the rounds of the ratio within a round):")
     for name, value in info["ratios"].items():
         print(f"  {name:42s} {value:8.2f}")
     print("set-up of the public call (median over the rounds of simulate() minus the kernel):")
