@@ -587,21 +587,27 @@ def adaptive_pair(
                 d1 = ps0 * nq0 + ps1 * nq1 - gp
                 dd1 = ps0 * nv0 + ps1 * nv1
                 xb0, xdb0, xb1, xdb1 = f0 * nq0, f0 * nv0, f1 * nq1, f1 * nv1
-                # a turning penetration or floor matters only where the bound of its cubic Hermite
-                # says the general step's screen could act (margin and tolerance as there)
+                # a turning penetration matters only where the bound of its cubic Hermite says
+                # the general step's screen could act (margin and tolerance as there)
                 quiet = d1 <= 0.0 and dc0 <= 0.0
                 if quiet and ddc0 > 0.0 and dd1 < 0.0:
                     margin = 0.05 * (abs(ddc0) + abs(dd1)) * hh
                     bnd = max(dc0, d1) + _hermite_spread(dc0, ddc0, d1, dd1, hh)
                     quiet = bnd < -margin * (1.0 + 1e-9)
-                if quiet and not lean and (xfd0 > 0.0) != (xdb0 > 0.0):
-                    bnd = max(abs(xf0), abs(xb0)) + _hermite_spread(xf0, xfd0, xb0, xdb0, hh)
-                    quiet = bnd * (1.0 + herm_tol + 1e-9) < pk0
-                if quiet and not lean and (xfd1 > 0.0) != (xdb1 > 0.0):
-                    bnd = max(abs(xf1), abs(xb1)) + _hermite_spread(xf1, xfd1, xb1, xdb1, hh)
-                    quiet = bnd * (1.0 + herm_tol + 1e-9) < pk1
                 if not quiet:
                     break  # the general step below takes this grid step
+                # a floor extremum that may be a new peak: found here as the general step
+                # would (the state does not depend on it)
+                if not lean and (xfd0 > 0.0) != (xdb0 > 0.0):
+                    bnd = max(abs(xf0), abs(xb0)) + _hermite_spread(xf0, xfd0, xb0, xdb0, hh)
+                    if not bnd * (1.0 + herm_tol + 1e-9) < pk0:
+                        pk0 = _floor_peak(f0, 0, xf0, xfd0, xb0, xdb0, pk0, q0, q1, v0, v1, p0s,
+                                          slope, hh, w0, z0, g0, w1, z1, g1, herm_tol)  # fmt: skip
+                if not lean and (xfd1 > 0.0) != (xdb1 > 0.0):
+                    bnd = max(abs(xf1), abs(xb1)) + _hermite_spread(xf1, xfd1, xb1, xdb1, hh)
+                    if not bnd * (1.0 + herm_tol + 1e-9) < pk1:
+                        pk1 = _floor_peak(f1, 1, xf1, xfd1, xb1, xdb1, pk1, q0, q1, v0, v1, p0s,
+                                          slope, hh, w0, z0, g0, w1, z1, g1, herm_tol)  # fmt: skip
                 steps += 1
                 if not lean:
                     run = _quiet_add(run, hh, slope, p0s, p1s, en0, nv0, nv1, km)
