@@ -70,6 +70,8 @@ _INF = math.inf
 _TWELFTH = 1.0 / 12.0
 #: Contact onset located to this fraction of the step [-] (1e-12 of a 0.01 s step: the
 #: penetration at the located onset is ~1e-14 v0, far below anything the contact phase resolves).
+#: What holds in every case is the penetration: at a grazing onset (rate near 0) the time of a
+#: root within round-off of zero may be off by more.
 ONSET_TOL = 1e-12
 #: An onset within this fraction of the step from the cubic Hermite guess is the root of the
 #: second-order Taylor polynomial at the guess (:func:`_exact_root_pair`).
@@ -156,12 +158,14 @@ def _exact_root_pair(
                                 off)  # fmt: skip
         if it == 0 and which == 0 and dd > 0.0:
             # the guess (cubic Hermite) is close: the root of the Taylor polynomial at it,
-            # d + dd x + ddd x^2 / 2 (two Newton steps from x = 0), is the root to round-off
-            # where |x| <= QUADRATIC_ROOT_SPAN of the bracket's end (the cubic term, third
-            # derivative x^3 / 6, below 1e-18 of the amplitude); one exact evaluation, not four
+            # d + dd x + ddd x^2 / 2 (two Newton steps from x = 0; it has a real root), is the
+            # root to round-off where |x| <= QUADRATIC_ROOT_SPAN of the bracket's end (the
+            # cubic term, third derivative x^3 / 6, at most 3e-16 of the amplitude at
+            # omega h = 2 pi / 50); one exact evaluation, not four
             x = -d / dd
             x -= (d + x * (dd + 0.5 * ddd * x)) / (dd + ddd * x)
-            if abs(x) <= QUADRATIC_ROOT_SPAN * hi and lo <= t + x <= hi:
+            real = dd * dd >= 2.0 * d * ddd
+            if real and abs(x) <= QUADRATIC_ROOT_SPAN * hi and lo <= t + x <= hi:
                 return t + x
         t, lo, hi, done = newton_in_bracket(t, d, dd, ddd, which, lo, hi, tol)
         if done:
