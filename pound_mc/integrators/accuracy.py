@@ -26,7 +26,7 @@ building of 100 kg against a 1-s one at zero gap) amplifies it a thousandfold wi
 impacts: the peak force is then off by up to 25 % whatever ``dt_s``.  So the batch runs also
 run every ``adaptive`` simulation that had a contact again with
 :data:`ADAPTIVE_SUBSTEPS_FACTOR` times the sub-steps (the same step doubling, on the contact
-sub-steps; 1.5 to 1.85 times the cost of the run alone where every run pounds) and flag the ones
+sub-steps; 1.5 to 2.1 times the cost of the run alone where every run pounds) and flag the ones
 whose peak force changes by more than :data:`PEAK_FORCE_TOLERANCE`.  That flags also the
 runs whose only contacts are round-off touches (identical buildings at zero gap, penetrations
 of 1e-15 m, no impact counted): their peak force, 1e-11 N, is round-off too.
