@@ -12,9 +12,11 @@ import numpy as np
 import pytest
 
 from pound_mc.integrators import batch, kernel_settings, run_kernel, simulate_sdof_pairs
+from pound_mc.integrators.accuracy import flag_inaccurate
 from pound_mc.integrators.adaptive import adaptive
 from pound_mc.integrators.outputs import (
     CONTACT_OUTPUTS,
+    IMPACTS,
     N_COUT,
     N_OUT,
     OUTPUTS,
@@ -195,6 +197,45 @@ def test_peak_only_pass_gives_the_full_runs_peak_force():
     np.testing.assert_array_equal(peak[:, PEAK_FORCE], full[:, PEAK_FORCE])
     np.testing.assert_array_equal(peak[:, STATUS], full[:, STATUS])
     assert np.isnan(np.delete(peak, [PEAK_FORCE, STATUS], axis=1)).all()
+
+
+def test_check_is_skipped_only_where_its_run_would_be_the_same():
+    # the run says whether the accuracy check's run (twice the sub-steps) would take its very
+    # sub-steps (no bound set by ``substeps`` binding at the finer setting); the batch skips the
+    # check there.  Held to running the finer run anyway: its peak force is bitwise the run's
+    # wherever the run says so.  B1-like pairs at 8 sub-steps: left 0.3 and 0.4 s (contact
+    # sub-steps at most 1/50 of the period, 5 ms, under duration / 16 for the softer contacts),
+    # 0.7 s (the record's 10 ms, over duration / 16 = 8.75 ms on B1)
+    scene = make("b1")
+    dt, acc = record_arrays(scene.load_record())
+    n = 12
+    arrays = [
+        np.repeat([0.3, 0.4, 0.7], 4), np.full(n, 0.05), np.full(n, 1.0e6), np.full(n, 1.0),
+        np.full(n, 0.05), np.full(n, 1.0e6), np.full(n, 0.01),
+        np.tile([1.0e9, 2.75e9, 1.0e10, 2.75e9], 3), np.tile([0.35, 0.2, 0.35, 0.6], 3),
+        np.full(n, 0.01),
+    ]  # fmt: skip
+    every = np.arange(n, dtype=np.int64)
+    runs = {}
+    for substeps in (8, 16):
+        settings = kernel_settings("jankowski", "adaptive", substeps=substeps)
+        shared = np.zeros((n, pre_size(2, 2)))
+        runs[substeps] = np.zeros((n, N_OUT + 1))
+        for mode in (PRE_RUN_TO_CONTACT, PRE_RESUME):
+            batch._sdof_adaptive(acc, dt, *arrays, settings, runs[substeps], every, every,
+                                 shared, mode, 0, n)  # fmt: skip
+    run, finer = runs[8], runs[16]
+    same = run[:, N_OUT] == 1.0
+    assert same.any() and not same.all()  # both kinds among these pairs
+    np.testing.assert_array_equal(finer[same, PEAK_FORCE], run[same, PEAK_FORCE])
+    # the batch flags what running every check flags
+    names = ("left_period_s", "left_damping_ratio", "left_mass_kg", "right_period_s",
+             "right_damping_ratio", "right_mass_kg", "gap_m", "beta", "xi", "dt_s")  # fmt: skip
+    out = simulate_sdof_pairs(acc, dt, **dict(zip(names, arrays, strict=True)), substeps=8)
+    want = flag_inaccurate(run[:, STATUS], run[:, IMPACTS], np.inf, 0.0, run[:, PEAK_FORCE],
+                           finer[:, PEAK_FORCE])  # fmt: skip
+    np.testing.assert_array_equal(out["status"], want)
+    np.testing.assert_array_equal(out["peak_force"], run[:, PEAK_FORCE])
 
 
 def test_no_contact_pair():

@@ -26,6 +26,7 @@ import numpy as np
 
 from pound_mc._jit import jit
 from pound_mc.integrators import laws
+from pound_mc.integrators.accuracy import ADAPTIVE_SUBSTEPS_FACTOR
 from pound_mc.integrators.outputs import (
     C_IMPACTS,
     C_IMPULSE,
@@ -33,6 +34,7 @@ from pound_mc.integrators.outputs import (
     C_MAX_PENETRATION,
     C_PEAK_FORCE,
     IMPACT_MIN_PENETRATION_M,
+    N_OUT,
     PRE_E0,
     PRE_E_D,
     PRE_E_IN,
@@ -124,6 +126,10 @@ LOCAL_PERIOD_SHARE = math.pi * math.sqrt(2.0) / 1.5
 #: damping at ``c h / m_eff`` near 3.4, at its stability limit (extreme drill: peak forces off
 #: by 2 %).  It binds only from ``xi`` about 0.85 (Jankowski; B1, ``xi = 0.35``, unchanged).
 LOCAL_DAMPING_SHARE = 8.0
+#: The accuracy check's run has ``ADAPTIVE_SUBSTEPS_FACTOR`` times the sub-steps: each bound
+#: that depends on ``substeps`` is this fraction of the run's (exactly, the factor being a
+#: power of two), so the run can tell whether the check's run would take its very sub-steps.
+_FINE = 1.0 / ADAPTIVE_SUBSTEPS_FACTOR
 
 
 @jit
@@ -542,6 +548,9 @@ def adaptive_pair(
     herm_tol = 4.0 * (wmax * h) ** 4 / 384.0
     t_onset = 0.0
     budget = 200 * (npts - 1) * m_rk + 1_000_000
+    # whether the accuracy check's run (_FINE times every sub-step bound that depends on
+    # ``substeps``) would take the same sub-steps: then its peak force is this run's, bitwise
+    same_fine = True
     in_contact = False
     fsal = False
     fc_end = ae0 = ae1 = 0.0
@@ -754,7 +763,9 @@ def adaptive_pair(
                         kpot = 0.8 * cd
                     else:
                         zhd = laws.episode_zeta(model, relation, xi0, v0c, zhd)
-                    hc = min(h_rk, laws.duration(model, v0c, b, me) / substeps)
+                    dur = laws.duration(model, v0c, b, me) / substeps
+                    hc = min(h_rk, dur)
+                    same_fine = same_fine and h_rk <= _FINE * dur
                     t_onset = i * dt_rec + s
                     in_contact = True
                     fsal = False
@@ -773,8 +784,9 @@ def adaptive_pair(
                         hs = min(hs, max(-tail * dc / ddc, hc * tail_min))
                 # at the penetration the step may reach (its rate), not only at its start
                 dc = ps0 * q0 + ps1 * q1 - gp
-                hs = _contact_bound(hs, dc, ps0 * v0 + ps1 * v1, model, b, cd, zhd, phase, loc_k,
-                                    loc_c)  # fmt: skip
+                hs, tight = _contact_bound(hs, dc, ps0 * v0 + ps1 * v1, model, b, cd, zhd, phase,
+                                           loc_k, loc_c)  # fmt: skip
+                same_fine = same_fine and not tight
                 if hs >= dt_rec - s or dt_rec - s - hs < 1e-9 * hc:
                     hs = dt_rec - s
                 # the sub-step, and again to the first switch of the force law inside it
@@ -866,7 +878,9 @@ def adaptive_pair(
                             kpot = 0.8 * cd
                         else:
                             zhd = laws.episode_zeta(model, relation, xi0, v0c, zhd)
-                        hc = min(hc, laws.duration(model, v0c, b, me) / substeps)
+                        dur = laws.duration(model, v0c, b, me) / substeps
+                        same_fine = same_fine and hc <= _FINE * dur
+                        hc = min(hc, dur)
                         t_onset = i * dt_rec + s
                     elif kind == 2:
                         phase = 2
@@ -914,6 +928,8 @@ def adaptive_pair(
     finish(out, cout, peaks, side, ph, q, v, omega, e0, e_in, e_d, w_c, stored_energy, peak_f,
            peak_t, steps, status)  # fmt: skip
     finish_impacts(out, cout, vlog, nlog, peak_e)
+    if out.size > N_OUT:  # a slot past the outputs: does the accuracy check's run differ?
+        out[N_OUT] = 1.0 if same_fine else 0.0
 
 
 @jit(inline=True)
@@ -928,7 +944,12 @@ def _contact_bound(hs, d, dd, model, b, cd, zhd, phase, loc_k, loc_c):
     penetration the rate reaches (every law's force is linear in the rate: the force at unit
     rate less the force at rest; ``c`` grows with the penetration in every law, so the deepest
     point of the step bounds it); ``loc_c`` is ``LOCAL_DAMPING_SHARE m_eff / substeps``.
+    Also returns whether the bounds at :data:`_FINE` of these (the accuracy check's run) would
+    shorten ``hs``: they are those bounds times ``_FINE`` exactly, and until one shortens it
+    both runs evaluate them at the same points.
     """
+    hs0 = hs
+    tight = False
     reach = max(dd, 0.0)
     for k in range(1 if reach == 0.0 else 2):  # without a rate both points are ``d``
         dk = d + reach * hs if k == 1 else d
@@ -936,15 +957,17 @@ def _contact_bound(hs, d, dd, model, b, cd, zhd, phase, loc_k, loc_c):
             e = laws.stored(model, dk, b)
             if e > 0.0:
                 hl = loc_k * dk / math.sqrt(e)
+                tight = tight or _FINE * hl < hs0
                 if hl < hs:
                     hs = hl
     dk = d + reach * hs
     if dk > 0.0:
         c = laws.force(model, dk, 1.0, b, cd, zhd, phase)
         c -= laws.force(model, dk, 0.0, b, cd, zhd, phase)
+        tight = tight or c * hs0 > _FINE * loc_c
         if c * hs > loc_c:
             hs = loc_c / c
-    return hs
+    return hs, tight
 
 
 @jit(inline=True)
