@@ -170,20 +170,32 @@ def test_shared_linear_response_in_batches():
             assert close(res[key][k], ref[key], tol), (k, key)
 
 
+#: Argument names of ``simulate_sdof_pairs`` in the order of ``batch._sdof_adaptive``'s arrays.
+PAIR_ARRAYS = ("left_period_s", "left_damping_ratio", "left_mass_kg", "right_period_s",
+               "right_damping_ratio", "right_mass_kg", "gap_m", "beta", "xi", "dt_s")  # fmt: skip
+
+
+def b1_like_pairs(left_periods, gaps):
+    """B1-like SDOF pairs (``PAIR_ARRAYS``): four contacts per left period, soft to stiff,
+    lightly to heavily damped, with ``gaps`` [m] in turn."""
+    k = len(left_periods)
+    n = 4 * k
+    return [
+        np.repeat(left_periods, 4).astype(float), np.full(n, 0.05), np.full(n, 1.0e6),
+        np.full(n, 1.0), np.full(n, 0.05), np.full(n, 1.0e6), np.tile(gaps, k).astype(float),
+        np.tile([1.0e9, 2.75e9, 1.0e10, 2.75e9], k), np.tile([0.35, 0.2, 0.35, 0.6], k),
+        np.full(n, 0.01),
+    ]  # fmt: skip
+
+
 def test_peak_only_pass_gives_the_full_runs_peak_force():
     # the accuracy check's finer run resumes in pre mode 3: no energies, no floor peaks, which
     # never move the state, so its peak force is bitwise a full run's; every other output NaN.
-    # Left periods 0.3 (two steps per record sample), 0.5, 0.7 s; gaps 0 to 0.02 m; soft to
-    # stiff, lightly to heavily damped contacts
-    scene = make("b1")
-    dt, acc = record_arrays(scene.load_record())
-    n = 12
-    arrays = [
-        np.repeat([0.3, 0.5, 0.7], 4), np.full(n, 0.05), np.full(n, 1.0e6), np.full(n, 1.0),
-        np.full(n, 0.05), np.full(n, 1.0e6), np.tile([0.0, 0.01, 0.01, 0.02], 3),
-        np.tile([1.0e9, 2.75e9, 1.0e10, 2.75e9], 3), np.tile([0.35, 0.2, 0.35, 0.6], 3),
-        np.full(n, 0.01),
-    ]  # fmt: skip
+    # Left periods 0.3 (two contact sub-steps per record sample), 0.5, 0.7 s; gaps 0 to
+    # 0.02 m; soft to stiff, lightly to heavily damped contacts
+    dt, acc = record_arrays(make("b1").load_record())
+    arrays = b1_like_pairs([0.3, 0.5, 0.7], [0.0, 0.01, 0.01, 0.02])
+    n = arrays[0].size
     settings = kernel_settings("jankowski", "adaptive", substeps=32)
     every = np.arange(n, dtype=np.int64)
     shared = np.zeros((n, pre_size(2, 2)))
@@ -206,15 +218,9 @@ def test_check_is_skipped_only_where_its_run_would_be_the_same():
     # wherever the run says so.  B1-like pairs at 8 sub-steps: left 0.3 and 0.4 s (contact
     # sub-steps at most 1/50 of the period, 5 ms, under duration / 16 for the softer contacts),
     # 0.7 s (the record's 10 ms, over duration / 16 = 8.75 ms on B1)
-    scene = make("b1")
-    dt, acc = record_arrays(scene.load_record())
-    n = 12
-    arrays = [
-        np.repeat([0.3, 0.4, 0.7], 4), np.full(n, 0.05), np.full(n, 1.0e6), np.full(n, 1.0),
-        np.full(n, 0.05), np.full(n, 1.0e6), np.full(n, 0.01),
-        np.tile([1.0e9, 2.75e9, 1.0e10, 2.75e9], 3), np.tile([0.35, 0.2, 0.35, 0.6], 3),
-        np.full(n, 0.01),
-    ]  # fmt: skip
+    dt, acc = record_arrays(make("b1").load_record())
+    arrays = b1_like_pairs([0.3, 0.4, 0.7], [0.01] * 4)
+    n = arrays[0].size
     every = np.arange(n, dtype=np.int64)
     runs = {}
     for substeps in (8, 16):
@@ -229,9 +235,7 @@ def test_check_is_skipped_only_where_its_run_would_be_the_same():
     assert same.any() and not same.all()  # both kinds among these pairs
     np.testing.assert_array_equal(finer[same, PEAK_FORCE], run[same, PEAK_FORCE])
     # the batch flags what running every check flags
-    names = ("left_period_s", "left_damping_ratio", "left_mass_kg", "right_period_s",
-             "right_damping_ratio", "right_mass_kg", "gap_m", "beta", "xi", "dt_s")  # fmt: skip
-    out = simulate_sdof_pairs(acc, dt, **dict(zip(names, arrays, strict=True)), substeps=8)
+    out = simulate_sdof_pairs(acc, dt, **dict(zip(PAIR_ARRAYS, arrays, strict=True)), substeps=8)
     want = flag_inaccurate(run[:, STATUS], run[:, IMPACTS], np.inf, 0.0, run[:, PEAK_FORCE],
                            finer[:, PEAK_FORCE])  # fmt: skip
     np.testing.assert_array_equal(out["status"], want)
