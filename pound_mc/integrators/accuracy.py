@@ -26,11 +26,13 @@ building of 100 kg against a 1-s one at zero gap) amplifies it a thousandfold wi
 impacts: the peak force is then off by up to 25 % whatever ``dt_s``.  So the batch runs also
 run every ``adaptive`` simulation that had a contact again with
 :data:`ADAPTIVE_SUBSTEPS_FACTOR` times the sub-steps (the same step doubling, on the contact
-sub-steps; 1.5 to 2.1 times the cost of the run alone where every run pounds) and flag the ones
-whose peak force changes by more than :data:`PEAK_FORCE_TOLERANCE`.  That flags also the
-runs whose only contacts are round-off touches (identical buildings at zero gap, penetrations
-of 1e-15 m, no impact counted): their peak force, 1e-11 N, is round-off too.
-The kernels are not touched: the flag is computed from their outputs.
+sub-steps; 1.5 to 2.1 times the cost of the run alone where every run pounds) and flag the
+ones whose peak force changes by more than :data:`PEAK_FORCE_TOLERANCE`.  An SDOF-pair run
+none of whose sub-steps a bound set by ``substeps`` would shorten at the finer setting is not
+run again: the finer run would take the same sub-steps, its peak force bitwise the run's.
+The check flags also the runs whose only contacts are round-off touches (identical
+buildings at zero gap, penetrations of 1e-15 m, no impact counted): their peak force, 1e-11 N,
+is round-off too.  The flag is computed from the kernels' outputs.
 """
 
 from __future__ import annotations
@@ -59,10 +61,11 @@ MIN_STEPS_PER_CONTACT = 25
 #: is ``inaccurate`` (step doubling): half of the 1 % aimed at, since for a second-order method
 #: the error at ``dt_s`` is about 4/3 of the change, and more where impacts reorder.
 PEAK_FORCE_TOLERANCE = 0.005
-#: ``adaptive``'s check runs with this many times the contact sub-steps: the sub-step error
-#: falls by 4 to 9 times from 16 to 32 sub-steps, so the error at ``substeps`` is at most about
-#: 4/3 of the change, as for step doubling (extreme drill: every run off by more than 1 % is
-#: flagged, none within 1 % is).
+#: ``adaptive``'s check runs with this many times the contact sub-steps (a power of two: the
+#: SDOF-pair kernel's bounds at the finer setting are then its own, scaled exactly): the
+#: sub-step error falls by 4 to 9 times from 16 to 32 sub-steps, so the error at ``substeps``
+#: is at most about 4/3 of the change, as for step doubling (extreme drill: every run off by
+#: more than 1 % is flagged, none within 1 % is).
 ADAPTIVE_SUBSTEPS_FACTOR = 2
 
 
