@@ -763,9 +763,9 @@ def adaptive_pair(
                         kpot = 0.8 * cd
                     else:
                         zhd = laws.episode_zeta(model, relation, xi0, v0c, zhd)
-                    dur = laws.duration(model, v0c, b, me) / substeps
-                    hc = min(h_rk, dur)
-                    same_fine = same_fine and h_rk <= _FINE * dur
+                    hc, same_fine = _episode_substep(
+                        h_rk, laws.duration(model, v0c, b, me) / substeps, same_fine
+                    )
                     t_onset = i * dt_rec + s
                     in_contact = True
                     fsal = False
@@ -878,9 +878,9 @@ def adaptive_pair(
                             kpot = 0.8 * cd
                         else:
                             zhd = laws.episode_zeta(model, relation, xi0, v0c, zhd)
-                        dur = laws.duration(model, v0c, b, me) / substeps
-                        same_fine = same_fine and hc <= _FINE * dur
-                        hc = min(hc, dur)
+                        hc, same_fine = _episode_substep(
+                            hc, laws.duration(model, v0c, b, me) / substeps, same_fine
+                        )
                         t_onset = i * dt_rec + s
                     elif kind == 2:
                         phase = 2
@@ -930,6 +930,16 @@ def adaptive_pair(
     finish_impacts(out, cout, vlog, nlog, peak_e)
     if out.size > N_OUT:  # a slot past the outputs: does the accuracy check's run differ?
         out[N_OUT] = 1.0 if same_fine else 0.0
+
+
+@jit(inline=True)
+def _episode_substep(hc, dur, same_fine):
+    """The contact sub-step [s] of a new episode and whether the check's run still takes it.
+
+    ``hc`` bounded by ``dur`` (the estimated duration over ``substeps``); the accuracy check's
+    run is bounded by ``_FINE dur`` (``same_fine``: it took this run's sub-steps so far).
+    """
+    return min(hc, dur), same_fine and hc <= _FINE * dur
 
 
 @jit(inline=True)

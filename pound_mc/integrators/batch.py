@@ -520,10 +520,10 @@ def simulate_sdof_pairs(
     arrays = np.broadcast_arrays(*[np.asarray(a, dtype=np.float64) for a in arrays])
     arrays = [np.array(a.ravel(), order="C") for a in arrays]  # writable: one compiled type
     nsim = arrays[0].size
-    out = np.empty((nsim, N_OUT))
     acc = np.ascontiguousarray(acc, dtype=np.float64)
     dt_rec = float(dt_rec)
     if settings.method != ADAPTIVE:
+        out = np.empty((nsim, N_OUT))
         _threaded(_sdof_fixed, nsim, acc, dt_rec, *arrays, settings, out)
         fixed_restitution(out, settings, arrays[8])
         half = None
