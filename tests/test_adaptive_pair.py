@@ -19,9 +19,12 @@ from pound_mc.integrators.outputs import (
     IMPACTS,
     N_COUT,
     N_OUT,
+    ONSET_SIZE,
     OUTPUTS,
     PEAK_FORCE,
+    PRE_INTERVAL,
     PRE_RESUME,
+    PRE_RESUME_ONSET,
     PRE_RESUME_PEAK,
     PRE_RUN_TO_CONTACT,
     STATUS,
@@ -240,6 +243,37 @@ def test_check_is_skipped_only_where_its_run_would_be_the_same():
                            finer[:, PEAK_FORCE])  # fmt: skip
     np.testing.assert_array_equal(out["status"], want)
     np.testing.assert_array_equal(out["peak_force"], run[:, PEAK_FORCE])
+
+
+def test_check_run_starts_at_the_last_onset_it_shares_with_the_run():
+    # the run stores its state at each contact onset up to which the check's run (twice the
+    # sub-steps) takes its very sub-steps; the check's run starts from the last one (pre mode
+    # 4) and must give the peak force of a finer run from the shared linear response, to the
+    # bit.  B1-like pairs at 8 sub-steps, left 0.3, 0.4 and 0.7 s as in the test above (some
+    # diverge from the check's run at the first impact, some later, some never)
+    dt, acc = record_arrays(make("b1").load_record())
+    arrays = b1_like_pairs([0.3, 0.4, 0.7], [0.01] * 4)
+    n = arrays[0].size
+    every = np.arange(n, dtype=np.int64)
+    runs = {}
+    shared = np.zeros((n, pre_size(2, 2)))
+    for substeps in (8, 16):
+        settings = kernel_settings("jankowski", "adaptive", substeps=substeps)
+        runs[substeps] = np.zeros((n, N_OUT + 1 + ONSET_SIZE))
+        for mode in (PRE_RUN_TO_CONTACT, PRE_RESUME):
+            batch._sdof_adaptive(acc, dt, *arrays, settings, runs[substeps], every, every,
+                                 shared, mode, 0, n)  # fmt: skip
+    run, finer = runs[8], runs[16]
+    starts = run[:, N_OUT + 1 :]
+    assert (run[:, PEAK_FORCE] > 0.0).all()
+    # the first onset is in the shared interval; some runs start the check's run later
+    assert (starts[:, PRE_INTERVAL] >= shared[:, PRE_INTERVAL]).all()
+    assert (starts[:, PRE_INTERVAL] > shared[:, PRE_INTERVAL]).any()
+    resumed = np.empty((n, N_OUT))
+    batch._sdof_adaptive(acc, dt, *arrays, kernel_settings("jankowski", "adaptive", substeps=16),
+                         resumed, every, every, starts, PRE_RESUME_ONSET, 0, n)  # fmt: skip
+    np.testing.assert_array_equal(resumed[:, PEAK_FORCE], finer[:, PEAK_FORCE])
+    np.testing.assert_array_equal(resumed[:, STATUS], finer[:, STATUS])
 
 
 def test_no_contact_pair():

@@ -29,7 +29,8 @@ run every ``adaptive`` simulation that had a contact again with
 sub-steps; 1.5 to 2.1 times the cost of the run alone where every run pounds) and flag the
 ones whose peak force changes by more than :data:`PEAK_FORCE_TOLERANCE`.  An SDOF-pair run
 none of whose sub-steps a bound set by ``substeps`` would shorten at the finer setting is not
-run again: the finer run would take the same sub-steps, its peak force bitwise the run's.
+run again: the finer run would take the same sub-steps, its peak force bitwise the run's; the
+others start their finer run at the last contact onset up to which it takes the run's sub-steps.
 The check flags also the runs whose only contacts are round-off touches (identical
 buildings at zero gap, penetrations of 1e-15 m, no impact counted): their peak force, 1e-11 N,
 is round-off too.  The flag is computed from the kernels' outputs.

@@ -35,12 +35,18 @@ from pound_mc.integrators.outputs import (
     C_PEAK_FORCE,
     IMPACT_MIN_PENETRATION_M,
     N_OUT,
+    ONSET_CD,
+    ONSET_GRID,
+    ONSET_PEAK,
+    ONSET_S,
+    ONSET_ZHD,
     PRE_E0,
     PRE_E_D,
     PRE_E_IN,
     PRE_INTERVAL,
     PRE_MODE,
     PRE_RESUME,
+    PRE_RESUME_ONSET,
     PRE_RESUME_PEAK,
     PRE_RUN_TO_CONTACT,
     PRE_STATE,
@@ -571,8 +577,13 @@ def adaptive_pair(
     store = hx.shape[0] > 0
     mode = int(pre[PRE_MODE]) if pre.size > 0 else 0
     # the peak force alone: no energies and no floor peaks (neither moves the state)
-    lean = mode == PRE_RESUME_PEAK
+    lean = mode == PRE_RESUME_PEAK or mode == PRE_RESUME_ONSET
+    # past the outputs and their ``same`` slot: where the check's run may start (the state at
+    # the last onset before which the check's run is this one, PRE_RESUME_ONSET)
+    onsets = out.size > N_OUT + 1
     i_first = 0
+    s = 0.0
+    k_grid = 0  # index of the next grid point within the interval
     if mode == PRE_RESUME or lean:
         i_first = int(pre[PRE_INTERVAL])
         e_in = pre[PRE_E_IN]
@@ -581,10 +592,12 @@ def adaptive_pair(
         e0 = pre[PRE_E0]
         q0, q1, v0, v1 = pre[PRE_STATE], pre[PRE_STATE + 1], pre[PRE_STATE + 2], pre[PRE_STATE + 3]
         pk0, pk1 = pre[PRE_STATE + 4], pre[PRE_STATE + 5]
+    if mode == PRE_RESUME_ONSET:  # within the interval, at the start of a linear step
+        s, k_grid, peak_f = pre[ONSET_S], int(pre[ONSET_GRID]), pre[ONSET_PEAK]
+        cd, zhd = pre[ONSET_CD], pre[ONSET_ZHD]
+        kpot = 0.8 * cd
     i = i_first
     while i < npts - 1:
-        s = 0.0
-        k_grid = 0  # index of the next grid point within the interval
         if fresh and not in_contact:
             # ---------------- runs of whole grid steps where nothing happens inside them: no
             # onset, no turning penetration, no floor extremum; the same arithmetic as the
@@ -730,6 +743,9 @@ def adaptive_pair(
                 if onset:
                     if mode == PRE_RUN_TO_CONTACT:
                         return
+                    if onsets and same_fine:  # the check's run is this one up to here
+                        _snapshot_onset(out[N_OUT + 1 :], i, s, k_grid, steps - 1, q0, q1, v0,
+                                        v1, peak_f, cd, zhd)  # fmt: skip
                     p1s = ag0 + slope * (s + hh)
                     nq0, nv0 = advance(q0, v0, -g0 * p0s, -g0 * p1s, w0, z0, hh)
                     nq1, nv1 = advance(q1, v1, -g1 * p0s, -g1 * p1s, w1, z1, hh)
@@ -901,6 +917,8 @@ def adaptive_pair(
         if status != 0:
             break
         i += 1
+        s = 0.0
+        k_grid = 0
     if mode == PRE_RUN_TO_CONTACT:
         # no contact in the whole record: the end state is shared
         _snapshot_pair(pre, npts - 1, e_in, e_d, steps, e0, q0, q1, v0, v1, pk0, pk1)
@@ -1049,6 +1067,17 @@ def _snapshot_pair(pre, i, e_in, e_d, steps, e0, q0, q1, v0, v1, pk0, pk1):
     pre[PRE_STATE + 3] = v1
     pre[PRE_STATE + 4] = pk0
     pre[PRE_STATE + 5] = pk1
+
+
+@jit(inline=True)
+def _snapshot_onset(pre, i, s, k_grid, steps, q0, q1, v0, v1, peak_f, cd, zhd):
+    """A ``PRE_RESUME_ONSET`` start: the state at a linear step's start (peak force alone)."""
+    _snapshot_pair(pre, i, 0.0, 0.0, steps, 0.0, q0, q1, v0, v1, 0.0, 0.0)
+    pre[ONSET_S] = s
+    pre[ONSET_GRID] = k_grid
+    pre[ONSET_PEAK] = peak_f
+    pre[ONSET_CD] = cd
+    pre[ONSET_ZHD] = zhd
 
 
 @jit(inline=True)

@@ -54,10 +54,12 @@ from pound_mc.integrators.outputs import (
     MAX_PENETRATION,
     N_COUT,
     N_OUT,
+    ONSET_SIZE,
     OUTPUTS,
     PEAK_FORCE,
     PRE_MODE,
     PRE_RESUME,
+    PRE_RESUME_ONSET,
     PRE_RESUME_PEAK,
     PRE_RUN_TO_CONTACT,
     STATUS,
@@ -437,9 +439,10 @@ def _sdof_adaptive(ag, dt_rec, tl, zl, ml, tr, zr, mr, gap, beta, xi, dt_s, sett
     A group gathers the simulations that differ only in contact parameters.  With ``mode``
     ``PRE_RUN_TO_CONTACT``, its linear response up to the first contact is run once, from
     member ``index[g]``, into ``shared[g]``; else every simulation ``k`` resumes from
-    ``shared[group[k]]`` in that mode (``PRE_RESUME``, or ``PRE_RESUME_PEAK`` for the peak
-    force alone, :mod:`~pound_mc.integrators.outputs`).  One kernel for every pass: the
-    SDOF-pair kernel is linked into one compiled caller, not several.
+    ``shared[group[k]]`` in that mode (``PRE_RESUME``, or ``PRE_RESUME_PEAK`` and
+    ``PRE_RESUME_ONSET`` for the peak force alone, :mod:`~pound_mc.integrators.outputs`).
+    One kernel for every pass: the SDOF-pair kernel is linked into one compiled caller, not
+    several.
     """
     empty = np.zeros((0, 2))
     empty1 = np.zeros((0, 1))
@@ -544,8 +547,9 @@ def simulate_sdof_pairs(
     shared = np.zeros((first.size, pre_size(2, 2)))
     first = first.astype(np.int64)
     # a slot past the outputs: 1 where the accuracy check's run would take the run's very
-    # sub-steps (adaptive_pair), so that its peak force is known without running it
-    out = np.zeros((nsim, N_OUT + 1))
+    # sub-steps (adaptive_pair), so that its peak force is known without running it; then the
+    # state from which the check's run may start (PRE_RESUME_ONSET: it is the run's up to there)
+    out = np.zeros((nsim, N_OUT + 1 + ONSET_SIZE))
     group = group.ravel().astype(np.int64)
     _threaded(_sdof_adaptive, first.size, acc, dt_rec, *arrays, settings, out, first, group,
               shared, PRE_RUN_TO_CONTACT)  # fmt: skip
@@ -555,10 +559,12 @@ def simulate_sdof_pairs(
     fixed_restitution(out, settings, arrays[8])
     if not accuracy_check:
         return _named(out)
-    # the finer run gives only its peak force (the same as a full run's, faster)
+    # the finer run gives only its peak force (the same as a full run's, faster), from the
+    # last contact onset up to which it is the run
     _check_substeps(out, settings, lambda hit, finer, fine: _threaded(
         _sdof_adaptive, hit.size, acc, dt_rec, *[a[hit] for a in arrays], finer, fine,
-        np.arange(hit.size, dtype=np.int64), group[hit], shared, PRE_RESUME_PEAK,
+        np.arange(hit.size, dtype=np.int64), np.arange(hit.size, dtype=np.int64),
+        out[hit, N_OUT + 1 :], PRE_RESUME_ONSET,
     ), same=out[:, N_OUT] == 1.0)  # fmt: skip
     return _named(out)
 

@@ -97,6 +97,17 @@ def pre_size(n_modes: int, n_floors: int) -> int:
     return PRE_STATE + 2 * n_modes + n_floors
 
 
+# Mode 4 (SDOF-pair ``adaptive``): resume for the peak force alone, as mode 3, from the start of
+# the linear step in which a contact began: the last onset before which the accuracy check's
+# finer run takes the run's very sub-steps, so that the two runs are bitwise the same up to
+# there.  The slots of a pair's ``pre`` are followed by the step's start within its interval,
+# its grid index, the peak force so far and the force law's damping constants (c0 and the
+# episode's damping ratio); the run writes them past its outputs' ``same`` slot.
+PRE_RESUME_ONSET = 4
+ONSET_S, ONSET_GRID, ONSET_PEAK, ONSET_CD, ONSET_ZHD = range(pre_size(2, 2), pre_size(2, 2) + 5)
+ONSET_SIZE = ONSET_ZHD + 1
+
+
 @jit
 def reset_contacts(cout):
     """Initial per-contact outputs: no force, no impact, no penetration yet, no impulse."""
