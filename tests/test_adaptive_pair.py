@@ -214,43 +214,11 @@ def test_peak_only_pass_gives_the_full_runs_peak_force():
     assert np.isnan(np.delete(peak, [PEAK_FORCE, STATUS], axis=1)).all()
 
 
-def test_check_is_skipped_only_where_its_run_would_be_the_same():
-    # the run says whether the accuracy check's run (twice the sub-steps) would take its very
-    # sub-steps (no bound set by ``substeps`` binding at the finer setting); the batch skips the
-    # check there.  Held to running the finer run anyway: its peak force is bitwise the run's
-    # wherever the run says so.  B1-like pairs at 8 sub-steps: left 0.3 and 0.4 s (contact
-    # sub-steps at most 1/50 of the period, 5 ms, under duration / 16 for the softer contacts),
-    # 0.7 s (the record's 10 ms, over duration / 16 = 8.75 ms on B1)
-    dt, acc = record_arrays(make("b1").load_record())
-    arrays = b1_like_pairs([0.3, 0.4, 0.7], [0.01] * 4)
-    n = arrays[0].size
-    every = np.arange(n, dtype=np.int64)
-    runs = {}
-    for substeps in (8, 16):
-        settings = kernel_settings("jankowski", "adaptive", substeps=substeps)
-        shared = np.zeros((n, pre_size(2, 2)))
-        runs[substeps] = np.zeros((n, N_OUT + 1))
-        for mode in (PRE_RUN_TO_CONTACT, PRE_RESUME):
-            batch._sdof_adaptive(acc, dt, *arrays, settings, runs[substeps], every, every,
-                                 shared, mode, 0, n)  # fmt: skip
-    run, finer = runs[8], runs[16]
-    same = run[:, N_OUT] == 1.0
-    assert same.any() and not same.all()  # both kinds among these pairs
-    np.testing.assert_array_equal(finer[same, PEAK_FORCE], run[same, PEAK_FORCE])
-    # the batch flags what running every check flags
-    out = simulate_sdof_pairs(acc, dt, **dict(zip(PAIR_ARRAYS, arrays, strict=True)), substeps=8)
-    want = flag_inaccurate(run[:, STATUS], run[:, IMPACTS], np.inf, 0.0, run[:, PEAK_FORCE],
-                           finer[:, PEAK_FORCE])  # fmt: skip
-    np.testing.assert_array_equal(out["status"], want)
-    np.testing.assert_array_equal(out["peak_force"], run[:, PEAK_FORCE])
-
-
-def test_check_run_starts_at_the_last_onset_it_shares_with_the_run():
-    # the run stores its state at each contact onset up to which the check's run (twice the
-    # sub-steps) takes its very sub-steps; the check's run starts from the last one (pre mode
-    # 4) and must give the peak force of a finer run from the shared linear response, to the
-    # bit.  B1-like pairs at 8 sub-steps, left 0.3, 0.4 and 0.7 s as in the test above (some
-    # diverge from the check's run at the first impact, some later, some never)
+@pytest.fixture(scope="module")
+def runs_8_16():
+    """B1-like pairs (left 0.3, 0.4 and 0.7 s, gap 0.01 m) run at 8 and 16 sub-steps, each
+    with the ``same`` slot and the check's start past its outputs; the shared linear response.
+    """
     dt, acc = record_arrays(make("b1").load_record())
     arrays = b1_like_pairs([0.3, 0.4, 0.7], [0.01] * 4)
     n = arrays[0].size
@@ -263,6 +231,38 @@ def test_check_run_starts_at_the_last_onset_it_shares_with_the_run():
         for mode in (PRE_RUN_TO_CONTACT, PRE_RESUME):
             batch._sdof_adaptive(acc, dt, *arrays, settings, runs[substeps], every, every,
                                  shared, mode, 0, n)  # fmt: skip
+    return dt, acc, arrays, runs, shared
+
+
+def test_check_is_skipped_only_where_its_run_would_be_the_same(runs_8_16):
+    # the run says whether the accuracy check's run (twice the sub-steps) would take its very
+    # sub-steps (no bound set by ``substeps`` binding at the finer setting); the batch skips the
+    # check there.  Held to running the finer run anyway: its peak force is bitwise the run's
+    # wherever the run says so.  B1-like pairs at 8 sub-steps: left 0.3 and 0.4 s (contact
+    # sub-steps at most 1/50 of the period, 5 ms, under duration / 16 for the softer contacts),
+    # 0.7 s (the record's 10 ms, over duration / 16 = 8.75 ms on B1)
+    dt, acc, arrays, runs, _ = runs_8_16
+    run, finer = runs[8], runs[16]
+    same = run[:, N_OUT] == 1.0
+    assert same.any() and not same.all()  # both kinds among these pairs
+    np.testing.assert_array_equal(finer[same, PEAK_FORCE], run[same, PEAK_FORCE])
+    # the batch flags what running every check flags
+    out = simulate_sdof_pairs(acc, dt, **dict(zip(PAIR_ARRAYS, arrays, strict=True)), substeps=8)
+    want = flag_inaccurate(run[:, STATUS], run[:, IMPACTS], np.inf, 0.0, run[:, PEAK_FORCE],
+                           finer[:, PEAK_FORCE])  # fmt: skip
+    np.testing.assert_array_equal(out["status"], want)
+    np.testing.assert_array_equal(out["peak_force"], run[:, PEAK_FORCE])
+
+
+def test_check_run_starts_at_the_last_onset_it_shares_with_the_run(runs_8_16):
+    # the run stores its state at each contact onset up to which the check's run (twice the
+    # sub-steps) takes its very sub-steps; the check's run starts from the last one (pre mode
+    # 4) and must give the peak force of a finer run from the shared linear response, to the
+    # bit.  The pairs of the test above (some diverge from the check's run at the first
+    # impact, some later, some never)
+    dt, acc, arrays, runs, shared = runs_8_16
+    n = arrays[0].size
+    every = np.arange(n, dtype=np.int64)
     run, finer = runs[8], runs[16]
     starts = run[:, N_OUT + 1 :]
     assert (run[:, PEAK_FORCE] > 0.0).all()
