@@ -19,7 +19,17 @@ import pytest
 from scipy.linalg import expm
 
 from pound_mc.integrators import batch, kernel_settings, run_kernel
-from pound_mc.integrators.outputs import N_COUT, N_OUT, PEAK_FORCE, STATUS
+from pound_mc.integrators.outputs import (
+    N_COUT,
+    N_OUT,
+    PEAK_FORCE,
+    PRE_INTERVAL,
+    PRE_RESUME,
+    PRE_RESUME_PEAK,
+    PRE_RUN_TO_CONTACT,
+    STATUS,
+    pre_size,
+)
 from pound_mc.integrators.reference import reference_solution
 from pound_mc.motions import record_arrays
 from pound_mc.scene import load_scene, scene_from_dict, simulate
@@ -423,28 +433,44 @@ def test_shear_buildings_pound_at_common_floors():
         assert rel(o[key], ref[key]) < 1e-3, key
 
 
-def test_shear_peak_only_run_gives_the_full_runs_peak_force():
-    # the accuracy check's finer run of the general kernel starts from a PRE_RESUME_PEAK state
-    # at rest: no energies, no floor peaks, which never move the state, so its peak force is
-    # bitwise a full run's; every other output NaN.  3 + 5 storeys, soft to stiff contacts
+def test_shear_batch_shares_the_linear_response_and_peak_only_run():
+    # a scene batch runs the linear response up to the first contact once per gap and step
+    # (pre mode 1) and resumes every simulation from it (mode 2): every output bitwise that of
+    # a run from rest.  The accuracy check's finer run resumes in mode 3: no energies, no floor
+    # peaks, which never move the state, so its peak force is bitwise a full run's; every
+    # other output NaN.  3 + 5 storeys, gaps 0 to 0.02 m, soft to stiff contacts
     scene = make_scene(
         uniform_shear(3, 1.0e6, 0.3), uniform_shear(5, 1.0e6, 0.6), JANKOWSKI,
         {"source": "builtin:elcentro", "duration_s": 10.0, "pga_g": 0.4},
     )  # fmt: skip
     dt_rec, acc = record_arrays(scene.load_record())
     a = scene.modal_arrays()
-    nsim, nc = 4, a["gap"].size
-    gap = np.array([[0.0] * nc, [0.01] * nc, [0.01] * nc, [0.02] * nc])
-    beta, xi = np.array([1.0e9, 2.75e9, 1.0e10, 2.75e9]), np.array([0.35, 0.2, 0.35, 0.6])
+    nsim, nc = 6, a["gap"].size
+    gap = np.repeat([0.0, 0.01, 0.02], 2)[:, None] * np.ones(nc)
+    beta = np.array([1.0e9, 2.75e9, 1.0e10, 2.75e9, 2.75e9, 1.0e9])
+    xi = np.array([0.35, 0.2, 0.35, 0.6, 0.35, 0.2])
     settings = kernel_settings("jankowski", "adaptive", substeps=16)
     pair = [acc, dt_rec, *(a[k] for k in ("omega", "zeta", "gamma", "phi", "side", "psi", "meff"))]
-    runs = {}
-    for name, pre in (("full", np.zeros(0)), ("peak", batch._peak_only_from_rest(
-            a["omega"].size, a["phi"].shape[0]))):  # fmt: skip
-        runs[name] = np.empty((nsim, N_OUT)), np.empty((nsim, nc, N_COUT))
-        batch._scene_adaptive(*pair, gap, beta, xi, np.full(nsim, 0.01), settings, *runs[name],
-                              pre, 0, nsim)  # fmt: skip
-    full, peak = runs["full"][0], runs["peak"][0]
+    every = np.arange(nsim, dtype=np.int64)
+    size = pre_size(a["omega"].size, a["phi"].shape[0])
+    rest = np.zeros((nsim, size))  # interval 0, at rest, no energy: a run from rest
+    first, group = np.array([0, 2, 4]), np.repeat([0, 1, 2], 2)
+    shared = np.zeros((3, size))
+
+    def run(mode, pre, index, grp):
+        o, c = np.empty((nsim, N_OUT)), np.empty((nsim, nc, N_COUT))
+        batch._scene_adaptive(*pair, gap, beta, xi, np.full(nsim, 0.01), settings, o, c, index,
+                              grp, pre, mode, 0, index.size)  # fmt: skip
+        return o, c
+
+    full, cfull = run(PRE_RESUME, rest, every, every)
+    run(PRE_RUN_TO_CONTACT, shared, first, group)
+    # at zero gap the buildings touch at once; at 0.01 and 0.02 m first near 1.9 s
+    assert shared[0, PRE_INTERVAL] == 0 and (shared[1:, PRE_INTERVAL] > 100).all()
+    resumed, cresumed = run(PRE_RESUME, shared, every, group)
+    np.testing.assert_array_equal(resumed, full)
+    np.testing.assert_array_equal(cresumed, cfull)
+    peak, _ = run(PRE_RESUME_PEAK, shared, every, group)
     assert (full[:, STATUS] == 0).all() and (full[:, PEAK_FORCE] > 0.0).all()
     np.testing.assert_array_equal(peak[:, PEAK_FORCE], full[:, PEAK_FORCE])
     np.testing.assert_array_equal(peak[:, STATUS], full[:, STATUS])

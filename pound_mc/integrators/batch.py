@@ -613,15 +613,27 @@ def _scene_args(k, ag, dt_rec, omega, zeta, gamma, phi, side, psi, meff, gap, be
 
 @jit
 def _scene_adaptive(ag, dt_rec, omega, zeta, gamma, phi, side, psi, meff, gap, beta, xi, dt_s,
-                    settings, out, cout, pre, lo, hi):  # fmt: skip
-    """``adaptive``: simulations ``lo:hi`` of one pair of buildings, from rest.
+                    settings, out, cout, index, group, shared, mode, lo, hi):  # fmt: skip
+    """``adaptive``: simulations ``index[lo:hi]`` of one pair of buildings, or groups ``lo:hi``.
 
-    ``pre``: empty, or (read only) a ``PRE_RESUME_PEAK`` state at rest for the peak force
-    alone (:func:`_peak_only_from_rest`).
+    As :func:`_sdof_adaptive`: with ``mode`` ``PRE_RUN_TO_CONTACT`` the linear response of
+    group ``g`` up to its first contact is run once, from member ``index[g]``, into
+    ``shared[g]``; else every simulation ``k`` resumes from ``shared[group[k]]`` in that mode
+    (``PRE_RESUME``, or ``PRE_RESUME_PEAK`` for the peak force alone).
     """
-    for k in range(lo, hi):
+    groups = mode == PRE_RUN_TO_CONTACT
+    for i in range(lo, hi):
+        k = index[i]
+        if groups:
+            pre = shared[i]
+            pre[PRE_MODE] = PRE_RUN_TO_CONTACT
+        else:
+            pre = shared[group[k]].copy()
+            pre[PRE_MODE] = mode
         _run_adaptive(*_scene_args(k, ag, dt_rec, omega, zeta, gamma, phi, side, psi, meff, gap,
                                    beta, xi, dt_s, settings, out, cout, pre))  # fmt: skip
+        if groups:
+            pre[PRE_MODE] = PRE_RESUME
 
 
 @jit
@@ -631,16 +643,6 @@ def _scene_fixed(ag, dt_rec, omega, zeta, gamma, phi, side, psi, meff, gap, beta
     for k in range(lo, hi):
         _run_fixed(*_scene_args(k, ag, dt_rec, omega, zeta, gamma, phi, side, psi, meff, gap,
                                 beta, xi, dt_s, settings, out, cout, pre))  # fmt: skip
-
-
-def _peak_only_from_rest(n_modes: int, n_floors: int) -> np.ndarray:
-    """A ``pre`` that runs the general ``adaptive`` kernel from rest for its peak force alone.
-
-    Resuming at the record's start from a state at rest with no energy is a run from rest.
-    """
-    pre = np.zeros(pre_size(n_modes, n_floors))
-    pre[PRE_MODE] = PRE_RESUME_PEAK
-    return pre
 
 
 def simulate_scene_batch(
@@ -706,7 +708,6 @@ def simulate_scene_batch(
     out = np.empty((nsim, N_OUT))
     cout = np.empty((nsim, nc, N_COUT))
     f8 = np.float64
-    kernel = _scene_adaptive if settings.method == ADAPTIVE else _scene_fixed
     pair = (
         np.ascontiguousarray(acc, dtype=f8),
         f8(dt_rec),
@@ -718,24 +719,35 @@ def simulate_scene_batch(
         beta,
         xi,
     )  # fmt: skip
-    _threaded(kernel, nsim, *pair, dt_s, settings, out, cout, _NO_PRE)
     if settings.method != ADAPTIVE:
+        _threaded(_scene_fixed, nsim, *pair, dt_s, settings, out, cout, _NO_PRE)
         half = None
         if accuracy_check:
             half = np.empty_like(out)  # step doubling (pound_mc.integrators.accuracy)
-            _threaded(kernel, nsim, *pair, dt_s / 2, settings, half, np.empty_like(cout),
+            _threaded(_scene_fixed, nsim, *pair, dt_s / 2, settings, half, np.empty_like(cout),
                       _NO_PRE)  # fmt: skip
         meff = np.asarray(arrays["meff"], dtype=f8)[None, :]
         t_c = shortest_contact_s(contact_model, cout[:, :, C_MAX_PENETRATION], beta[:, None], meff)
         t_c = t_c.min(axis=1)
         out[:, STATUS] = flag_inaccurate(out[:, STATUS], out[:, IMPACTS], t_c, dt_s,
                                          *_peaks(out, half))  # fmt: skip
-    elif accuracy_check:
+    else:
+        # simulations with the same gaps and step share their linear response up to the first
+        # contact (the buildings are the batch's)
+        _, first, group = np.unique(np.column_stack([gap, dt_s]), axis=0, return_index=True,
+                                    return_inverse=True)  # fmt: skip
+        first, group = first.astype(np.int64), group.ravel().astype(np.int64)
+        shared = np.zeros((first.size, pre_size(arrays["omega"].size, arrays["phi"].shape[0])))
+        _threaded(_scene_adaptive, first.size, *pair, dt_s, settings, np.empty_like(out),
+                  np.empty_like(cout), first, group, shared, PRE_RUN_TO_CONTACT)  # fmt: skip
+        _threaded(_scene_adaptive, nsim, *pair, dt_s, settings, out, cout,
+                  np.arange(nsim, dtype=np.int64), group, shared, PRE_RESUME)  # fmt: skip
+    if settings.method == ADAPTIVE and accuracy_check:
         # the finer run gives only its peak force (the same as a full run's, faster)
-        lean = _peak_only_from_rest(arrays["omega"].size, arrays["phi"].shape[0])
         _check_substeps(out, settings, lambda hit, finer, fine: _threaded(
-            kernel, hit.size, *pair[:-3], gap[hit], beta[hit], xi[hit], dt_s[hit], finer, fine,
-            np.empty((hit.size, nc, N_COUT)), lean,
+            _scene_adaptive, hit.size, *pair[:-3], gap[hit], beta[hit], xi[hit], dt_s[hit],
+            finer, fine, np.empty((hit.size, nc, N_COUT)), np.arange(hit.size, dtype=np.int64),
+            group[hit], shared, PRE_RESUME_PEAK,
         ))  # fmt: skip
     contacts = {name: cout[:, :, k] for k, name in enumerate(CONTACT_OUTPUTS)}
     contacts["impacts"] = contacts["impacts"].astype(np.int32)
