@@ -446,25 +446,37 @@ def _sdof_adaptive(ag, dt_rec, tl, zl, ml, tr, zr, mr, gap, beta, xi, dt_s, sett
     """
     empty = np.zeros((0, 2))
     empty1 = np.zeros((0, 1))
-    groups = mode == PRE_RUN_TO_CONTACT
     for i in range(lo, hi):
         k = index[i]
         omega, zeta, gamma, phi, side, psi, g, me, be, x = _sdof_arrays(
             k, tl, zl, ml, tr, zr, mr, gap, beta, xi
         )
-        if groups:
-            pre = shared[i]
-            pre[PRE_MODE] = PRE_RUN_TO_CONTACT
-            o = np.empty(N_OUT)
-        else:
-            pre = shared[group[k]].copy()
-            pre[PRE_MODE] = mode
-            o = out[k]
+        o = np.empty(N_OUT) if mode == PRE_RUN_TO_CONTACT else out[k]
         _run_adaptive_pair(ag, dt_rec, omega, zeta, gamma, phi, side, psi, g, me, be, x,
                            _with_step(settings, dt_s[k]), np.zeros(2), np.zeros(2), o,
-                           np.empty((1, N_COUT)), empty, empty1, empty1, pre)  # fmt: skip
-        if groups:
-            pre[PRE_MODE] = PRE_RESUME
+                           np.empty((1, N_COUT)), empty, empty1, empty1,
+                           _member_pre(i, k, group, shared, mode))  # fmt: skip
+
+
+@jit(inline=True)
+def _member_pre(i, k, group, shared, mode):
+    """The ``pre`` of pass entry ``i`` (simulation ``k``) of a grouped batch kernel, in ``mode``.
+
+    ``PRE_RUN_TO_CONTACT``: group ``i``'s own row of ``shared``, which the run fills; else a
+    copy of simulation ``k``'s group row to resume from (each run writes its own).
+    """
+    pre = shared[i] if mode == PRE_RUN_TO_CONTACT else shared[group[k]].copy()
+    pre[PRE_MODE] = mode
+    return pre
+
+
+def _linear_groups(key) -> tuple[np.ndarray, np.ndarray]:
+    """Groups of the simulations whose rows of ``key`` are equal (the same linear response).
+
+    Returns the first member of each group and each simulation's group, both int64.
+    """
+    _, first, group = np.unique(key, axis=0, return_index=True, return_inverse=True)
+    return first.astype(np.int64), group.ravel().astype(np.int64)
 
 
 @jit
@@ -542,15 +554,12 @@ def simulate_sdof_pairs(
         return _named(out)
     # simulations that differ only in contact parameters share their linear response up to
     # the first contact (periods, damping ratios, masses, gap and step define a group)
-    linear = np.stack([arrays[k] for k in (0, 1, 2, 3, 4, 5, 6, 9)], axis=1)
-    _, first, group = np.unique(linear, axis=0, return_index=True, return_inverse=True)
+    first, group = _linear_groups(np.stack([arrays[k] for k in (0, 1, 2, 3, 4, 5, 6, 9)], axis=1))
     shared = np.zeros((first.size, pre_size(2, 2)))
-    first = first.astype(np.int64)
     # a slot past the outputs: 1 where the accuracy check's run would take the run's very
     # sub-steps (adaptive_pair), so that its peak force is known without running it; then the
     # state from which the check's run may start (PRE_RESUME_ONSET: it is the run's up to there)
     out = np.zeros((nsim, N_OUT + 1 + ONSET_SIZE))
-    group = group.ravel().astype(np.int64)
     _threaded(_sdof_adaptive, first.size, acc, dt_rec, *arrays, settings, out, first, group,
               shared, PRE_RUN_TO_CONTACT)  # fmt: skip
     everyone = np.arange(nsim, dtype=np.int64)
@@ -621,19 +630,11 @@ def _scene_adaptive(ag, dt_rec, omega, zeta, gamma, phi, side, psi, meff, gap, b
     ``shared[g]``; else every simulation ``k`` resumes from ``shared[group[k]]`` in that mode
     (``PRE_RESUME``, or ``PRE_RESUME_PEAK`` for the peak force alone).
     """
-    groups = mode == PRE_RUN_TO_CONTACT
     for i in range(lo, hi):
         k = index[i]
-        if groups:
-            pre = shared[i]
-            pre[PRE_MODE] = PRE_RUN_TO_CONTACT
-        else:
-            pre = shared[group[k]].copy()
-            pre[PRE_MODE] = mode
         _run_adaptive(*_scene_args(k, ag, dt_rec, omega, zeta, gamma, phi, side, psi, meff, gap,
-                                   beta, xi, dt_s, settings, out, cout, pre))  # fmt: skip
-        if groups:
-            pre[PRE_MODE] = PRE_RESUME
+                                   beta, xi, dt_s, settings, out, cout,
+                                   _member_pre(i, k, group, shared, mode)))  # fmt: skip
 
 
 @jit
@@ -734,9 +735,7 @@ def simulate_scene_batch(
     else:
         # simulations with the same gaps and step share their linear response up to the first
         # contact (the buildings are the batch's)
-        _, first, group = np.unique(np.column_stack([gap, dt_s]), axis=0, return_index=True,
-                                    return_inverse=True)  # fmt: skip
-        first, group = first.astype(np.int64), group.ravel().astype(np.int64)
+        first, group = _linear_groups(np.column_stack([gap, dt_s]))
         shared = np.zeros((first.size, pre_size(arrays["omega"].size, arrays["phi"].shape[0])))
         _threaded(_scene_adaptive, first.size, *pair, dt_s, settings, np.empty_like(out),
                   np.empty_like(cout), first, group, shared, PRE_RUN_TO_CONTACT)  # fmt: skip
