@@ -25,18 +25,23 @@ pytestmark = [
 ]
 
 
-@pytest.fixture(scope="module")
-def cluster():
-    """Two one-threaded worker processes on loopback (the layout ``--workers 2`` starts)."""
-    with distributed.LocalCluster(
-        n_workers=2,
+def _local_cluster(n_workers: int):
+    """One-threaded worker processes on loopback (the layout ``--workers N`` starts)."""
+    return distributed.LocalCluster(
+        n_workers=n_workers,
         processes=True,
         threads_per_worker=1,
         host="127.0.0.1",
         dashboard_address=":0",  # the scheduler's HTTP server on a free port
         silence_logs=logging.CRITICAL,
         env={"NUMBA_NUM_THREADS": "1"},
-    ) as cluster:
+    )
+
+
+@pytest.fixture(scope="module")
+def cluster():
+    """Two one-threaded worker processes on loopback (the layout ``--workers 2`` starts)."""
+    with _local_cluster(2) as cluster:
         yield cluster
 
 
@@ -65,6 +70,33 @@ def test_scheduler_run_equals_local_run(cluster, study_file, reference, tmp_path
     assert main([*argv, "--chunk-size", "5"]) == 0
     assert "0 of 10 chunks run" in capsys.readouterr().out
     _assert_identical(reference, out / "small.nc")
+
+
+def _compiled_batch_kernels() -> int:
+    """Signatures of the batch kernels compiled or loaded from the cache in this process."""
+    from pound_mc.integrators import batch
+
+    return sum(len(getattr(f, "overloads", ())) for f in vars(batch).values())
+
+
+def test_every_worker_loads_the_kernels_before_the_first_chunk(study_file, tmp_path):
+    # The progress bar's rate and ETA measure the chunks only: before it starts, each worker
+    # runs one simulation (compiling its kernels or loading them from its cache), as a local
+    # run does before its bar.  Before this, each worker paid it in its first chunk.
+    from pound_mc.study.distributed import dask_executor, run_study_distributed
+
+    study = load_study(study_file)
+    with (
+        _local_cluster(2) as cluster,
+        distributed.Client(cluster) as client,
+    ):
+        assert set(client.run(_compiled_batch_kernels).values()) == {0}  # fresh processes
+        seconds, _ = dask_executor(client).warm_up(StudyEngine(study), 0, quiet=True)
+        assert seconds > 0.0
+        loaded = client.run(_compiled_batch_kernels)
+        assert len(loaded) == 2 and min(loaded.values()) > 0, loaded
+        report = run_study_distributed(study, tmp_path, client=client, progress=False)
+        assert report.complete and report.warmup_seconds > 0.0
 
 
 class SlowEngine(StudyEngine):
@@ -195,15 +227,7 @@ def test_all_workers_lost_then_resume(study_file, reference, tmp_path):
 
     study = load_study(study_file)
     with (
-        distributed.LocalCluster(
-            n_workers=1,
-            processes=True,
-            threads_per_worker=1,
-            host="127.0.0.1",
-            dashboard_address=":0",
-            silence_logs=logging.CRITICAL,
-            env={"NUMBA_NUM_THREADS": "1"},
-        ) as cluster,
+        _local_cluster(1) as cluster,
         distributed.Client(cluster) as client,
     ):
         pids = client.run(os.getpid)

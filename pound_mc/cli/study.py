@@ -28,7 +28,7 @@ from pound_mc.study.runner import (
     plan_text,
     run_study,
 )
-from pound_mc.study.warmup import NOTICE_AFTER_S, cache_directory, compile_kernels, warm_up
+from pound_mc.study.warmup import cache_directory, compile_kernels, warm_up
 
 #: Fixed cost per chunk of a local run (writing its file, Python around the batch call) [s],
 #: measured on a 2-core machine (README, "Throughput and scaling"); added to the estimate.
@@ -142,7 +142,7 @@ def _charts(study, path: Path, out: Path) -> list[Path]:
 
 def compiled(report) -> bool:
     """Whether a run's warm-up compiled kernels (rather than loading them from the cache)."""
-    return report.warmup_seconds > NOTICE_AFTER_S
+    return report.warmup_compiled
 
 
 def check_command(args) -> int:

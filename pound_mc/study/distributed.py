@@ -30,12 +30,20 @@ again.
 Start workers with one thread each and one worker process per core
 (``dask worker ADDRESS --nworkers N --nthreads 1``): the kernels release the GIL but each
 task uses one numba thread, so a worker thread is a core.
+
+Before the progress bar starts, every worker connected at that time runs one simulation of the
+study (:func:`warm_up_worker`), which compiles its kernels or loads them from its cache; the
+client, which runs no simulation, compiles nothing.  So the bar's rate and ETA measure the
+chunks alone, as for a local run; a worker that joins later loads its kernels in its first
+chunk.
 """
 
 from __future__ import annotations
 
 import asyncio
 import logging
+import sys
+import time
 import uuid
 from collections.abc import Iterable
 from contextlib import ExitStack
@@ -45,8 +53,9 @@ import numba
 
 from pound_mc.errors import ClusterError, InputError
 from pound_mc.study.runner import Chunk, run_study
+from pound_mc.study.warmup import compiling_notice
 
-__all__ = ["run_study_distributed", "dask_executor", "run_chunk", "TIMEOUT_S"]
+__all__ = ["run_study_distributed", "dask_executor", "run_chunk", "warm_up_worker", "TIMEOUT_S"]
 
 _INSTALL = 'pip install "pound-mc[dask]"'
 #: Seconds to wait for the scheduler to answer, and for the next chunk to finish.
@@ -89,6 +98,17 @@ def run_chunk(engine, start: int, stop: int) -> dict:
         numba.set_num_threads(old)
 
 
+def warm_up_worker(engine, index: int) -> float:
+    """Run simulation ``index`` once on this worker, its result discarded: wall time [s].
+
+    The worker compiles the study's kernels, or loads them from its cache, before any chunk
+    (:func:`pound_mc.study.warmup.warm_up` on a worker).
+    """
+    t0 = time.perf_counter()
+    run_chunk(engine, index, index + 1)
+    return time.perf_counter() - t0
+
+
 def _fault(exc: BaseException) -> str:
     """What a cluster failure means, in words."""
     name = type(exc).__name__
@@ -121,6 +141,55 @@ def dask_executor(client, *, retries: int = 3, timeout_s: float = TIMEOUT_S):
         The cluster failed (workers or scheduler lost, no chunk finished in ``timeout_s``).
     """
     distributed = _import_distributed()
+    sent = {}  # the engine scattered to the workers (by the warm-up), reused by the run
+
+    def scatter(engine):
+        if sent.get("engine") is not engine:
+            [sent["future"]] = client.scatter([engine], broadcast=True, hash=False,
+                                              timeout=timeout_s)  # fmt: skip
+            sent["engine"] = engine
+        return sent["future"]
+
+    def warm_up(engine, index: int = 0, *, stream=None, quiet: bool = False):
+        """Run simulation ``index`` once on every worker (:func:`warm_up_worker`).
+
+        Returns the wall time [s] (sending the study, which a new worker process imports
+        pound-mc to receive, then the simulations) and whether the simulations took long
+        enough to be compiling, as :func:`pound_mc.study.warmup.warm_up`.
+        """
+        stream = sys.stderr if stream is None else stream
+        t0 = time.perf_counter()
+        try:
+            shared = scatter(engine)  # not in the notice's time: imports, not compiling
+            workers = list(client.scheduler_info()["workers"])
+            tag = f"pound-mc-warm-up-{uuid.uuid4().hex[:8]}"
+            futures = [
+                client.submit(
+                    warm_up_worker,
+                    shared,
+                    index,
+                    key=f"{tag}-{k}",
+                    workers=[w],
+                    allow_other_workers=True,
+                    pure=False,
+                )
+                for k, w in enumerate(workers)
+            ]
+            where = f"on {len(workers)} Dask worker{'s' * (len(workers) != 1)}"
+            with compiling_notice(stream, where=where, quiet=quiet) as state:
+                distributed.wait(futures, timeout=timeout_s)
+            for future in futures:
+                future.result(timeout=timeout_s)
+        except Exception as exc:  # every failure of the cluster, whatever its class
+            raise ClusterError(
+                f"the Dask cluster failed while its workers loaded the kernels: {_fault(exc)}",
+                key="--scheduler",
+            ) from None
+        seconds = time.perf_counter() - t0
+        if state["shown"] and not quiet:
+            print(f"kernels ready {where} in {seconds:.1f} s (cached for later runs)",
+                  file=stream, flush=True)  # fmt: skip
+        return seconds, state["shown"]
 
     def run(engine, chunks: Iterable[Chunk]):
         chunks = list(chunks)
@@ -130,7 +199,7 @@ def dask_executor(client, *, retries: int = 3, timeout_s: float = TIMEOUT_S):
         futures = {}
         failed = False
         try:
-            [shared] = client.scatter([engine], broadcast=True, hash=False, timeout=timeout_s)
+            shared = scatter(engine)
             for chunk in chunks:
                 future = client.submit(
                     run_chunk,
@@ -177,7 +246,9 @@ def dask_executor(client, *, retries: int = 3, timeout_s: float = TIMEOUT_S):
                     client.cancel(list(futures))
                 if "shared" in locals():
                     client.cancel([shared])
+            sent.clear()
 
+    run.warm_up = warm_up
     return run
 
 

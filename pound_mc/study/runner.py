@@ -28,7 +28,10 @@ chunk runs, so results do not depend on thread count, chunk size or backend.
 Chunks run through an *executor*: a callable ``executor(engine, chunks)`` that yields
 ``(chunk, result)`` pairs as chunks finish, in any order.  The default runs them one after the
 other in this process on numba's threads; :mod:`pound_mc.study.distributed` runs them on a Dask
-cluster.  Either way this process alone writes the chunk files and the dataset.
+cluster.  Either way this process alone writes the chunk files and the dataset.  An executor
+whose chunks run elsewhere has a ``warm_up(engine, index, quiet=...)`` attribute, called instead
+of :func:`~pound_mc.study.warmup.warm_up` before the progress bar starts, so that the kernels
+compile where the chunks run (the Dask workers), not here.
 
 Test hook: when the environment variable ``POUND_MC_TEST_PAUSE_AT`` names a stage (see
 :data:`PAUSE_STAGES`), the runner prints ``POUND_MC_TEST_PAUSE_AT: paused at <stage>`` to
@@ -127,6 +130,8 @@ class RunReport:
     #: Seconds of the warm-up simulation before the chunks (compilation or cache load),
     #: not counted in ``seconds``.
     warmup_seconds: float = 0.0
+    #: Whether the warm-up took long enough to be compiling rather than loading the cache.
+    warmup_compiled: bool = False
 
     @property
     def rate(self) -> float:
@@ -543,8 +548,10 @@ def _run_locked(study, out_dir, engine, layout, fresh, chunk_size, progress, max
     # compile (or load from the cache) the run's kernels before the bar starts, so that its
     # rate and ETA measure simulations only
     warmup_s = 0.0
+    compiled = False
     if todo_now:
-        warmup_s, _ = warm_up(engine, todo_now[0].start, quiet=not progress)
+        warm = getattr(executor, "warm_up", warm_up)  # where the chunks run
+        warmup_s, compiled = warm(engine, todo_now[0].start, quiet=not progress)
     t0 = time.perf_counter()
     ran = 0
     simulations_run = 0
@@ -589,7 +596,7 @@ def _run_locked(study, out_dir, engine, layout, fresh, chunk_size, progress, max
     complete = ran == len(todo)
     if not complete:
         return RunReport(None, n, len(ranges), ran, seconds, False, interrupted, simulations_run,
-                         warmup_s)  # fmt: skip
+                         warmup_s, compiled)  # fmt: skip
 
     _pause_at("dataset")
     results = {name: a.reshape(study.shape + a.shape[1:]) for name, a in flat.items()}
@@ -598,4 +605,5 @@ def _run_locked(study, out_dir, engine, layout, fresh, chunk_size, progress, max
     path = write_netcdf(ds, out_dir / f"{study.name}.nc")
     _pause_at("done")
     seconds = time.perf_counter() - t0
-    return RunReport(path, n, len(ranges), ran, seconds, True, False, simulations_run, warmup_s)
+    return RunReport(path, n, len(ranges), ran, seconds, True, False, simulations_run, warmup_s,
+                     compiled)  # fmt: skip

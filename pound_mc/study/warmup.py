@@ -50,11 +50,14 @@ def cache_directory() -> str:
 
 
 @contextmanager
-def compiling_notice(stream: TextIO | None = None, after_s: float | None = None):
+def compiling_notice(stream: TextIO | None = None, after_s: float | None = None, *,
+                     where: str | None = None, quiet: bool = False):  # fmt: skip
     """Print :data:`COMPILING_MESSAGE` to ``stream`` if the block runs longer than ``after_s``.
 
     Yields a dict whose ``"shown"`` entry tells, after the block, whether the message was
-    printed (the kernels were compiled rather than loaded from the cache).
+    due (the kernels were compiled rather than loaded from the cache).  ``where``: where the
+    kernels compile (default: here, and the message names this process's cache); ``quiet``:
+    print nothing.
     """
     stream = sys.stderr if stream is None else stream
     after_s = NOTICE_AFTER_S if after_s is None else after_s
@@ -64,7 +67,9 @@ def compiling_notice(stream: TextIO | None = None, after_s: float | None = None)
     def notice():
         if not done.wait(after_s):
             state["shown"] = True
-            print(f"{COMPILING_MESSAGE} (cache: {cache_directory()})", file=stream, flush=True)
+            if not quiet:
+                text = where if where is not None else f"(cache: {cache_directory()})"
+                print(f"{COMPILING_MESSAGE} {text}", file=stream, flush=True)
 
     timer = threading.Thread(target=notice, daemon=True)
     timer.start()
