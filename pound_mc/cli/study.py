@@ -94,7 +94,7 @@ def run_command(args) -> int:
     print(
         f"{report.n_simulations:,} simulations, {report.chunks_run} of {report.chunks_total} "
         f"chunks run in {report.seconds:.1f} s"
-        + (f" after {report.warmup_seconds:.1f} s of compiling" if compiled(report) else "")
+        + (f" after {report.warmup_seconds:.1f} s of compiling" if report.warmup_compiled else "")
         + (f" ({report.rate:,.0f} simulations/s)" if report.chunks_run else "")
         + f"; {time.perf_counter() - t0:.1f} s with the dataset"
     )
@@ -138,11 +138,6 @@ def _charts(study, path: Path, out: Path) -> list[Path]:
         written.append(out / f"{study.name}_fragility.png")
         fragility_panels(ds, written[-1])
     return written
-
-
-def compiled(report) -> bool:
-    """Whether a run's warm-up compiled kernels (rather than loading them from the cache)."""
-    return report.warmup_compiled
 
 
 def check_command(args) -> int:

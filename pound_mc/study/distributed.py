@@ -42,7 +42,6 @@ from __future__ import annotations
 
 import asyncio
 import logging
-import sys
 import time
 import uuid
 from collections.abc import Iterable
@@ -53,7 +52,7 @@ import numba
 
 from pound_mc.errors import ClusterError, InputError
 from pound_mc.study.runner import Chunk, run_study
-from pound_mc.study.warmup import compiling_notice
+from pound_mc.study.warmup import noticed
 
 __all__ = ["run_study_distributed", "dask_executor", "run_chunk", "warm_up_worker", "TIMEOUT_S"]
 
@@ -157,7 +156,6 @@ def dask_executor(client, *, retries: int = 3, timeout_s: float = TIMEOUT_S):
         pound-mc to receive, then the simulations) and whether the simulations took long
         enough to be compiling, as :func:`pound_mc.study.warmup.warm_up`.
         """
-        stream = sys.stderr if stream is None else stream
         t0 = time.perf_counter()
         try:
             shared = scatter(engine)  # not in the notice's time: imports, not compiling
@@ -176,8 +174,8 @@ def dask_executor(client, *, retries: int = 3, timeout_s: float = TIMEOUT_S):
                 for k, w in enumerate(workers)
             ]
             where = f"on {len(workers)} Dask worker{'s' * (len(workers) != 1)}"
-            with compiling_notice(stream, where=where, quiet=quiet) as state:
-                distributed.wait(futures, timeout=timeout_s)
+            _, compiled = noticed(lambda: distributed.wait(futures, timeout=timeout_s),
+                                  stream=stream, quiet=quiet, where=where)  # fmt: skip
             for future in futures:
                 future.result(timeout=timeout_s)
         except Exception as exc:  # every failure of the cluster, whatever its class
@@ -185,11 +183,7 @@ def dask_executor(client, *, retries: int = 3, timeout_s: float = TIMEOUT_S):
                 f"the Dask cluster failed while its workers loaded the kernels: {_fault(exc)}",
                 key="--scheduler",
             ) from None
-        seconds = time.perf_counter() - t0
-        if state["shown"] and not quiet:
-            print(f"kernels ready {where} in {seconds:.1f} s (cached for later runs)",
-                  file=stream, flush=True)  # fmt: skip
-        return seconds, state["shown"]
+        return time.perf_counter() - t0, compiled
 
     def run(engine, chunks: Iterable[Chunk]):
         chunks = list(chunks)

@@ -33,6 +33,7 @@ __all__ = [
     "COMPILING_MESSAGE",
     "NOTICE_AFTER_S",
     "compiling_notice",
+    "noticed",
     "warm_up",
     "compile_kernels",
     "cache_directory",
@@ -102,17 +103,25 @@ def warm_up(engine, index: int = 0, *, stream: TextIO | None = None, quiet: bool
     compiled : bool
         Whether it took long enough to be compiling (the notice was due).
     """
+    return noticed(lambda: engine.run_indices(np.array([index], dtype=np.int64)), stream=stream,
+                   quiet=quiet)  # fmt: skip
+
+
+def noticed(work, *, stream: TextIO | None = None, quiet: bool = False, where: str | None = None):
+    """Call ``work()``, the kernels' first call, under :func:`compiling_notice`.
+
+    ``where``: where the kernels compile (default: here).  Returns the wall time of the call
+    [s] and whether it took long enough to be compiling; when it did, says how long (unless
+    ``quiet``).
+    """
     stream = sys.stderr if stream is None else stream
     t0 = time.perf_counter()
-    if quiet:
-        engine.run_indices(np.array([index], dtype=np.int64))
-        seconds = time.perf_counter() - t0
-        return seconds, seconds > NOTICE_AFTER_S
-    with compiling_notice(stream) as state:
-        engine.run_indices(np.array([index], dtype=np.int64))
+    with compiling_notice(stream, where=where, quiet=quiet) as state:
+        work()
     seconds = time.perf_counter() - t0
-    if state["shown"]:
-        print(f"kernels compiled in {seconds:.1f} s (cached for later runs)", file=stream,
+    if state["shown"] and not quiet:
+        place = "" if where is None else f"{where} "
+        print(f"kernels compiled {place}in {seconds:.1f} s (cached for later runs)", file=stream,
               flush=True)  # fmt: skip
     return seconds, state["shown"]
 
