@@ -237,11 +237,11 @@ def test_plot_errors_are_input_errors(tiny, tmp_path, capsys):
 
 
 # -- notebook ----------------------------------------------------------------------------------
-@pytest.mark.slow
-def test_analysis_notebook_runs_headless(tiny, monkeypatch):
+def execute_notebook(dataset, monkeypatch) -> list:
+    """The outputs of ``studies/analysis.ipynb`` run headless on ``dataset``, in cell order."""
     nbformat = pytest.importorskip("nbformat")
     nbclient = pytest.importorskip("nbclient")
-    monkeypatch.setenv("POUND_MC_DATASET", str(tiny))
+    monkeypatch.setenv("POUND_MC_DATASET", str(dataset))
     monkeypatch.setenv("JUPYTER_PLATFORM_DIRS", "1")
     monkeypatch.setenv("MPLBACKEND", "Agg")
     nb = nbformat.read(ROOT / "studies" / "analysis.ipynb", as_version=4)
@@ -249,7 +249,12 @@ def test_analysis_notebook_runs_headless(tiny, monkeypatch):
         nb, kernel_name="python3", timeout=300, resources={"metadata": {"path": str(ROOT)}}
     )
     client.execute()
-    outputs = [o for c in nb.cells if c.cell_type == "code" for o in c.outputs]
+    return [o for c in nb.cells if c.cell_type == "code" for o in c.outputs]
+
+
+@pytest.mark.slow
+def test_analysis_notebook_runs_headless(tiny, monkeypatch):
+    outputs = execute_notebook(tiny, monkeypatch)
     assert not [o for o in outputs if o.output_type == "error"]
     text = "".join(o.get("text", "") for o in outputs)
     assert "tiny-analysis" in text  # it read the dataset it was pointed at

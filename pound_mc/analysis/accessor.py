@@ -193,9 +193,16 @@ class PoundPlot:
         "Pounding probability against gap (:func:`pound_mc.analysis.plot.probability_chart`).",
     )
 
-    def fragility(self, path: str | Path | None = None, **kwargs: Any) -> np.ndarray:
-        """Fragility panels (:func:`pound_mc.analysis.risk_chart.fragility_panels`)."""
-        return _axes_of(fragility_panels(self._ds, path, **kwargs), None)
+    fragility = _chart_method(
+        "fragility",
+        fragility_panels,
+        "np.ndarray",
+        """Fragility panels (:func:`pound_mc.analysis.risk_chart.fragility_panels`).
+
+        One panel per combination of the other grid axes: ``ax`` is a sequence of as many
+        Axes; one panel returns its Axes.
+        """,
+    )
 
     required_gap = _chart_method(
         "required_gap",
@@ -267,8 +274,10 @@ class PoundPlot:
             record=record, sample=sample, study_path=study_path, **coords
         )
         fig = time_history_chart(result, ax=ax)
+        names = {"record": lambda i: f"record {self._ds['record'].values[i]}"}
+        names["sample"] = lambda i: f"sample {i}"
         where = ", ".join(
-            f"{d} = {value_text(self._ds, d, i)}" if d not in ("record", "sample") else f"{d} {i}"
+            names[d](i) if d in names else f"{d} = {value_text(self._ds, d, i)}"
             for d, i in index.items()
         )
         fig.suptitle(f"{self._ds.attrs.get('study_name', '')}: {where}", fontsize=9)

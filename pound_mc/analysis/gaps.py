@@ -60,6 +60,11 @@ def study_gaps(study_or_dataset, *, base_dir=None, substeps: int = 8):
         Evaluation points per sample interval
         (:func:`pound_mc.physics.separation.peak_displacements`).
 
+    Raises
+    ------
+    pound_mc.errors.InputError
+        Where a building is not an SDOF building (shear, wall): the rules do not describe it.
+
     Returns
     -------
     xarray.Dataset
@@ -79,6 +84,13 @@ def study_gaps(study_or_dataset, *, base_dir=None, substeps: int = 8):
         study = study_from_text(text, file=file)
     engine = StudyEngine(study)
     p = engine.parameters(np.arange(study.n_simulations))
+    lacking = [side for side in ("left", "right") if f"{side}.period_s" not in p]
+    if lacking:
+        raise InputError(
+            "does not apply: the separation rules compare the linear responses of two SDOF "
+            f"buildings; the {' and '.join(lacking)} building of study {study.name!r} is not one",
+            key=f"{lacking[0]}.model",
+        )
     u1 = _linear_peaks(
         engine.records, p["record"], p["left.period_s"], p["left.damping_ratio"], substeps
     )

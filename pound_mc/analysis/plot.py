@@ -35,6 +35,7 @@ from pound_mc.analysis.style import (
     scale_of,
     value_text,
 )
+from pound_mc.errors import InputError
 
 __all__ = [
     "restitution_chart",
@@ -147,9 +148,10 @@ def spectrum_chart(
     """
     x, line, others = _spectrum_selection(ds, x, line)
     each = isinstance(record, str) and record == "each"
-    sel = dict(sel or {})
+    sel = _checked_sel(ds, sel, x)
     if each and line is not None:
         others, line = [line, *others], None
+    wanted = sel.pop(line, None) if line is not None else None
     hold = _hold(ds, others, sel)
     q = spectrum_quantiles(ds, record).isel(hold)
     fig, (ax,) = new_axes(ax, (8.4, 4.6))
@@ -159,7 +161,10 @@ def spectrum_chart(
     elif line is None:
         lines = [(0, {}, "median over samples")]
     else:
-        lines = [(i, {line: i}, value_text(ds, line, i)) for i in range(ds.sizes[line])]
+        picked = range(ds.sizes[line])
+        if wanted is not None:  # the line values ``sel`` names (nearest), in its order
+            picked = dict.fromkeys(_nearest_index(ds, line, v) for v in np.atleast_1d(wanted))
+        lines = [(i, {line: i}, value_text(ds, line, i)) for i in picked]
     band = len(lines) <= 7
     crowd = len(lines) > 12  # too many to tell apart: thin grey lines and their median
     for k, (_, where, label) in enumerate(lines):
@@ -312,7 +317,12 @@ def rule_gaps(
     found = {label: ds.attrs[attr] for label, attr in RULE_ATTRS.items() if attr in ds.attrs}
     if found or "study_text" not in ds.attrs or CONTACT_DIM in ds.dims:
         return found  # the rules' linear SDOF responses do not describe shear buildings
-    gaps = study_gaps(ds, base_dir=base_dir)
+    try:
+        gaps = study_gaps(ds, base_dir=base_dir)
+    except InputError as exc:
+        if "does not apply" not in exc.message:
+            raise
+        return {}  # nor a wall
     return {"ABS": gaps["gap_abs"], "SRSS": gaps["gap_srss"], "DDC": gaps["gap_ddc"]}
 
 
@@ -356,6 +366,29 @@ def _hold(ds, dims, sel):
         else:
             out[dim] = 0
     return out
+
+
+def _hidden_under(gaps, drawn: dict, span: float) -> str:
+    """`` (under the R lines)`` where every gap is within 1 % of the axis of rule R's, else ``""``.
+
+    ``gaps``: a rule's gaps [mm] (one, or one per line); ``drawn``: the rules drawn before it;
+    ``span``: the axis' extent [mm] (0: not numeric, nothing said).
+    """
+    for other, prev in drawn.items():
+        both = np.isfinite(gaps) & np.isfinite(prev) if prev.shape == gaps.shape else None
+        if span > 0.0 and both is not None and both.any():
+            if np.all(np.abs(gaps[both] - prev[both]) <= 0.01 * span):
+                return f" (under the {other} line{'s' if gaps.size > 1 else ''})"
+    return ""
+
+
+def _checked_sel(ds, sel, x) -> dict:
+    """A copy of ``sel`` after refusing a dimension the dataset lacks or the horizontal axis."""
+    sel = dict(sel or {})
+    _hold(ds, [], sel)  # unknown dimensions
+    if x in sel:
+        raise ValueError(f"sel names {x!r}, the chart's horizontal axis: it draws all its values")
+    return sel
 
 
 def _nearest_index(ds, dim, value) -> int:
@@ -442,7 +475,7 @@ def probability_chart(
     x = x or (GAP_DIM if GAP_DIM in grid else grid[0])
     if x not in grid:
         raise ValueError(f"no grid dimension {x!r}; the dataset has {grid}")
-    sel = dict(sel or {})
+    sel = _checked_sel(ds, sel, x)
     rest = [d for d in grid if d != x]
     line = line if line is not None else (rest[0] if rest else None)
     wanted = sel.pop(line, None) if line is not None else None
@@ -477,12 +510,15 @@ def probability_chart(
     if not numeric:
         ax.set_xticks(xs, [value_text(ds, x, i) for i in range(ds.sizes[x])])
         fit_tick_labels(ax, ds.sizes[x])
+    drawn = {}  # rule -> its gaps [mm], to say which rule's lines hide another's
     for label, value in (rule_gaps(ds, rules, base_dir=base_dir) if x == GAP_DIM else {}).items():
         style = _RULE_STYLES.get(label, (0, (1, 3)))
         arr = _reduce_rule(value, ds, line, record, hold)
+        under = _hidden_under(arr * 1e3, drawn, np.ptp(xs) if numeric else 0.0)
+        drawn[label] = arr * 1e3
         if arr.size == 1:
             if np.isfinite(arr[0]):
-                rule_label = f"{label} rule: {arr[0] * 1e3:.3g} mm"
+                rule_label = f"{label} rule: {arr[0] * 1e3:.3g} mm" + under
                 ax.axvline(arr[0] * 1e3, color="0.3", ls=style, lw=1.1, label=rule_label)
             continue
         if line is None or arr.size != ds.sizes[line]:
@@ -492,7 +528,7 @@ def probability_chart(
         first = True
         for i in line_idx:
             if np.isfinite(arr[i]):
-                rule_label = f"{label} rule (in each line's colour)" if first else None
+                rule_label = f"{label} rule (in each line's colour){under}" if first else None
                 ax.axvline(arr[i] * 1e3, color=colours[i], ls=style, lw=1.1, label=rule_label)
                 first = False
     held = ", ".join(f"{d} = {value_text(ds, d, i)}" for d, i in hold.items())
@@ -501,7 +537,8 @@ def probability_chart(
     elif CONTACT_DIM in ds.dims:
         note = "shear buildings: no separation rules (they assume SDOF buildings)"
     else:
-        note = "vertical lines: gaps the separation rules ask for (median over samples)"
+        over = "records and samples" if record is None and ds.sizes["record"] > 1 else "samples"
+        note = f"vertical lines: gaps the separation rules ask for (median over {over})"
     finish_axes(
         ax,
         xlabel=axis_label(ds, x),

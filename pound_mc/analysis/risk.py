@@ -209,7 +209,8 @@ def required_gap(
         Along the grid axes other than the gap: ``required_gap`` [m], ``required_gap_ci``
         (``bound``: lower, upper) [m], ``message`` (why there is none, else ""), the
         ``pounding_probability`` and ``n_total`` per gap, and with ``rules`` ``gap_abs``,
-        ``gap_srss``, ``gap_ddc`` [m]; attributes ``target`` and ``ci``.
+        ``gap_srss``, ``gap_ddc`` [m]; attributes ``target`` and ``ci`` (and ``rules``, why
+        the rules' gaps are left out, for a study of shear buildings or a wall).
     """
     if GAP_DIM not in ds.dims or ds.sizes[GAP_DIM] < 2:
         raise InputError(
@@ -250,7 +251,11 @@ def required_gap(
         attrs={"target": float(probability), "ci": float(ci)},
     )  # fmt: skip
     if rules:
-        gaps_ds = study_gaps(ds, base_dir=base_dir)
+        try:
+            gaps_ds = study_gaps(ds, base_dir=base_dir)
+        except InputError as exc:  # shear buildings, a wall: the rules do not describe them
+            out.attrs["rules"] = exc.message
+            return out
         for name in ("gap_abs", "gap_srss", "gap_ddc"):
             value = gaps_ds[name].median([d for d in gaps_ds[name].dims if d not in rest])
             out[name] = value.assign_attrs(gaps_ds[name].attrs).drop_vars(

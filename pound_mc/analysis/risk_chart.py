@@ -12,17 +12,19 @@ from __future__ import annotations
 
 import itertools
 import textwrap
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
 import xarray as xr
+from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from pound_mc.analysis.fragility import fit_fragility
 from pound_mc.analysis.fragility_chart import fragility_chart
 from pound_mc.analysis.plot import _hold, _line_label, probability_chart, save
 from pound_mc.analysis.risk import GAP_DIM, _counts, _intensity_dim, required_gap
-from pound_mc.analysis.style import axis_label, chart_doc, legend_outside, value_text
+from pound_mc.analysis.style import axis_label, chart_doc, legend_outside, new_axes, value_text
 from pound_mc.errors import InputError
 
 __all__ = ["fragility_panels", "required_gap_chart"]
@@ -39,6 +41,7 @@ def fragility_panels(
     max_panels: int = 6,
     n_boot: int = 1000,
     seed: int = 0,
+    ax: Axes | Sequence[Axes] | None = None,
 ) -> Figure:
     """One fragility panel per combination of the other grid axes (at most ``max_panels``).
 
@@ -53,6 +56,8 @@ def fragility_panels(
         ``{dim: value}``: hold these grid dims at one value (nearest) instead of a panel each.
     max_panels : int
         Most panels drawn (the first combinations).
+    ax : matplotlib.axes.Axes or sequence of Axes, optional
+        Where to draw: one Axes per panel (default a new figure, three panels a row).
 
     Returns
     -------
@@ -67,8 +72,12 @@ def fragility_panels(
     combos = list(itertools.product(*(range(ds.sizes[d]) for d in free)))[:max_panels]
     ncols = min(3, len(combos))
     nrows = -(-len(combos) // ncols)
-    fig = Figure(figsize=(4.6 * ncols, 3.6 * nrows), layout="constrained")
-    axes = fig.subplots(nrows, ncols, squeeze=False).ravel()
+    if ax is None:
+        fig, axes = new_axes(None, (4.6 * ncols, 3.6 * nrows), nrows=nrows, ncols=ncols)
+    else:
+        fig, axes = new_axes(ax, (0.0, 0.0), ncols=len(combos))
+    own = ax is None
+    legend = None
     x = np.asarray(ds[dim].values, dtype=float)
     im_label = axis_label(ds, dim)
     for ax, combo in zip(axes, combos, strict=False):
@@ -88,17 +97,23 @@ def fragility_panels(
             continue
         fragility_chart(fit, ax=ax, im_label=im_label, event_label=event, legend=False)
         ax.set_title(f"{title}\ntheta = {fit.theta:.3g}, beta = {fit.beta:.3g}", fontsize=8)
-        if not fig.legends:
+        if not legend:
             handles, labels = ax.get_legend_handles_labels()
             generic = [label.split(":")[0] for label in labels]  # the fit's numbers: per panel
-            fig.legend(handles, generic, loc="outside lower center", ncols=3, fontsize=8)
+            if own:
+                legend = fig.legend(
+                    handles, generic, loc="outside lower center", ncols=3, fontsize=8
+                )
+            else:  # a caller's figure: in the first panel, where a rising curve leaves room
+                legend = ax.legend(handles, generic, loc="lower right", fontsize=7)
     for ax in axes[len(combos) :]:
         ax.set_visible(False)
-    fig.suptitle(
-        f"Fragility ({ds.attrs.get('study_name', '')}): P({event}) over records and samples, "
-        f"lognormal fit by maximum likelihood, {n_boot} bootstrap replicates",
-        fontsize=9,
-    )
+    if own:  # a figure of its own: the title over the panels (not on a caller's figure)
+        fig.suptitle(
+            f"Fragility ({ds.attrs.get('study_name', '')}): P({event}) over records and "
+            f"samples, lognormal fit by maximum likelihood, {n_boot} bootstrap replicates",
+            fontsize=9,
+        )
     return save(fig, path)
 
 
@@ -112,6 +127,7 @@ def required_gap_chart(
     sel: dict | None = None,
     rules="auto",
     base_dir=None,
+    ax: Axes | None = None,
 ) -> Figure:
     """Pounding probability against gap, the rules, the target and the required gap per line.
 
@@ -123,7 +139,7 @@ def required_gap_chart(
     probability : float, default 0.1
         Target probability (a horizontal line); each line's required gap is marked on it with
         its Wilson confidence interval.
-    line, sel, rules, base_dir
+    line, sel, rules, base_dir, ax
         As :func:`pound_mc.analysis.plot.probability_chart` (all records pooled).
 
     Returns
@@ -134,8 +150,8 @@ def required_gap_chart(
     """
     if GAP_DIM not in ds.dims:
         raise InputError("does not apply: the required gap needs a study with the gap on its grid")
-    fig = probability_chart(ds, None, line=line, sel=sel, rules=rules, base_dir=base_dir)
-    ax = fig.axes[0]
+    fig = probability_chart(ds, None, line=line, sel=sel, rules=rules, base_dir=base_dir, ax=ax)
+    ax = ax if ax is not None else fig.axes[0]
     found = required_gap(ds, probability, rules=False)
     ax.axhline(probability, color="grey", lw=0.9, ls="--", label=f"target {probability:g}")
     rest = list(found["required_gap"].dims)
@@ -171,9 +187,9 @@ def required_gap_chart(
         )
         first = False
     legend_outside(ax, title=axis_label(ds, line) if line is not None else None)
-    ax.set_title(
-        ax.get_title() + f"\ndiamonds: smallest gap with P <= {probability:g} (bars: Wilson "
-        "interval)",
-        fontsize=8,
-    )
+    if first:  # no line reaches the target within the grid's gaps: say so, not a silent chart
+        marks = f"no gap of the grid brings P to {probability:g} or less: widen the gap range"
+    else:
+        marks = f"diamonds: smallest gap with P <= {probability:g} (bars: Wilson interval)"
+    ax.set_title(ax.get_title() + "\n" + marks, fontsize=8)
     return save(fig, path)

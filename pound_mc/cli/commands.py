@@ -256,7 +256,7 @@ def _scene(sub: argparse._SubParsersAction) -> None:
 
 def _study(sub: argparse._SubParsersAction) -> None:
     """Studies: ``run`` and ``check``."""
-    p = _command(sub, "run", help="run a study and write <out>/<name>.nc and a spectrum chart")
+    p = _command(sub, "run", help="run a study and write <out>/<name>.nc and its charts")
     _shared(p, "study")
     p.add_argument("--out", default="outputs", metavar="DIR", help="output folder")
     p.add_argument("--threads", type=int, metavar="N", help="numba threads (in-process run)")
@@ -272,7 +272,7 @@ def _study(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--fresh", action="store_true", help="discard earlier results of this study")
     _shared(p, "chunk-size")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
-    p.add_argument("--no-plot", action="store_true", help="do not draw the spectrum chart")
+    p.add_argument("--no-plot", action="store_true", help="do not draw the study's charts")
     p.add_argument(
         "--dask-timeout",
         type=float,

@@ -1,0 +1,152 @@
+"""The notebook API of a study dataset: every ``ds.pound.plot`` method on the Axes given, the
+required gap of every study, ``sel`` as the charts document it, and the worked notebook on the
+studies whose datasets it meets (the quickstart's intensity and gap axes, yielding buildings).
+
+The datasets are the cut-down shipped studies of ``test_analysis_matrix`` (a few seconds each).
+"""
+
+import re
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pytest
+import xarray as xr
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
+from test_analysis import execute_notebook
+from test_analysis_matrix import small_study
+
+import pound_mc  # noqa: F401  (registers ds.pound)
+from pound_mc.cli import main
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+@pytest.fixture(scope="module")
+def small(tmp_path_factory):
+    """``{study stem: path of its cut-down dataset}``, each run once when first asked for."""
+    folder = tmp_path_factory.mktemp("api")
+    done = {}
+
+    def get(stem: str) -> Path:
+        if stem not in done:
+            study = folder / f"{stem}.toml"
+            study.write_text(small_study(ROOT / "studies" / f"{stem}.toml"))
+            args = ["run", str(study), "--out", str(folder), "--no-progress", "--no-plot"]
+            assert main(args) == 0
+            done[stem] = folder / f"{tomllib.loads(study.read_text())['study']['name']}.nc"
+        return done[stem]
+
+    return get
+
+
+def _open(path):
+    with xr.open_dataset(path) as ds:
+        return ds.load()
+
+
+def _axes(n):
+    fig = Figure(figsize=(4 * n, 3), layout="constrained")
+    return fig.subplots(1, n, squeeze=False).ravel()
+
+
+def test_every_plot_method_draws_on_the_axes_given(small):
+    ds = _open(small("quickstart"))
+    n_gaps = ds.sizes["contact_gap_m"]
+    for name, n, kwargs in (
+        ("spectrum", 1, {}),
+        ("probability", 1, {"rules": None}),
+        ("required_gap", 1, {"rules": None}),
+        ("distribution", 2, {}),
+        ("restitution", 1, {}),
+        ("fragility", n_gaps, {"n_boot": 20}),  # a panel per gap
+    ):
+        given = _axes(n)
+        got = getattr(ds.pound.plot, name)(ax=given if n > 1 else given[0], **kwargs)
+        got = np.atleast_1d(got)
+        assert [id(a) for a in got] == [id(a) for a in given], name
+        assert any(a.lines or a.collections or a.patches for a in given), name
+        # and on a figure of its own: the Axes it made
+        own = np.atleast_1d(getattr(ds.pound.plot, name)(**kwargs))
+        assert all(isinstance(a, Axes) for a in own), name
+    with pytest.raises(ValueError, match=f"draws {n_gaps} panel"):  # one Axes per panel
+        ds.pound.plot.fragility(ax=_axes(n_gaps + 1), n_boot=20)
+
+
+def test_required_gap_chart_marks_the_gap_the_api_finds(small):
+    ds = _open(small("quickstart"))
+    ax = _axes(1)[0]
+    ds.pound.plot.required_gap(ax=ax, rules=None, probability=0.5)
+    found = ds.pound.required_gap(probability=0.5, rules=False)["required_gap"]
+    # the diamonds: errorbar markers at (gap [mm], target), one per line with a finite gap
+    marks = sorted(float(ln.get_xdata()[0]) for ln in ax.lines if ln.get_marker() == "D")
+    expected = sorted(float(g) * 1e3 for g in found.values.ravel() if np.isfinite(g))
+    np.testing.assert_allclose(marks, expected)
+    title = ax.get_title()
+    if expected:
+        assert "diamonds" in title
+    else:  # none reached: the chart says so instead of a legend of absent diamonds
+        assert "widen the gap range" in title
+
+
+def test_required_gap_of_a_shear_study_leaves_the_rules_out(small):
+    ds = _open(small("shear_spectrum"))
+    found = ds.pound.required_gap(probability=0.1)
+    assert "gap_abs" not in found and "SDOF" in found.attrs["rules"]
+    # the probability per gap is the dataset's: simulations with an impact over those ok
+    ok = ds["status"] == 0
+    p = ((ds["impacts"] > 0) & ok).sum(("record", "sample")) / ok.sum(("record", "sample"))
+    np.testing.assert_allclose(
+        found["pounding_probability"].transpose(*p.dims).values, p.values, rtol=1e-12
+    )
+
+
+def test_spectrum_sel_picks_lines_and_refuses_what_it_cannot_hold(small):
+    ds = _open(small("quickstart"))
+    gaps = ds["contact_gap_m"].values
+    ax = ds.pound.plot.spectrum(sel={"contact_gap_m": [gaps[-1], gaps[0]]})
+    assert [ln.get_label() for ln in ax.lines] == [f"{g * 1e3:g} mm" for g in (gaps[-1], gaps[0])]
+    # the lines are the median over records of each record's median over samples [MN]
+    q = ds["peak_force_quantile"].sel(quantile=0.5).median("record") / 1e6
+    np.testing.assert_allclose(ax.lines[1].get_ydata(), q.isel(contact_gap_m=0).values)
+    with pytest.raises(ValueError, match="no dimension 'colour'"):
+        ds.pound.plot.spectrum(sel={"colour": 1})
+    with pytest.raises(ValueError, match="horizontal axis"):
+        ds.pound.plot.spectrum(sel={ds.pound.grid_dims[0]: 0.2})
+
+
+def test_history_title_names_the_record(small):
+    path = small("quickstart")
+    ds = _open(path)
+    name = str(ds["record"].values[1])
+    axes = ds.pound.plot.history(record=name, sample=0)
+    assert f"record {name}" in axes[0].figure._suptitle.get_text()
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("stem", ["quickstart", "inelastic_spectrum"])
+def test_analysis_notebook_runs_on_the_studies_it_meets(stem, small, monkeypatch):
+    outputs = execute_notebook(small(stem), monkeypatch)
+    assert not [o for o in outputs if o.output_type == "error"]
+    text = "".join(o.get("text", "") for o in outputs)
+    images = [o for o in outputs if "image/png" in o.get("data", {})]
+    if stem == "quickstart":  # intensity and gap axes: the fragility and required-gap cell
+        assert "required_gap" in text and "theta" in text
+        assert len(images) == 4  # spectrum, probability, required gap, history
+        rerun, stored = re.search(r"rerun: ([\d.e+-]+) MN; dataset: ([\d.e+-]+) MN", text).groups()
+        assert float(rerun) == pytest.approx(float(stored), rel=1e-12)
+    else:  # yielding buildings: no histories, said in a line
+        assert "no history for this study" in text
+        assert len(images) == 2  # spectrum, probability
+
+
+def test_fragility_fit_of_the_chart_is_the_api_s(small):
+    # the panel's title numbers are the fit of that gap's stripes (Baker 2015 MLE)
+    ds = _open(small("quickstart"))
+    axes = np.atleast_1d(ds.pound.plot.fragility(n_boot=20))
+    fit = ds.pound.fragility(im=ds.pound.grid_dims[0], n_boot=20)
+    for k, ax in enumerate(axes):
+        theta = fit["theta"].isel(contact_gap_m=k)
+        if np.isfinite(theta):
+            assert f"theta = {float(theta):.3g}" in ax.get_title()
