@@ -79,7 +79,7 @@ def _intensity_dim(ds: xr.Dataset, im: str | None) -> str:
         if not found:
             raise InputError(
                 f"the dataset has no intensity axis ({' or '.join(INTENSITY_DIMS)}); name a "
-                f"grid dimension with --im (one of {dims})",
+                f"grid dimension as the intensity (--im, or im= in Python; one of {dims})",
                 key="--im",
             )
         return found[0]
