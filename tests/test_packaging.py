@@ -19,7 +19,9 @@ def test_init_lists_and_writes_a_shipped_study(tmp_path, capsys, monkeypatch):
     assert main(["init"]) == 0
     listed = capsys.readouterr().out
     for path in (ROOT / "studies").glob("*.toml"):
-        assert path.stem in listed
+        # each by its whole one-line description (the first comment line was cut mid-sentence)
+        about = tomllib.loads(path.read_text())["study"]["description"]
+        assert f"{path.stem:20s} {about}\n" in listed
     assert main(["init", "quickstart"]) == 0
     written = tmp_path / "quickstart.toml"
     assert written.read_text() == (ROOT / "studies" / "quickstart.toml").read_text()

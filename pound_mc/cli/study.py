@@ -8,6 +8,7 @@ from __future__ import annotations
 import shutil
 import sys
 import time
+import tomllib
 from importlib import resources
 from pathlib import Path
 
@@ -230,9 +231,9 @@ def init_command(args) -> int:
     studies = shipped_studies()
     if not args.name:
         print("shipped studies (pound-mc init NAME writes NAME.toml here):")
-        for name, path in studies.items():
-            first = next((ln for ln in path.read_text().splitlines() if ln.startswith("#")), "#")
-            print(f"  {name:20s} {first.lstrip('# ').strip()}")
+        for name, path in studies.items():  # each by its [study] description (one line)
+            about = tomllib.loads(path.read_text(encoding="utf-8"))["study"].get("description")
+            print(f"  {name:20s} {about or ''}")
         return 0
     name = args.name.removesuffix(".toml")
     if name not in studies:
