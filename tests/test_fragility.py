@@ -2,8 +2,11 @@
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
+import xarray as xr
 from scipy import optimize, stats
 
 from pound_mc.analysis.fragility import (
@@ -13,6 +16,9 @@ from pound_mc.analysis.fragility import (
     wilson_interval,
 )
 from pound_mc.analysis.fragility_chart import fragility_chart
+from pound_mc.analysis.risk import fragility
+from pound_mc.analysis.risk_chart import fragility_panels
+from pound_mc.cli import main
 from pound_mc.errors import InputError
 
 STRIPES = np.array([0.1, 0.2, 0.3, 0.4, 0.6, 0.8, 1.0])
@@ -197,3 +203,123 @@ def test_chart_draws_the_fit(tmp_path):
     assert np.isclose(band[:, 1].min(), min(lower.min(), upper.min()))
     ax.figure.savefig(tmp_path / "fragility.png")
     assert (tmp_path / "fragility.png").stat().st_size > 0
+
+
+# Pounding counts of studies/quickstart.toml at its 100 mm gap (dataset written by the engine:
+# impacts > 0 over 44 records x 2 samples = 88 simulations per stripe) at PGA 0.1, 0.2, 0.4 g
+QS_PGA = np.array([0.1, 0.2, 0.4])
+QS_100MM = np.array([0, 2, 48])
+# 1/88, 87/88, 88/88: a resample is separated when 0.1 g draws no event or 0.2 g draws only
+# events, (87/88)^88 = 37 % each, 60 % either: more than half of the resamples have no fit
+HALF_SEPARATED = np.array([1, 87, 88])
+
+
+def _resamples(n_event, n_total, n_boot, seed):
+    # the bootstrap's resamples drawn again from the same generator: two batches of n_boot
+    rng = np.random.default_rng(seed)
+    p = np.asarray(n_event) / n_total
+    return np.concatenate([rng.binomial(n_total, p, size=(n_boot, p.size)) for _ in range(2)])
+
+
+def test_resamples_without_a_fit_are_discarded_and_counted():
+    n_total = np.full(3, 88)
+    fit = fit_fragility(QS_PGA, QS_100MM, n_total, n_boot=200, seed=5)
+    draws = _resamples(QS_100MM, n_total, 200, 5)
+    # 0.1 g never draws an event (0/88) and 0.4 g never only events (48/88, 1 - 0.55^88): a
+    # resample is separated exactly when 0.2 g draws no event ((86/88)^88 = 13 %)
+    assert not np.any(draws[:, 0]) and np.all(draws[:, 2] < 88)
+    separated = draws[:, 1] == 0
+    used = np.flatnonzero(~separated)[199] + 1  # draws up to the 200th with a fit
+    assert fit.n_boot_discarded == np.count_nonzero(separated[:used]) > 0
+    assert fit.discarded == {"separated": fit.n_boot_discarded}
+    # no step (beta = 0) and no infinite median among the replicates, each the point fit of its
+    # resample
+    assert fit.theta_boot.size == fit.beta_boot.size == 200
+    assert np.all(fit.beta_boot > 0) and np.all(np.isfinite(fit.theta_boot + fit.beta_boot))
+    kept = draws[:used][~separated[:used]]
+    for k in (0, 199):
+        ref = fit_fragility(QS_PGA, kept[k], n_total, n_boot=0)
+        assert (fit.theta_boot[k], fit.beta_boot[k]) == pytest.approx((ref.theta, ref.beta))
+    with pytest.raises(InputError, match="separated"):  # what was discarded, the fit refuses
+        fit_fragility(QS_PGA, draws[separated][0], n_total, n_boot=0)
+    # kept at beta = 0, these replicates made the lower bound 0; the profile-likelihood 95 %
+    # interval of beta (chi2(1) = 3.84 on Baker's eq. 12, scipy) is [0.246, 0.448]
+    assert 0.2 < fit.beta_ci[0] < fit.beta < fit.beta_ci[1] < 0.5
+    assert fit.bootstrap_note == (
+        f"{fit.n_boot_discarded} of {200 + fit.n_boot_discarded} bootstrap resamples left out: "
+        f"no fit (separated stripes: {fit.n_boot_discarded})"
+    )
+    assert fit.to_dict()["n_boot_discarded"] == fit.n_boot_discarded
+
+
+def test_more_than_half_without_a_fit_gives_no_interval():
+    n_total = np.full(3, 88)
+    fit = fit_fragility(QS_PGA, HALF_SEPARATED, n_total, n_boot=200, seed=3)
+    draws = _resamples(HALF_SEPARATED, n_total, 200, 3)
+    no_fit = (draws[:, 0] == 0) | (draws[:, 1] == 88)
+    assert fit.n_boot_discarded == np.count_nonzero(no_fit) > 200
+    assert fit.discarded == {"separated": fit.n_boot_discarded}
+    assert fit.theta_boot.size == 400 - fit.n_boot_discarded
+    assert np.isnan(fit.theta_ci + fit.beta_ci).all()
+    assert np.isnan(fit.band([0.1, 0.2])).all()
+    assert fit.bootstrap_note.startswith(f"no interval: {fit.n_boot_discarded} of 400 ")
+    assert "more than half" in fit.bootstrap_note
+    assert not fragility_chart(fit).collections  # no band
+
+
+def test_intervals_without_discarded_resamples_are_unchanged():
+    # theta_ci, beta_ci and band of this fit as the bootstrap gave them before resamples without
+    # a fit were discarded (commit 16aaaec, which kept them at their limits; this fit has none)
+    n_event, n_total = _draw(0.4, 0.5, 40, 3)
+    assert n_event.tolist() == [0, 2, 14, 21, 35, 37, 39]
+    fit = fit_fragility(STRIPES, n_event, n_total, n_boot=300, seed=11)
+    assert fit.n_boot_discarded == 0 and fit.discarded == {} and fit.bootstrap_note == ""
+    assert fit.theta_ci == (0.35191872692498855, 0.420293440341506)
+    assert fit.beta_ci == (0.35947060191546815, 0.5394157339325832)
+    lower, upper = fit.band([0.2, 0.4, 0.8])
+    assert lower.tolist() == [0.029461718149874114, 0.4539537880520916, 0.9058796821539399]
+    assert upper.tolist() == [0.1301267210115875, 0.6134600750611734, 0.9804727358478391]
+
+
+def _stripe_dataset():
+    # a study dataset as pound-mc run writes it, reduced to what the fragility reads: 88
+    # records x 1 sample at PGA 0.1, 0.2, 0.4 g and two gaps with the counts above
+    counts = np.stack([QS_100MM, HALF_SEPARATED], axis=1)  # (pga_g, contact_gap_m)
+    impacts = (np.arange(88)[:, None, None, None] < counts[None, :, :, None]).astype(np.int64)
+    dims = ("record", "pga_g", "contact_gap_m", "sample")
+    return xr.Dataset(
+        {
+            "impacts": (dims, impacts),
+            "peak_force": (dims, impacts * 1e6),
+            "status": (dims, np.zeros_like(impacts)),
+        },
+        coords={
+            "pga_g": ("pga_g", QS_PGA, {"units": "g", "long_name": "peak ground acceleration"}),
+            "contact_gap_m": ("contact_gap_m", [0.1, 0.2], {"units": "m", "long_name": "gap"}),
+        },
+    )
+
+
+def test_dataset_cli_and_chart_say_what_was_discarded(tmp_path, capsys):
+    ds = _stripe_dataset()
+    fits = [
+        fit_fragility(QS_PGA, z, np.full(3, 88), n_boot=200) for z in (QS_100MM, HALF_SEPARATED)
+    ]
+    out = fragility(ds, n_boot=200)
+    assert out["n_boot_discarded"].values.tolist() == [f.n_boot_discarded for f in fits]
+    assert out["bootstrap_note"].values.tolist() == [f.bootstrap_note for f in fits]
+    assert np.isnan(out["beta_ci"].values[1]).all() and out["beta_ci"].values[0, 0] > 0
+    path = tmp_path / "stripes.nc"
+    ds.to_netcdf(path)
+    assert main(["fragility", str(path), "--n-boot", "200"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[2] == f"    {fits[0].bootstrap_note}" and "[nan, nan]" in lines[3]
+    assert lines[4] == f"    {fits[1].bootstrap_note}"
+    assert main(["fragility", str(path), "--n-boot", "200", "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["n_boot_discarded"] == [f.n_boot_discarded for f in fits]
+    assert data["beta_ci"][1] == [None, None]
+    fig = fragility_panels(ds, n_boot=200)
+    for ax, f in zip(fig.axes[:2], fits, strict=True):
+        assert ax.get_title().replace("\n", " ").endswith(f.bootstrap_note)
+    assert fig.axes[0].collections and not fig.axes[1].collections  # the band only with a CI

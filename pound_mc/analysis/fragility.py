@@ -22,11 +22,28 @@ are refused with an :class:`~pound_mc.errors.InputError`.
 
 Confidence intervals come from a nonparametric bootstrap that resamples the simulations within
 each stripe (``z*_j ~ Binomial(n_j, z_j / n_j)``, the same as drawing ``n_j`` of the stripe's
-simulations with replacement), refitting each replicate, and taking percentiles.  A replicate
-without a finite fit keeps the limit its likelihood tends to (``beta = 0`` with ``theta`` at the
-separating intensity; ``beta = inf``; ``theta = inf`` or ``0`` when it has no or only events), so
-the intervals stay honest about the data's weakness; :attr:`FragilityFit.n_boot_degenerate`
-counts them.
+simulations with replacement), refitting each replicate, and taking percentiles (Efron &
+Tibshirani 1993, ch. 13).  With few stripes a resample can lose the few events (or non-events)
+that make the stripes overlap: at the quickstart's 100 mm gap (0/88, 2/88 and 48/88 pound at
+PGA 0.1, 0.2 and 0.4 g) the 0.2 g stripe draws no event in ``(86/88)^88 = 13 %`` of the
+resamples, which are then separated.  Such a resample has no maximum-likelihood fit, the data
+the point fit refuses: its likelihood grows without bound towards a step (``beta -> 0``).  That
+limit is not a value the data allow: while the observed stripes overlap, their likelihood tends
+to 0 as ``beta -> 0``, so a replicate kept at the limit only drags the percentiles to ``beta = 0``
+and the band to a 0-to-1 step.  A replicate with no fit (separated, no event, only events, a
+falling fraction, not converged) is therefore not a valid replicate of the estimator: it is
+discarded and counted (:attr:`FragilityFit.n_boot_discarded`, by kind in
+:attr:`FragilityFit.discarded`), and resamples are drawn on from the same generator (a second
+batch of ``n_boot``) until ``n_boot`` replicates have a fit.  The intervals then describe the
+estimator where it exists; the discarded resamples are the steep end, so the larger their share
+the more the lower bound of ``beta`` is too high (with 0/88, 1/88 and 43/88 events, 36 %
+discarded, it is 0.28 where the likelihood-ratio interval has 0.22).  When more than half of the
+resamples have no fit (fewer than ``n_boot`` fits in ``2 n_boot`` draws) the percentiles
+describe the conditioning more than the data, and the intervals are NaN
+(:attr:`FragilityFit.bootstrap_note` says why: add stripes near ``theta``).  Resampling from
+the fitted curve instead (a parametric bootstrap, ``z*_j ~ Binomial(n_j, p_j)``) would not avoid
+this: the fitted probability at 0.2 g (0.023) is the observed 2/88.  When no replicate is
+discarded the intervals are those of the plain percentile bootstrap.
 
 The required gap (:func:`required_gap`) reads the smallest gap from which on the pounding
 probability stays at or below a target, interpolating linearly between the gaps studied; its
@@ -37,6 +54,7 @@ References
 ----------
 Baker, J. W. (2015). Efficient analytical fragility function fitting using dynamic structural
 analysis. Earthquake Spectra 31(1), 579-599.
+Efron, B., Tibshirani, R. J. (1993). An Introduction to the Bootstrap. Chapman & Hall.
 Wilson, E. B. (1927). Probable inference, the law of succession, and statistical inference.
 J. Am. Stat. Assoc. 22(158), 209-212.
 Brown, L. D., Cai, T. T., DasGupta, A. (2001). Interval estimation for a binomial proportion.
@@ -65,6 +83,17 @@ __all__ = [
 
 #: Newton iterations before a fit is declared not converged.
 _MAX_ITER = 200
+#: Bootstrap batches of ``n_boot`` resamples drawn at most: fewer than ``n_boot`` fits among
+#: them means more than half of the resamples had none, and the intervals are NaN.
+_BOOT_BATCHES = 2
+#: Replicates without a fit, by :func:`_classify`'s kind, in words.
+_DISCARDED_WORDS = {
+    "separated": "separated stripes",
+    "none": "no event",
+    "all": "only events",
+    "decreasing": "falling event fraction",
+    "not converged": "not converged",
+}
 #: Convergence: Newton decrement (twice the log-likelihood still to gain) below this times
 #: max(1, -lnL); one more Newton step is taken after it.
 _TOL = 1e-12
@@ -257,19 +286,25 @@ class FragilityFit:
     beta : float
         Dispersion (standard deviation of ln IM) [-].
     theta_ci, beta_ci : tuple of float
-        Bootstrap percentile confidence intervals at level ``ci``.
+        Bootstrap percentile confidence intervals at level ``ci``; NaN without replicates or
+        when more than half of the resamples had no fit (see :attr:`bootstrap_note`).
     loglik : float
         Maximised binomial log-likelihood, without the binomial coefficients.
     ci : float
         Confidence level of the intervals.
     n_boot : int
-        Bootstrap replicates.
-    n_boot_degenerate : int
-        Replicates with no finite fit (kept at their limits, see the module notes).
+        Bootstrap replicates asked for.
+    n_boot_discarded : int
+        Resamples drawn and discarded because they have no fit, as the point fit would refuse
+        them (see the module notes); 0 when every resample had one.
     im, n_event, n_total : numpy.ndarray
         The stripes fitted (intensity, events, simulations).
     theta_boot, beta_boot : numpy.ndarray
-        The bootstrap replicates.
+        The bootstrap replicates with a fit, in the order drawn: ``n_boot`` of them, fewer when
+        more than half of the resamples had none.
+    discarded : dict of str to int
+        :attr:`n_boot_discarded` by reason (``"separated"``, ``"none"``, ``"all"``,
+        ``"decreasing"``, ``"not converged"``).
     """
 
     theta: float
@@ -279,21 +314,43 @@ class FragilityFit:
     loglik: float
     ci: float
     n_boot: int
-    n_boot_degenerate: int
+    n_boot_discarded: int
     im: np.ndarray = field(repr=False)
     n_event: np.ndarray = field(repr=False)
     n_total: np.ndarray = field(repr=False)
     theta_boot: np.ndarray = field(repr=False)
     beta_boot: np.ndarray = field(repr=False)
+    discarded: dict[str, int] = field(default_factory=dict, repr=False)
+
+    @property
+    def bootstrap_note(self) -> str:
+        """Why the bootstrap left resamples out, in words; ``""`` when it left none out."""
+        if not self.n_boot_discarded:
+            return ""
+        drawn = self.theta_boot.size + self.n_boot_discarded
+        why = ", ".join(
+            f"{_DISCARDED_WORDS[kind]}: {count}" for kind, count in self.discarded.items()
+        )
+        share = f"{self.n_boot_discarded} of {drawn} bootstrap resamples"
+        if self.theta_boot.size == self.n_boot:
+            return f"{share} left out: no fit ({why})"
+        advice = "more than half; add stripes near theta"
+        return f"no interval: {share} have no fit ({why}), {advice}"
 
     def probability(self, x) -> np.ndarray:
         """Fitted probability of the event at intensity ``x``."""
         return fragility_probability(x, self.theta, self.beta)
 
     def band(self, x, ci: float | None = None) -> tuple[np.ndarray, np.ndarray]:
-        """Pointwise bootstrap band ``(lower, upper)`` of the curve at ``x`` (level ``ci``)."""
+        """Pointwise bootstrap band ``(lower, upper)`` of the curve at ``x`` (level ``ci``).
+
+        NaN where the fit has no intervals (no replicates, or more than half of the resamples
+        without a fit).
+        """
         level = self.ci if ci is None else _level(ci)
         x = np.atleast_1d(np.asarray(x, dtype=np.float64))
+        if self.theta_boot.size == 0 or self.theta_boot.size < self.n_boot:
+            return np.full(x.shape, np.nan), np.full(x.shape, np.nan)
         curves = fragility_probability(
             x[None, :], self.theta_boot[:, None], self.beta_boot[:, None]
         )
@@ -311,12 +368,13 @@ class FragilityFit:
             "loglik": self.loglik,
             "ci": self.ci,
             "n_boot": self.n_boot,
-            "n_boot_degenerate": self.n_boot_degenerate,
+            "n_boot_discarded": self.n_boot_discarded,
             "stripes": {
                 "im": self.im.tolist(),
                 "n_event": self.n_event.tolist(),
                 "n_total": self.n_total.tolist(),
             },
+            "discarded": dict(self.discarded),
         }
 
 
@@ -366,7 +424,8 @@ def fit_fragility(
     n_total : array_like of int
         Simulations at each stripe.
     n_boot : int, default 1000
-        Bootstrap replicates (0: no intervals, they are NaN).
+        Bootstrap replicates with a fit (0: no intervals, they are NaN).  Resamples without a
+        fit are discarded and drawn again, up to ``2 n_boot`` resamples in all (module notes).
     seed : int or numpy.random.SeedSequence, default 0
         Seed of the bootstrap's :class:`numpy.random.Generator`.
     ci : float, default 0.95
@@ -408,21 +467,15 @@ def fit_fragility(
     }.get(kind[0])
     if reason:
         raise InputError(f"cannot fit a fragility: {reason}", key="n_event")
+    theta_ci = beta_ci = (np.nan, np.nan)
+    theta_b = beta_b = np.empty(0)
+    discarded: dict[str, int] = {}
     if n_boot:
-        rng = np.random.default_rng(seed)
-        p_hat = np.divide(z, n, out=np.zeros_like(z), where=used)
-        z_boot = rng.binomial(n.astype(np.int64), p_hat, size=(int(n_boot), z.size))
-        z_boot = z_boot.astype(np.float64)
-        n_boot_rows = np.broadcast_to(n, z_boot.shape)
-        theta_b, beta_b, _ll, kind_b = _fit_rows(t, z_boot, n_boot_rows)
-        q = [(1 - level) / 2, (1 + level) / 2]
-        theta_ci = np.nanquantile(theta_b, q, method="inverted_cdf")
-        beta_ci = np.nanquantile(beta_b, q, method="inverted_cdf")
-        degenerate = int(np.count_nonzero(kind_b != ""))
-    else:
-        theta_b = beta_b = np.empty(0)
-        theta_ci = beta_ci = (np.nan, np.nan)
-        degenerate = 0
+        theta_b, beta_b, discarded = _bootstrap(t, z, n, int(n_boot), seed)
+        if theta_b.size == n_boot:
+            q = [(1 - level) / 2, (1 + level) / 2]
+            theta_ci = np.nanquantile(theta_b, q, method="inverted_cdf")
+            beta_ci = np.nanquantile(beta_b, q, method="inverted_cdf")
     return FragilityFit(
         theta=float(theta[0]),
         beta=float(beta[0]),
@@ -431,13 +484,50 @@ def fit_fragility(
         loglik=float(loglik[0]),
         ci=level,
         n_boot=int(n_boot),
-        n_boot_degenerate=degenerate,
+        n_boot_discarded=sum(discarded.values()),
         im=im,
         n_event=z.astype(np.int64),
         n_total=n.astype(np.int64),
         theta_boot=theta_b,
         beta_boot=beta_b,
+        discarded=discarded,
     )
+
+
+def _bootstrap(t, z, n, n_boot, seed):
+    """Bootstrap replicates of the fit: the first ``n_boot`` resamples with a fit, in order.
+
+    Resamples are drawn in batches of ``n_boot`` from one generator (the first batch is the
+    whole bootstrap when every resample has a fit), at most :data:`_BOOT_BATCHES` of them.
+
+    Returns
+    -------
+    theta, beta : numpy.ndarray
+        The replicates with a fit (``n_boot``, fewer when the batches ran out).
+    discarded : dict of str to int
+        Resamples without a fit drawn before the last replicate kept, by kind.
+    """
+    rng = np.random.default_rng(seed)
+    p_hat = np.divide(z, n, out=np.zeros_like(z), where=n > 0)
+    thetas, betas, kinds = [], [], []
+    found = 0
+    for _batch in range(_BOOT_BATCHES):
+        z_boot = rng.binomial(n.astype(np.int64), p_hat, size=(n_boot, z.size))
+        z_boot = z_boot.astype(np.float64)
+        theta_b, beta_b, _ll, kind_b = _fit_rows(t, z_boot, np.broadcast_to(n, z_boot.shape))
+        valid = kind_b == ""
+        # rows up to and with the replicate that completes n_boot (all rows if none does)
+        reach = np.cumsum(valid) >= n_boot - found
+        rows = slice(0, int(np.argmax(reach)) + 1 if reach.any() else n_boot)
+        valid = valid[rows]
+        thetas.append(theta_b[rows][valid])
+        betas.append(beta_b[rows][valid])
+        kinds.extend(kind_b[rows][~valid])
+        found += int(np.count_nonzero(valid))
+        if found == n_boot:
+            break
+    discarded = {kind: kinds.count(kind) for kind in _DISCARDED_WORDS if kind in kinds}
+    return np.concatenate(thetas), np.concatenate(betas), discarded
 
 
 # --------------------------------------------------------------------------- required gap

@@ -41,8 +41,8 @@ def fragility_chart(
     event_label : str, default "event"
         What the probability is of (``"pounding"``).
     band : bool, default True
-        Shade the pointwise bootstrap band of the curve at ``fit.ci`` (when there are
-        replicates).
+        Shade the pointwise bootstrap band of the curve at ``fit.ci`` (when the fit has
+        intervals: not when more than half of the resamples had no fit).
     counts : bool, default True
         Write ``events/simulations`` beside each stripe's point.
     num : int, default 200
@@ -65,7 +65,7 @@ def fragility_chart(
     upper_im = max(float(im.max()), fit.theta * np.exp(2.5 * fit.beta))
     x = np.linspace(0.0, 1.05 * upper_im, num)[1:]
     percent = round(100 * fit.ci)
-    if band and fit.theta_boot.size:
+    if band and np.all(np.isfinite(fit.theta_ci)):
         lower, upper = fit.band(x)
         ax.fill_between(
             x, lower, upper, color=PALETTE[0], alpha=0.2, lw=0, label=f"{percent} % bootstrap band"

@@ -128,7 +128,9 @@ def fragility(
         Along the remaining grid axes: ``theta`` (median, units of the IM), ``beta`` [-],
         ``theta_ci`` and ``beta_ci`` (with a ``bound`` dimension: lower, upper), the stripes
         ``n_event`` and ``n_total`` (with the IM dimension) and ``fit_message`` (why a
-        combination has no fit, "" where it has one); attributes ``im``, ``event``, ``ci``.
+        combination has no fit, "" where it has one), ``n_boot_discarded`` (bootstrap resamples
+        without a fit, left out) and ``bootstrap_note`` (why, "" where none was; the intervals
+        are NaN when more than half were); attributes ``im``, ``event``, ``ci``.
     """
     dim = _intensity_dim(ds, im)
     n_event, n_total = _counts(ds, event)
@@ -141,6 +143,8 @@ def fragility(
     theta_ci = np.full((*shape, 2), np.nan)
     beta_ci = np.full((*shape, 2), np.nan)
     message = np.full(shape, "", dtype=object)
+    discarded = np.zeros(shape, dtype=np.int64)
+    note = np.full(shape, "", dtype=object)
     x = np.asarray(ds[dim].values, dtype=float)
     for index in itertools.product(*(range(n) for n in shape)):
         try:
@@ -152,6 +156,7 @@ def fragility(
             continue
         theta[index], beta[index] = fit.theta, fit.beta
         theta_ci[index], beta_ci[index] = fit.theta_ci, fit.beta_ci
+        discarded[index], note[index] = fit.n_boot_discarded, fit.bootstrap_note
     units = ds[dim].attrs.get("units", "1")
     bound = ("bound",)
     out = xr.Dataset(
@@ -167,6 +172,9 @@ def fragility(
             "n_total": (n_total.dims, n_total.values.astype(np.int64),
                         {"units": "1", "long_name": "simulations with status ok"}),
             "fit_message": (rest, message, {"long_name": "why there is no fit"}),
+            "n_boot_discarded": (rest, discarded, {"units": "1", "long_name":
+                                 "bootstrap resamples without a fit, left out"}),
+            "bootstrap_note": (rest, note, {"long_name": "why bootstrap resamples were left out"}),
         },
         coords={**{d: ds[d] for d in (*rest, dim)}, "bound": ["lower", "upper"]},
         attrs={"im": dim, "event": str(event), "ci": ci, "n_boot": n_boot},

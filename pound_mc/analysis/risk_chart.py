@@ -62,7 +62,8 @@ def fragility_panels(
     Returns
     -------
     matplotlib.figure.Figure
-        A panel without a fit says why.
+        A panel without a fit says why; one whose bootstrap left resamples out (they have no
+        fit) says how many, and has no band when more than half were.
     """
     dim = _intensity_dim(ds, im)
     n_event, n_total = _counts(ds, event)
@@ -96,7 +97,9 @@ def fragility_panels(
             ax.set_ylim(-0.02, 1.02)
             continue
         fragility_chart(fit, ax=ax, im_label=im_label, event_label=event, legend=False)
-        ax.set_title(f"{title}\ntheta = {fit.theta:.3g}, beta = {fit.beta:.3g}", fontsize=8)
+        head = f"{title}\ntheta = {fit.theta:.3g}, beta = {fit.beta:.3g}"
+        note = f"\n{textwrap.fill(fit.bootstrap_note, 64)}" if fit.bootstrap_note else ""
+        ax.set_title(head + note, fontsize=8)
         if not legend:
             handles, labels = ax.get_legend_handles_labels()
             generic = [label.split(":")[0] for label in labels]  # the fit's numbers: per panel

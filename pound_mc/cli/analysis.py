@@ -223,6 +223,8 @@ def fragility_command(args) -> int:
         "beta_ci": _jsonable(fit["beta_ci"].values),
         "ci": fit.attrs["ci"],
         "message": np.asarray(fit["fit_message"].values, dtype=object).tolist(),
+        "n_boot_discarded": np.asarray(fit["n_boot_discarded"].values).tolist(),
+        "bootstrap_note": np.asarray(fit["bootstrap_note"].values, dtype=object).tolist(),
     }
     if args.json:
         print(json.dumps(out, indent=1))
@@ -234,6 +236,7 @@ def fragility_command(args) -> int:
     tci = fit["theta_ci"].values.reshape(-1, 2)
     bci = fit["beta_ci"].values.reshape(-1, 2)
     msgs = np.atleast_1d(np.asarray(fit["fit_message"].values, dtype=object)).ravel()
+    notes = np.atleast_1d(np.asarray(fit["bootstrap_note"].values, dtype=object)).ravel()
     grids = np.meshgrid(*(fit[d].values for d in rest), indexing="ij") if rest else []
     for k in range(flat_theta.size):
         where = ", ".join(f"{d} = {g.ravel()[k]:g}" for d, g in zip(rest, grids, strict=True))
@@ -243,4 +246,6 @@ def fragility_command(args) -> int:
         else:
             print(head + f"theta = {flat_theta[k]:.4g} [{tci[k, 0]:.4g}, {tci[k, 1]:.4g}], "
                   f"beta = {flat_beta[k]:.3g} [{bci[k, 0]:.3g}, {bci[k, 1]:.3g}]")  # fmt: skip
+            if notes[k]:
+                print(f"    {notes[k]}")
     return 0
