@@ -150,3 +150,16 @@ def test_fragility_fit_of_the_chart_is_the_api_s(small):
         theta = fit["theta"].isel(contact_gap_m=k)
         if np.isfinite(theta):
             assert f"theta = {float(theta):.3g}" in ax.get_title()
+
+
+def test_a_rule_hidden_under_another_says_so(small):
+    ds = _open(small("quickstart"))
+    span = float(np.ptp(ds["contact_gap_m"].values)) * 1e3  # the gap axis [mm]
+    near = 0.03 + 0.005 * span * 1e-3  # half of 1 % of the axis from SRSS: drawn under it
+    ax = ds.pound.plot.probability(rules={"ABS": 0.05, "SRSS": 0.03, "DDC": near})
+    labels = [ln.get_label() for ln in ax.lines if "rule" in ln.get_label()]
+    assert labels == [
+        "ABS rule: 50 mm",
+        "SRSS rule: 30 mm",
+        f"DDC rule: {near * 1e3:.3g} mm (under the SRSS line)",
+    ]

@@ -369,7 +369,7 @@ def _hold(ds, dims, sel):
 
 
 def _hidden_under(gaps, drawn: dict, span: float) -> str:
-    """`` (under the R lines)`` where every gap is within 1 % of the axis of rule R's, else ``""``.
+    """``under the R lines`` where every gap is within 1 % of the axis of rule R's, else ``""``.
 
     ``gaps``: a rule's gaps [mm] (one, or one per line); ``drawn``: the rules drawn before it;
     ``span``: the axis' extent [mm] (0: not numeric, nothing said).
@@ -378,7 +378,7 @@ def _hidden_under(gaps, drawn: dict, span: float) -> str:
         both = np.isfinite(gaps) & np.isfinite(prev) if prev.shape == gaps.shape else None
         if span > 0.0 and both is not None and both.any():
             if np.all(np.abs(gaps[both] - prev[both]) <= 0.01 * span):
-                return f" (under the {other} line{'s' if gaps.size > 1 else ''})"
+                return f"under the {other} line{'s' if gaps.size > 1 else ''}"
     return ""
 
 
@@ -518,7 +518,9 @@ def probability_chart(
         drawn[label] = arr * 1e3
         if arr.size == 1:
             if np.isfinite(arr[0]):
-                rule_label = f"{label} rule: {arr[0] * 1e3:.3g} mm" + under
+                rule_label = f"{label} rule: {arr[0] * 1e3:.3g} mm" + (
+                    f" ({under})" if under else ""
+                )
                 ax.axvline(arr[0] * 1e3, color="0.3", ls=style, lw=1.1, label=rule_label)
             continue
         if line is None or arr.size != ds.sizes[line]:
@@ -528,7 +530,8 @@ def probability_chart(
         first = True
         for i in line_idx:
             if np.isfinite(arr[i]):
-                rule_label = f"{label} rule (in each line's colour){under}" if first else None
+                where = f"in each line's colour; {under}" if under else "in each line's colour"
+                rule_label = f"{label} rule ({where})" if first else None
                 ax.axvline(arr[i] * 1e3, color=colours[i], ls=style, lw=1.1, label=rule_label)
                 first = False
     held = ", ".join(f"{d} = {value_text(ds, d, i)}" for d, i in hold.items())
