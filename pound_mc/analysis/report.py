@@ -118,12 +118,18 @@ def _provenance_html(ds) -> str:
 
 
 def _yielding_sides(ds) -> list[str]:
-    """Buildings with ductility values, those with a yield-displacement grid axis first."""
+    """Buildings with a ductility value per simulation, those with a yield-displacement axis first.
+
+    The sides :func:`pound_mc.analysis.plot.inelastic_chart` can draw: ``peak_ductility_{side}``
+    over the dims of ``peak_force``, not NaN throughout.
+    """
     ok = ds["status"] == 0
     sides = [
         s
         for s in ("left", "right")
-        if f"peak_ductility_{s}" in ds and bool(ds[f"peak_ductility_{s}"].where(ok).notnull().any())
+        if f"peak_ductility_{s}" in ds
+        and ds[f"peak_ductility_{s}"].dims == ds["peak_force"].dims
+        and bool(ds[f"peak_ductility_{s}"].where(ok).notnull().any())
     ]
     return sorted(sides, key=lambda s: f"{s}_yield_disp_m" not in ds.dims)
 
