@@ -13,6 +13,7 @@ import tomllib
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
 import xarray as xr
 from test_analysis import CHROMIUM, screenshot
@@ -20,6 +21,7 @@ from test_analysis import CHROMIUM, screenshot
 import pound_mc  # noqa: F401  (registers ds.pound)
 from pound_mc.analysis import profiles, risk
 from pound_mc.analysis.risk_chart import fragility_panels
+from pound_mc.analysis.style import axis_label
 from pound_mc.cli import main
 from pound_mc.cli.analysis import draw
 from pound_mc.cli.commands import KINDS
@@ -201,8 +203,10 @@ def _applies(ds, kind) -> bool:
         return "contact" in ds.dims
     if kind == "history":
         return "hysteretic_energy" not in ds  # yielding buildings: no histories recorded
-    if kind in profiles.PROFILE_VARIABLES:
-        return any(v in ds for v in profiles.PROFILE_VARIABLES[kind])
+    if kind in profiles.PROFILE_VARIABLES:  # present and not NaN throughout (SDOF drift)
+        ok = ds["status"] == 0
+        variables = [v for v in profiles.PROFILE_VARIABLES[kind] if v in ds]
+        return any(bool(ds[v].where(ok).notnull().any()) for v in variables)
     return True
 
 
@@ -273,8 +277,12 @@ def test_report_of_every_study_renders_in_chromium(study, datasets, tmp_path):
         expected -= {"distribution", "history"}
     if not _applies(ds, "history"):
         expected.discard("history")
+    if "peak_ductility_left" in ds and bool(ds["peak_ductility_left"].notnull().any()):
+        expected.add("inelastic")  # the inelastic spectrum of a study of yielding buildings
     for key in expected:
         assert f'id="chart-{key}"' in page, key
+    for kind in profiles.PROFILE_VARIABLES:  # no empty drift chart of SDOF buildings
+        assert (f'id="chart-{kind}"' in page) == _applies(ds, kind), kind
     screenshot(tmp_path, out)  # no console message, not blank
 
 
@@ -343,3 +351,86 @@ def test_worst_and_to_dataframe(datasets):
     counts = ds.pound.status_counts()
     assert counts.index.tolist() == ["ok", "unstable", "not_converged", "inaccurate"]
     assert int(counts.sum()) == ds["status"].size
+
+
+# -- inelastic SDOF buildings: which profiles apply, lines per building variant, --sel -------
+def _inelastic_sdof(datasets):
+    path = datasets(next(p for p in STUDIES if p.stem == "inelastic_spectrum"))
+    with xr.open_dataset(path) as ds:
+        ds.load()
+    return path, ds
+
+
+def _ok_quantiles(ds, name, keep):
+    """5, 50 and 95 % of ``name`` (status ok) over the records and samples, (quantile, *keep)."""
+    ok = ds[name].where(ds["status"] == 0)
+    return ok.quantile([0.05, 0.5, 0.95], dim=("record", "sample")).transpose("quantile", *keep)
+
+
+def _band(collection, xs):
+    """Lowest and highest y of a ``fill_between`` band at each of ``xs``."""
+    verts = collection.get_paths()[0].vertices
+    at = [verts[verts[:, 0] == x, 1] for x in xs]
+    return np.array([a.min() for a in at]), np.array([a.max() for a in at])
+
+
+def test_drift_of_sdof_buildings_does_not_apply(datasets, tmp_path, capsys):
+    path, ds = _inelastic_sdof(datasets)
+    # drift ratios of SDOF buildings without height_m are NaN (pound_mc/study/dataset.py)
+    assert ds["peak_drift_left"].isnull().all() and ds["peak_drift_right"].isnull().all()
+    out = tmp_path / "x.png"
+    assert main(["plot", str(path), "--kind", "drift", "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and str(path) in err and "Traceback" not in err, err
+    assert "does not apply" in err and "peak_drift_left" in err, err
+    assert not out.exists()
+    # the report leaves it out: test_report_of_every_study_renders_in_chromium
+
+
+def test_ductility_of_sdof_buildings_is_one_line_per_yield_displacement(datasets):
+    path, ds = _inelastic_sdof(datasets)
+    grid = ("left_yield_disp_m", "left_period_s")
+    q = _ok_quantiles(ds, "peak_ductility_left", grid)
+    periods = ds["left_period_s"].values  # [s], drawn as they are
+    for line in (None, "left_yield_disp_m"):  # the default line axis and asked for by name
+        fig = draw(path, "ductility", line=line)
+        (ax,) = fig.axes  # the right building is elastic (ductility NaN): no panel
+        assert "right building left out" in fig.get_suptitle()
+        assert ax.get_xlabel() == axis_label(ds, "left_period_s")
+        assert ax.get_legend().get_title().get_text() == axis_label(ds, "left_yield_disp_m")
+        assert len(ax.lines) == len(ax.collections) == ds.sizes["left_yield_disp_m"]
+        for k, (drawn, band) in enumerate(zip(ax.lines, ax.collections, strict=True)):
+            np.testing.assert_array_equal(drawn.get_xdata(), periods)
+            np.testing.assert_allclose(drawn.get_ydata(), q.sel(quantile=0.5)[k].values)
+            low, high = _band(band, periods)
+            np.testing.assert_allclose(low, q.sel(quantile=0.05)[k].values)
+            np.testing.assert_allclose(high, q.sel(quantile=0.95)[k].values)
+
+
+def test_sel_picks_the_lines_and_holds_the_other_axes_of_profile_charts(datasets):
+    path, ds = _inelastic_sdof(datasets)
+    median = _ok_quantiles(ds, "peak_ductility_left", ("left_yield_disp_m", "left_period_s"))
+    median = median.sel(quantile=0.5)
+    (ax,) = draw(path, "ductility", sel={"left_yield_disp_m": 0.02}).axes
+    assert [line.get_label() for line in ax.lines] == ["20 mm"]
+    np.testing.assert_allclose(ax.lines[0].get_ydata(), median[0].values)
+    # a third grid axis (a gap, the ductility doubled at the second) is held at one value
+    sub = ds[["peak_force", "status", "peak_ductility_left", "peak_ductility_right"]]
+    doubled = sub.assign(peak_ductility_left=2.0 * sub["peak_ductility_left"])
+    three = xr.concat([sub, doubled], dim=pd.Index([0.01, 0.02], name="contact_gap_m"))
+    three = three.transpose("record", "left_period_s", "left_yield_disp_m", "contact_gap_m", ...)
+    three["contact_gap_m"].attrs = {"units": "m", "long_name": "initial gap"}
+    for sel, factor, held in ((None, 1.0, "10 mm"), ({"contact_gap_m": 0.02}, 2.0, "20 mm")):
+        fig = profiles.profile_chart(three, quantity="ductility", sel=sel)
+        assert f"held: contact_gap_m = {held}" in fig.get_suptitle()
+        for k, line in enumerate(fig.axes[0].lines):
+            np.testing.assert_allclose(line.get_ydata(), factor * median[k].values)
+    # contacts of the shear study: the gap sel names alone
+    shear = datasets(next(p for p in STUDIES if p.stem == "shear_spectrum"))
+    with xr.open_dataset(shear) as sds:
+        sds.load()
+    gap = float(sds["contact_gap_m"].values[1])
+    (ax,) = draw(shear, "contacts", sel={"contact_gap_m": gap}).axes
+    force = _ok_quantiles(sds, "contact_peak_force", ("contact_gap_m", "contact"))
+    assert len(ax.lines) == 1
+    np.testing.assert_allclose(ax.lines[0].get_xdata(), force.sel(quantile=0.5)[1] / 1e6)

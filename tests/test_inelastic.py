@@ -305,6 +305,44 @@ def test_inelastic_chart_draws_the_elastic_line_as_displacement_over_the_yield_o
     )
 
 
+def test_inelastic_chart_titles_fit_and_lines_take_the_shared_style():
+    """Titles inside the figure, one legend below both panels, the shared colours and markers."""
+    from pound_mc.analysis.style import PALETTE, line_style
+
+    rng = np.random.default_rng(2)
+    dims = ("record", "left_period_s", "left_yield_disp_m", "sample")
+    disp = rng.uniform(0.01, 0.1, (1, 4, 2, 6))
+    ds = xr.Dataset(
+        {
+            "peak_ductility_left": (dims, disp / np.array([0.02, 1000.0])[:, None]),
+            "peak_disp_left": (dims, disp),
+            "peak_force": (dims, rng.uniform(1e6, 2e6, disp.shape)),
+        },
+        coords={
+            "left_period_s": ("left_period_s", [0.1, 0.7, 1.3, 2.0], {"units": "s"}),
+            "left_yield_disp_m": ("left_yield_disp_m", [0.02, 1000.0], {"units": "m"}),
+            "record": ["builtin:elcentro"],
+        },
+        attrs={"study_name": "inelastic_spectrum"},
+    )
+    fig = inelastic_chart(ds)
+    fig.draw_without_rendering()  # the constrained layout
+    width = fig.bbox.width
+    for ax in fig.axes:
+        box = ax.title.get_window_extent()
+        assert box.x0 >= 0 and box.x1 <= width, ax.get_title()  # not clipped
+        assert ax.get_position().width > 0.35  # no legend beside the panels narrows them
+        assert ax.get_legend() is None
+        for k, line in enumerate(ax.get_lines()[:2]):
+            look = line_style(k)
+            assert line.get_color() == PALETTE[k] == look["color"]
+            assert line.get_marker() == look["marker"]
+    (legend,) = fig.legends  # one legend, below the panels, naming the line axis
+    assert legend.get_window_extent().y1 < min(ax.get_window_extent().y0 for ax in fig.axes)
+    assert [t.get_text() for t in legend.get_texts()][0] == "bilinear, yield displacement 20 mm"
+    assert "record builtin:elcentro" in fig.get_suptitle()
+
+
 # --------------------------------------------------------------------------- Bouc-Wen
 
 

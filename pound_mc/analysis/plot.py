@@ -28,6 +28,7 @@ from pound_mc.analysis.style import (
     axis_label,
     chart_doc,
     fit_tick_labels,
+    legend_below,
     legend_outside,
     line_style,
     new_axes,
@@ -242,32 +243,44 @@ def inelastic_chart(ds, path: str | Path | None = None, *, side="left", record=0
     force = ds["peak_force"].isel(hold) / 1e6
     values = [None] if line is None else list(ds[line].values)
     u_ref = float(min(values)) if line == f"{side}_yield_disp_m" else np.nan
-    fig = Figure(figsize=(9.6, 4.2), layout="constrained")
+    ref_text = _value_text(ds, line, int(np.argmin(values))) if np.isfinite(u_ref) else ""
+    fig = Figure(figsize=(9.6, 4.6), layout="constrained")
     ax_mu, ax_f = fig.subplots(1, 2, sharex=True)
-    xs = ds[x].values
+    xs = ds[x].values * scale_of(ds, x)
     for i, value in enumerate(values):
         pick = {} if value is None else {line: value}
         mu = duct.sel(pick)
         label = "median" if value is None else _value_text(ds, line, i)
-        labels = (label, label)
         elastic = not bool((mu > 1.0).any())
         if elastic and np.isfinite(u_ref):
             mu = disp.sel(pick) / u_ref
-            labels = (f"elastic: peak displacement / {u_ref:g} m", "elastic (never yields)")
+            label = f"elastic (never yields; ductility demand: peak displacement / {ref_text})"
         elif np.isfinite(u_ref):
-            labels = (f"bilinear, yield displacement {value:g} m",) * 2
-        style = {"color": f"C{i % 10}", "ls": "--" if elastic else "-"}
-        for ax, data, text in ((ax_mu, mu, labels[0]), (ax_f, force.sel(pick), labels[1])):
+            label = f"bilinear, yield displacement {_value_text(ds, line, i)}"
+        look = line_style(i)
+        look["linestyle"] = "--" if elastic else "-"
+        for ax, data, text in ((ax_mu, mu, label), (ax_f, force.sel(pick), f"_{label}")):
             q = data.quantile([0.05, 0.5, 0.95], dim="sample").values
-            ax.plot(xs, q[1], lw=1.6, label=text, **style)
-            ax.fill_between(xs, q[0], q[2], color=style["color"], alpha=0.18, lw=0)
-    xlabel = _axis_label(ds, x)
-    name = ds.attrs.get("study_name", "")
-    finish_axes(ax_mu, xlabel=xlabel, ylabel=f"ductility demand, {side} building [-]",
-                title=f"Ductility demand ({name}): median and 5-95 %")  # fmt: skip
+            ax.plot(xs, q[1], lw=1.6, ms=4, label=text, **look)
+            ax.fill_between(xs, q[0], q[2], color=look["color"], alpha=0.15, lw=0)
     ax_mu.axhline(1.0, color="k", lw=0.6, alpha=0.5)
-    finish_axes(ax_f, xlabel=xlabel, ylabel="peak impact force [MN]",
-                title=f"Peak impact force ({name}): median and 5-95 %")  # fmt: skip
+    for ax, ylabel, title in (
+        (ax_mu, f"ductility demand, {side} building [-]", f"Ductility demand, {side} building"),
+        (ax_f, "peak impact force [MN]", "Peak impact force"),
+    ):
+        ax.set(xlabel=_axis_label(ds, x), ylabel=ylabel, title=title)
+        ax.title.set_fontsize(9)
+        ax.grid(True, alpha=0.3)
+    held = ", ".join(
+        [f"record {ds['record'].values[_record_index(ds, record)]}"]
+        + [f"{d} = {value_text(ds, d, 0)}" for d in others]
+    )
+    fig.suptitle(
+        f"Inelastic spectrum ({ds.attrs.get('study_name', '')}, {held}): "
+        f"median over {ds.sizes['sample']} samples and 5-95 % band",
+        fontsize=9,
+    )
+    legend_below(fig, ax_mu, title=axis_label(ds, line) if line is not None else None)
     return save(fig, path)
 
 

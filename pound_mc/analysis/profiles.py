@@ -5,7 +5,8 @@ the ``contact`` dimension of a shear-building study) against the contact's eleva
 :func:`profile_chart` draws the peak storey drift or ductility of both buildings against the
 storey (variables along a ``storey`` dimension), or, for single-storey buildings, against the
 first grid axis.  Lines are medians over the records and samples (status ok) with the 5-95 %
-range as a band; heights are in m, drifts in mm, forces in MN.
+range as a band, one per value of a grid axis; every other grid axis is held at one value
+(never pooled across building variants); heights are in m, drifts in mm, forces in MN.
 """
 
 from __future__ import annotations
@@ -21,8 +22,16 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from pound_mc.analysis import style
+from pound_mc.analysis.plot import _grid_dims, _hold, _nearest_index
 
-__all__ = ["CONTACT_DIM", "STOREY_DIM", "PROFILE_VARIABLES", "contacts_chart", "profile_chart"]
+__all__ = [
+    "CONTACT_DIM",
+    "STOREY_DIM",
+    "PROFILE_VARIABLES",
+    "contacts_chart",
+    "profile_chart",
+    "has_values",
+]
 
 #: Dimension of the contacts of a shear-building study.
 CONTACT_DIM = "contact"
@@ -33,37 +42,124 @@ PROFILE_VARIABLES = {
     "drift": ("peak_drift_left", "peak_drift_right"),
     "ductility": ("peak_ductility_left", "peak_ductility_right"),
 }
+#: What the outputs of a quantity need, for the message of a dataset without them.
+_NEEDS = {
+    "drift": "drift ratios need storey heights: shear buildings or an SDOF with height_m",
+    "ductility": "no building that can yield",
+}
+#: Why one building's outputs of a quantity can be NaN throughout (its panel is left out).
+_WHY_EMPTY = {"drift": "no storey heights", "ductility": "it cannot yield"}
 
 
-def _over_samples(ds, variable, keep):
-    """Median and 5-95 % of ``variable`` (status ok) over every dim not in ``keep``."""
+def _over_samples(ds, variable, keep, hold=None):
+    """Median and 5-95 % of ``variable`` (status ok) over every dim not in ``keep``.
+
+    ``hold`` (``{dim: index}``) first takes the held dims at one value each.
+    """
     values = ds[variable].where(ds["status"] == 0)
+    values = values.isel({d: i for d, i in (hold or {}).items() if d in values.dims})
     over = [d for d in values.dims if d not in keep]
     with warnings.catch_warnings():  # storeys a lower building lacks are NaN: NaN quantiles
         warnings.filterwarnings("ignore", "All-NaN slice", RuntimeWarning)
         return values.quantile([0.05, 0.5, 0.95], dim=over, skipna=True)
 
 
-def _line_dim(ds, line):
-    grid = [d for d in ds["peak_force"].dims if d not in ("record", "sample")]
+def _selection(ds, line, sel, *, x_axis: bool = False):
+    """The axes of a profile chart: x, line, the held dims and the line values drawn.
+
+    Every grid axis is the horizontal axis (``x_axis``: the first one that is not ``line``),
+    the line axis (one line per value; default the first remaining grid axis) or held at one
+    value (``sel``'s nearest, else the first), so no line pools building variants.  ``sel``
+    on the line axis picks the lines drawn; on ``record``, the one record drawn.
+
+    Returns
+    -------
+    x : str or None
+    line : str or None
+    hold : dict
+        ``{dim: index}`` of the held dims.
+    picks : list
+        Indices along ``line`` of the lines drawn (``[None]`` without a line axis).
+    """
+    grid = _grid_dims(ds)
     if line is not None and line not in grid:
         raise ValueError(f"no grid dimension {line!r}; the dataset has {grid}")
-    return line if line is not None else (grid[0] if grid else None)
+    sel = dict(sel or {})
+    x = None
+    if x_axis and grid:
+        rest = [d for d in grid if d != line]
+        if not rest:
+            raise ValueError(
+                f"{line!r} is the only grid axis: none is left for the horizontal axis"
+            )
+        x = rest[0]
+    rest = [d for d in grid if d not in (x, line)]
+    line = line if line is not None else (rest.pop(0) if rest else None)
+    wanted = sel.pop(line, None) if line is not None else None
+    sel.pop(x, None)
+    hold = _hold(ds, rest + (["record"] if "record" in sel else []), sel)
+    if line is None:
+        picks = [None]
+    elif wanted is None:
+        picks = list(range(ds.sizes[line]))
+    else:
+        picks = list(dict.fromkeys(_nearest_index(ds, line, v) for v in np.atleast_1d(wanted)))
+    return x, line, hold, picks
 
 
-def _profile_lines(ax, ds, q, line, heights, scale: float) -> None:
-    """One profile per value of ``line`` (a single one where ``line`` is None).
+def _held_text(ds, hold) -> str:
+    """``"left_yield_disp_m = 20 mm, ..."``: what a chart holds (empty when nothing)."""
+    return ", ".join(f"{d} = {style.value_text(ds, d, i)}" for d, i in hold.items())
 
-    Each is the median of ``q`` against ``heights`` with its 5-95 % band.
+
+def _draw_lines(ax, ds, q, line, picks, at, scale: float, *, across: bool) -> None:
+    """One median line per index of ``line`` in ``picks``, each with its 5-95 % band.
+
+    ``across``: the values on the horizontal axis against ``at`` up the vertical one (a
+    profile over the height); else ``at`` along the horizontal axis.
     """
-    values = [None] if line is None else range(ds.sizes[line])
-    for k, i in enumerate(values):
+    for k, i in enumerate(picks):
         sq = q if i is None else q.isel({line: i})
+        low, mid, high = (
+            np.atleast_1d(sq.sel(quantile=level).values) * scale for level in (0.05, 0.5, 0.95)
+        )
         look = style.line_style(k)
         label = "median" if i is None else style.value_text(ds, line, i)
-        ax.plot(sq.sel(quantile=0.5).values * scale, heights, ms=5, label=label, **look)
-        low, high = (sq.sel(quantile=level).values * scale for level in (0.05, 0.95))
-        ax.fill_betweenx(heights, low, high, color=look["color"], alpha=0.12, lw=0)
+        if across:
+            ax.plot(mid, at, ms=5, label=label, **look)
+            ax.fill_betweenx(at, low, high, color=look["color"], alpha=0.12, lw=0)
+        else:
+            ax.plot(at, mid, ms=5, label=label, **look)
+            ax.fill_between(at, low, high, color=look["color"], alpha=0.12, lw=0)
+
+
+def has_values(ds: xr.Dataset, quantity: str) -> bool:
+    """Whether ``ds`` has a variable of ``quantity`` (:data:`PROFILE_VARIABLES`) with values.
+
+    A variable NaN in every simulation with status ok has none (the drift ratios of SDOF
+    buildings without ``height_m``, the ductility of a building that cannot yield).
+    """
+    ok = ds["status"] == 0
+    names = [v for v in PROFILE_VARIABLES[quantity] if v in ds]
+    return any(not bool(ds[v].where(ok).isnull().all()) for v in names)
+
+
+def _with_values(ds, quantity) -> tuple[list[str], list[str]]:
+    """The variables of ``quantity`` in ``ds`` with values, and those NaN throughout."""
+    names = [v for v in PROFILE_VARIABLES[quantity] if v in ds]
+    ok = ds["status"] == 0
+    empty = [v for v in names if bool(ds[v].where(ok).isnull().all())]
+    if not names:
+        raise ValueError(
+            f"does not apply: the dataset has no {quantity} outputs "
+            f"({', '.join(PROFILE_VARIABLES[quantity])}; inelastic buildings only)"
+        )
+    if len(empty) == len(names):
+        are = "are" if len(names) > 1 else "is"
+        raise ValueError(
+            f"does not apply: {' and '.join(names)} {are} NaN throughout ({_NEEDS[quantity]})"
+        )
+    return [v for v in names if v not in empty], empty
 
 
 @style.chart_doc
@@ -73,6 +169,7 @@ def contacts_chart(
     *,
     variable: str = "contact_peak_force",
     line: str | None = None,
+    sel: dict | None = None,
     ax: Axes | None = None,
 ) -> Figure:
     """Peak impact force (or another per-contact result) at each contact against its elevation.
@@ -85,8 +182,11 @@ def contacts_chart(
     variable : str
         Per-contact variable (``contact_peak_force``, ``contact_impacts``, ...).
     line : str, optional
-        Grid dimension with one line per value (default the first grid axis); the others and
-        the records and samples are pooled.
+        Grid dimension with one line per value (default the first grid axis); the records and
+        samples are pooled, the other grid axes held at one value.
+    sel : dict, optional
+        ``{dim: value}``: the value (nearest) each other grid axis is held at (default its
+        first), the values of ``line`` drawn (default all), or the one ``record`` drawn.
     ax : matplotlib.axes.Axes, optional
         Where to draw.
 
@@ -99,23 +199,23 @@ def contacts_chart(
         raise ValueError(
             f"does not apply: the dataset has no per-contact {variable!r} (shear buildings only)"
         )
-    line = _line_dim(ds, line)
-    keep = [CONTACT_DIM] + ([line] if line else [])
-    q = _over_samples(ds, variable, keep)
+    _, line, hold, picks = _selection(ds, line, sel)
+    q = _over_samples(ds, variable, [CONTACT_DIM] + ([line] if line else []), hold)
     height = (
         ds["contact_elevation"].values
         if "contact_elevation" in ds.coords
         else ds[CONTACT_DIM].values.astype(float)
     )
     fig, (ax,) = style.new_axes(ax, (7.6, 4.8))
-    _profile_lines(ax, ds, q, line, height, style.scale_of(ds, variable))
+    _draw_lines(ax, ds, q, line, picks, height, style.scale_of(ds, variable), across=True)
     ax.set_yticks(height, [f"{h:g}" for h in height])
+    held = _held_text(ds, hold)
     ax.set(
         xlabel=style.axis_label(ds, variable),
         ylabel="contact elevation [m]" if "contact_elevation" in ds.coords else "contact [-]",
         title=(
             f"{ds[variable].attrs.get('long_name', variable)} ({ds.attrs.get('study_name', '')})"
-            "\nmedian over records and samples, 5-95 % band"
+            f"\nmedian over records and samples, 5-95 % band{', ' + held if held else ''}"
         ),
     )
     ax.title.set_fontsize(9)
@@ -131,9 +231,14 @@ def profile_chart(
     *,
     quantity: Literal["drift", "ductility"] = "drift",
     line: str | None = None,
+    sel: dict | None = None,
     ax: Axes | Sequence[Axes] | None = None,
 ) -> Figure:
     """Peak storey drift or ductility of both buildings, over the height (one panel each).
+
+    A building whose outputs are NaN in every simulation (an elastic building's ductility)
+    has no panel; a dataset where both are NaN throughout (the drift ratios of SDOF buildings
+    without ``height_m``) raises ``ValueError("does not apply: ...")``.
 
     Parameters
     ----------
@@ -143,46 +248,54 @@ def profile_chart(
     quantity : {"drift", "ductility"}
         Which outputs.
     line : str, optional
-        Grid dimension with one line per value (default the first grid axis).  Outputs without
-        a ``storey`` dimension (SDOF buildings) are drawn against this axis instead.
-    ax : sequence of two matplotlib.axes.Axes, optional
-        Where to draw the left and the right building.
+        Grid dimension with one line per value.  Outputs along a ``storey`` dimension are drawn
+        against the storey (default line: the first grid axis); the others (SDOF buildings)
+        against the first grid axis that is not ``line`` (default line: the next grid axis).
+        The records and samples are pooled; every other grid axis is held at one value.
+    sel : dict, optional
+        ``{dim: value}``: the value (nearest) each held grid axis is held at (default its
+        first), the values of ``line`` drawn (default all), or the one ``record`` drawn.
+    ax : sequence of matplotlib.axes.Axes, optional
+        Where to draw: one Axes per building with values (left first).
 
     Returns
     -------
     matplotlib.figure.Figure
-        ``axes[b].lines``: per line value, the medians (chart units) against the storeys.
+        ``axes[b].lines``: per line value, the medians (chart units) against the storeys or
+        the horizontal grid axis.
     """
     if quantity not in PROFILE_VARIABLES:
         raise ValueError(f"quantity must be one of {list(PROFILE_VARIABLES)}, got {quantity!r}")
-    names = [v for v in PROFILE_VARIABLES[quantity] if v in ds]
-    if not names:
-        raise ValueError(
-            f"does not apply: the dataset has no {quantity} outputs "
-            f"({', '.join(PROFILE_VARIABLES[quantity])}; inelastic buildings only)"
-        )
-    line = _line_dim(ds, line)
-    fig, axes = style.new_axes(ax, (10.0, 4.8), ncols=len(names))
+    names, empty = _with_values(ds, quantity)
+    over_storeys = all(STOREY_DIM in ds[name].dims for name in names)
+    x, line, hold, picks = _selection(ds, line, sel, x_axis=not over_storeys)
+    fig, axes = style.new_axes(ax, (10.0 if len(names) > 1 else 7.6, 4.8), ncols=len(names))
     for ax_b, name in zip(axes, names, strict=True):
         scale = style.scale_of(ds, name)
-        if STOREY_DIM in ds[name].dims:
-            q = _over_samples(ds, name, [STOREY_DIM] + ([line] if line else []))
+        keep = [d for d in (STOREY_DIM if over_storeys else x, line) if d]
+        q = _over_samples(ds, name, keep, hold)
+        if over_storeys:
             storeys = ds[STOREY_DIM].values
-            _profile_lines(ax_b, ds, q, line, storeys, scale)
+            _draw_lines(ax_b, ds, q, line, picks, storeys, scale, across=True)
             ax_b.set_yticks(storeys, [str(s) for s in storeys])
             ax_b.set(xlabel=style.axis_label(ds, name), ylabel="storey [-]")
         else:
-            med = _over_samples(ds, name, [line] if line else []).sel(quantile=0.5).values * scale
-            xs = ds[line].values * style.scale_of(ds, line) if line else np.zeros(1)
-            ax_b.plot(xs, np.atleast_1d(med), ms=5, label="median", **style.line_style(0))
-            xlabel = style.axis_label(ds, line) if line else ""
+            xs = ds[x].values * style.scale_of(ds, x) if x else np.zeros(1)
+            _draw_lines(ax_b, ds, q, line, picks, xs, scale, across=False)
+            xlabel = style.axis_label(ds, x) if x else ""
             ax_b.set(xlabel=xlabel, ylabel=style.axis_label(ds, name))
         ax_b.set_title(ds[name].attrs.get("long_name", name), fontsize=9)
         ax_b.grid(alpha=0.3)
     style.legend_outside(axes[-1], title=style.axis_label(ds, line) if line else None)
+    notes = [f"held: {_held_text(ds, hold)}"] if hold else []
+    notes += [
+        f"{name.rsplit('_', 1)[1]} building left out ({name} NaN throughout: "
+        f"{_WHY_EMPTY[quantity]})"
+        for name in empty
+    ]
     fig.suptitle(
         f"Peak {quantity} ({ds.attrs.get('study_name', '')}): median over records and samples, "
-        "5-95 % band",
+        "5-95 % band" + ("\n" + "; ".join(notes) if notes else ""),
         fontsize=9,
     )
     return style.save(fig, path)

@@ -117,6 +117,23 @@ def _provenance_html(ds) -> str:
     return f'<h2>Provenance</h2><table id="provenance">{"".join(rows)}</table>'
 
 
+def _yielding_sides(ds) -> list[str]:
+    """Buildings with a ductility value per simulation, those with a yield-displacement axis first.
+
+    The sides :func:`pound_mc.analysis.plot.inelastic_chart` can draw: ``peak_ductility_{side}``
+    over the dims of ``peak_force``, not NaN throughout.
+    """
+    ok = ds["status"] == 0
+    sides = [
+        s
+        for s in ("left", "right")
+        if f"peak_ductility_{s}" in ds
+        and ds[f"peak_ductility_{s}"].dims == ds["peak_force"].dims
+        and bool(ds[f"peak_ductility_{s}"].where(ok).notnull().any())
+    ]
+    return sorted(sides, key=lambda s: f"{s}_yield_disp_m" not in ds.dims)
+
+
 def report_html(ds: xr.Dataset, *, base_dir: str | Path | None = None, history: bool = True) -> str:
     """The results page of a study dataset as one HTML string.
 
@@ -142,6 +159,19 @@ def report_html(ds: xr.Dataset, *, base_dir: str | Path | None = None, history: 
             "the median over the records of each record's values.",
         )
     )
+    sides = _yielding_sides(ds) if plot._grid_dims(ds) else []
+    if sides:
+        figures.append(
+            _figure_html(
+                "inelastic",
+                plot.inelastic_chart(ds, side=sides[0]),
+                f"Inelastic spectrum of the {sides[0]} building: median ductility demand (a "
+                "building that never yields: its peak displacement over the smallest yield "
+                "displacement) and peak impact force over the samples, with the 5-95 % band, "
+                "against the first grid axis, one line per value of the second; first record, "
+                "other grid axes at their first value.",
+            )
+        )
     if plot.GAP_DIM in ds.dims:
         caption = (
             "Pounding probability: the fraction of samples with at least one impact against "
@@ -201,14 +231,16 @@ def report_html(ds: xr.Dataset, *, base_dir: str | Path | None = None, history: 
                 "grid axis.",
             )
         )
-    for quantity, names in profiles.PROFILE_VARIABLES.items():
-        if any(name in ds for name in names):
+    for quantity in profiles.PROFILE_VARIABLES:
+        if profiles.has_values(ds, quantity):
             figures.append(
                 _figure_html(
                     quantity,
                     profiles.profile_chart(ds, quantity=quantity),
                     f"Peak {quantity} of each building (per storey for shear buildings): "
-                    "median over records and samples and the 5-95 % band.",
+                    "median over records and samples and the 5-95 % band, one line per value "
+                    "of a grid axis, the other grid axes held at the value the title names; a "
+                    "building whose values are NaN throughout has no panel.",
                 )
             )
     if history:

@@ -8,7 +8,8 @@ placement from here, so that charts read alike:
 - one choice of units in charts: lengths (gaps, displacements, penetrations) in mm, forces in
   MN, intensities in g, everything else in the dataset's own units;
 - units stated once, in brackets after the name (``"initial separation gap [mm]"``);
-- legends outside the data (right of the axes), tick labels turned when there are many.
+- legends outside the data (right of the axes, or below panels that share their lines), tick
+  labels turned when there are many.
 """
 
 from __future__ import annotations
@@ -35,6 +36,7 @@ __all__ = [
     "fit_tick_labels",
     "new_axes",
     "save",
+    "legend_below",
 ]
 
 #: Okabe & Ito (2008) colour-blind-safe colours (yellow left out: too pale on white).
@@ -122,6 +124,27 @@ def legend_outside(ax: Axes, *, title: str | None = None, size: float = 8, **kwa
         title_fontsize=size,
         frameon=False,
         **kwargs,
+    )
+
+
+def legend_below(fig: Figure, ax: Axes, *, title: str | None = None, size: float = 8) -> None:
+    """One legend of ``ax``'s lines below every panel of ``fig`` (panels sharing their lines).
+
+    Below rather than beside, so that long labels do not narrow the panels; ``fig`` needs the
+    constrained layout (:func:`new_axes`).  Nothing is drawn if no line has a label.
+    """
+    handles, labels = ax.get_legend_handles_labels()
+    if not handles:
+        return
+    fig.legend(
+        handles,
+        labels,
+        loc="outside lower center",
+        ncols=min(len(handles), 3),
+        fontsize=size,
+        title=title,
+        title_fontsize=size,
+        frameon=False,
     )
 
 

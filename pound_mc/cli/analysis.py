@@ -110,9 +110,9 @@ def draw(path: str | Path, kind: str, *, out=None, sel=None, record=None, sample
                 sel=sel,
             )
         if kind == "contacts":
-            return profiles.contacts_chart(ds, out, line=kwargs.get("line"))
+            return profiles.contacts_chart(ds, out, line=kwargs.get("line"), sel=sel)
         if kind in ("drift", "ductility"):
-            return profiles.profile_chart(ds, out, quantity=kind, line=kwargs.get("line"))
+            return profiles.profile_chart(ds, out, quantity=kind, line=kwargs.get("line"), sel=sel)
         if kind == "probability":
             return plot.probability_chart(
                 ds, out, record=record, sel=sel, line=kwargs.get("line"), base_dir=path.parent
