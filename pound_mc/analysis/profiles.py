@@ -3,10 +3,12 @@
 :func:`contacts_chart` draws each contact's peak impact force (``contact_peak_force``, along
 the ``contact`` dimension of a shear-building study) against the contact's elevation;
 :func:`profile_chart` draws the peak storey drift or ductility of both buildings against the
-storey (variables along a ``storey`` dimension), or, for single-storey buildings, against the
-first grid axis.  Lines are medians over the records and samples (status ok) with the 5-95 %
-range as a band, one per value of a grid axis; every other grid axis is held at one value
-(never pooled across building variants); heights are in m, drifts in mm, forces in MN.
+storey (the per-storey outputs ``storey_peak_drift`` / ``storey_peak_ductility`` of yielding
+shear buildings, along the ``storey`` dimension, one panel per building), or, for single-storey
+buildings, against the first grid axis.  Lines are medians over the records and samples (status
+ok) with the 5-95 % range as a band, one per value of a grid axis; every other grid axis is held
+at one value (never pooled across building variants); heights are in m, forces in MN, storey
+drift ratios in %.
 """
 
 from __future__ import annotations
@@ -28,6 +30,7 @@ __all__ = [
     "CONTACT_DIM",
     "STOREY_DIM",
     "PROFILE_VARIABLES",
+    "STOREY_VARIABLES",
     "contacts_chart",
     "profile_chart",
     "has_values",
@@ -42,6 +45,10 @@ PROFILE_VARIABLES = {
     "drift": ("peak_drift_left", "peak_drift_right"),
     "ductility": ("peak_ductility_left", "peak_ductility_right"),
 }
+#: Per-storey variables of :func:`profile_chart` (shear buildings), by quantity.
+STOREY_VARIABLES = {"drift": "storey_peak_drift", "ductility": "storey_peak_ductility"}
+#: The buildings, in the order of the ``storey`` dimension (``storey_building``).
+_SIDES = ("left", "right")
 #: What the outputs of a quantity need, for the message of a dataset without them.
 _NEEDS = {
     "drift": "drift ratios need storey heights: shear buildings or an SDOF with height_m",
@@ -236,9 +243,13 @@ def profile_chart(
 ) -> Figure:
     """Peak storey drift or ductility of both buildings, over the height (one panel each).
 
-    A building whose outputs are NaN in every simulation (an elastic building's ductility)
-    has no panel; a dataset where both are NaN throughout (the drift ratios of SDOF buildings
-    without ``height_m``) raises ``ValueError("does not apply: ...")``.
+    Yielding shear buildings: the per-storey outputs (:data:`STOREY_VARIABLES`, drift ratios
+    in %) of each building's storeys (``storey_building``) against the storey number within
+    the building (``storey_number``), both panels on one scale.  SDOF buildings: the
+    per-building outputs (:data:`PROFILE_VARIABLES`) against the first grid axis.  A building
+    whose outputs are NaN in every simulation (an elastic building's ductility) has no panel;
+    a dataset where both are NaN throughout (the drift ratios of SDOF buildings without
+    ``height_m``) raises ``ValueError("does not apply: ...")``.
 
     Parameters
     ----------
@@ -248,9 +259,9 @@ def profile_chart(
     quantity : {"drift", "ductility"}
         Which outputs.
     line : str, optional
-        Grid dimension with one line per value.  Outputs along a ``storey`` dimension are drawn
-        against the storey (default line: the first grid axis); the others (SDOF buildings)
-        against the first grid axis that is not ``line`` (default line: the next grid axis).
+        Grid dimension with one line per value.  Per-storey outputs are drawn against the
+        storey (default line: the first grid axis); the others (SDOF buildings) against the
+        first grid axis that is not ``line`` (default line: the next grid axis).
         The records and samples are pooled; every other grid axis is held at one value.
     sel : dict, optional
         ``{dim: value}``: the value (nearest) each held grid axis is held at (default its
@@ -261,41 +272,91 @@ def profile_chart(
     Returns
     -------
     matplotlib.figure.Figure
-        ``axes[b].lines``: per line value, the medians (chart units) against the storeys or
-        the horizontal grid axis.
+        ``axes[b].lines``: per line value, the medians (chart units) against the storey
+        numbers or the horizontal grid axis.
     """
     if quantity not in PROFILE_VARIABLES:
         raise ValueError(f"quantity must be one of {list(PROFILE_VARIABLES)}, got {quantity!r}")
     names, empty = _with_values(ds, quantity)
-    over_storeys = all(STOREY_DIM in ds[name].dims for name in names)
-    x, line, hold, picks = _selection(ds, line, sel, x_axis=not over_storeys)
+    if _has_storeys(ds, quantity):
+        return _storey_chart(ds, path, quantity, line, sel, ax)
+    x, line, hold, picks = _selection(ds, line, sel, x_axis=True)
     fig, axes = style.new_axes(ax, (10.0 if len(names) > 1 else 7.6, 4.8), ncols=len(names))
     for ax_b, name in zip(axes, names, strict=True):
-        scale = style.scale_of(ds, name)
-        keep = [d for d in (STOREY_DIM if over_storeys else x, line) if d]
-        q = _over_samples(ds, name, keep, hold)
-        if over_storeys:
-            storeys = ds[STOREY_DIM].values
-            _draw_lines(ax_b, ds, q, line, picks, storeys, scale, across=True)
-            ax_b.set_yticks(storeys, [str(s) for s in storeys])
-            ax_b.set(xlabel=style.axis_label(ds, name), ylabel="storey [-]")
-        else:
-            xs = ds[x].values * style.scale_of(ds, x) if x else np.zeros(1)
-            _draw_lines(ax_b, ds, q, line, picks, xs, scale, across=False)
-            xlabel = style.axis_label(ds, x) if x else ""
-            ax_b.set(xlabel=xlabel, ylabel=style.axis_label(ds, name))
+        q = _over_samples(ds, name, [d for d in (x, line) if d], hold)
+        xs = ds[x].values * style.scale_of(ds, x) if x else np.zeros(1)
+        _draw_lines(ax_b, ds, q, line, picks, xs, style.scale_of(ds, name), across=False)
+        xlabel = style.axis_label(ds, x) if x else ""
+        ax_b.set(xlabel=xlabel, ylabel=style.axis_label(ds, name))
         ax_b.set_title(ds[name].attrs.get("long_name", name), fontsize=9)
         ax_b.grid(alpha=0.3)
     style.legend_outside(axes[-1], title=style.axis_label(ds, line) if line else None)
+    left_out = [(name.rsplit("_", 1)[1], name) for name in empty]
+    fig.suptitle(_suptitle(ds, quantity, hold, left_out), fontsize=9)
+    return style.save(fig, path)
+
+
+def _suptitle(ds, quantity, hold, left_out) -> str:
+    """Title of a profile chart: what it draws, what it holds, which buildings it leaves out.
+
+    ``left_out``: ``(side, variable)`` of each building without values.
+    """
     notes = [f"held: {_held_text(ds, hold)}"] if hold else []
     notes += [
-        f"{name.rsplit('_', 1)[1]} building left out ({name} NaN throughout: "
-        f"{_WHY_EMPTY[quantity]})"
-        for name in empty
+        f"{side} building left out ({name} NaN throughout: {_WHY_EMPTY[quantity]})"
+        for side, name in left_out
     ]
-    fig.suptitle(
+    return (
         f"Peak {quantity} ({ds.attrs.get('study_name', '')}): median over records and samples, "
-        "5-95 % band" + ("\n" + "; ".join(notes) if notes else ""),
-        fontsize=9,
+        "5-95 % band" + ("\n" + "; ".join(notes) if notes else "")
     )
+
+
+def _has_storeys(ds, quantity) -> bool:
+    """Whether ``ds`` has the per-storey outputs of ``quantity`` (yielding shear buildings)."""
+    name = STOREY_VARIABLES[quantity]
+    return name in ds and STOREY_DIM in ds[name].dims and "storey_building" in ds.coords
+
+
+def _storey_units(ds, name, quantity) -> tuple[str, float]:
+    """Units a storey chart draws ``name`` in and the factor to them: drift ratios in %."""
+    units = str(ds[name].attrs.get("units", "")).strip()
+    if quantity == "drift" and units in ("", "1"):
+        return "%", 100.0
+    return style.chart_units(units)
+
+
+def _storey_chart(ds, path, quantity, line, sel, ax) -> Figure:
+    """:func:`profile_chart` of per-storey outputs: one panel per building, storeys up the side.
+
+    The storeys of each building (``storey_building``) are drawn against their number within
+    it (``storey_number``), the panels sharing their storey and value scales.
+    """
+    name = STOREY_VARIABLES[quantity]
+    ok = ds[name].where(ds["status"] == 0)
+    building = ds["storey_building"].values.astype(str)
+    sides = [s for s in _SIDES if (building == s).any()]
+    empty = [s for s in sides if bool(ok.isel({STOREY_DIM: building == s}).isnull().all())]
+    sides = [s for s in sides if s not in empty]
+    _, line, hold, picks = _selection(ds, line, sel)
+    units, scale = _storey_units(ds, name, quantity)
+    fig, axes = style.new_axes(ax, (10.0 if len(sides) > 1 else 7.6, 4.8), ncols=len(sides))
+    tallest = 0
+    for ax_b, side in zip(axes, sides, strict=True):
+        mine = ds.isel({STOREY_DIM: building == side})
+        numbers = mine["storey_number"].values if "storey_number" in mine.coords else None
+        numbers = np.arange(1, mine.sizes[STOREY_DIM] + 1) if numbers is None else numbers
+        tallest = max(tallest, int(numbers.max()))
+        q = _over_samples(mine, name, [d for d in (line, STOREY_DIM) if d], hold)
+        _draw_lines(ax_b, ds, q, line, picks, numbers, scale, across=True)
+        ax_b.set_yticks(numbers, [str(n) for n in numbers])
+        long_name = ds[name].attrs.get("long_name", name)
+        ax_b.set(xlabel=f"{long_name} [{units}]", ylabel=f"storey of the {side} building [-]")
+        ax_b.set_title(f"{side} building ({len(numbers)} storeys)", fontsize=9)
+        ax_b.grid(alpha=0.3)
+    right = max(a.get_xlim()[1] for a in axes)
+    for ax_b in axes:  # one scale for both buildings: storeys side by side, values comparable
+        ax_b.set(xlim=(0.0, right), ylim=(0.5, tallest + 0.5))
+    style.legend_outside(axes[-1], title=style.axis_label(ds, line) if line else None)
+    fig.suptitle(_suptitle(ds, quantity, hold, [(s, name) for s in empty]), fontsize=9)
     return style.save(fig, path)
