@@ -286,55 +286,6 @@ def test_report_of_every_study_renders_in_chromium(study, datasets, tmp_path):
     screenshot(tmp_path, out)  # no console message, not blank
 
 
-def test_report_shows_drift_and_ductility_when_present(datasets):
-    from pound_mc.analysis.report import report_html
-
-    ds = _inelastic(datasets)
-    page = report_html(ds, history=False)
-    assert 'id="chart-drift"' in page and 'id="chart-ductility"' in page
-
-
-def _inelastic(datasets):
-    """The shear study's small dataset with inelastic outputs added by hand (DESIGN.md 9)."""
-    shear = next(p for p in STUDIES if p.stem == "shear_spectrum")
-    with xr.open_dataset(datasets(shear)) as ds:
-        ds = ds.load()
-    dims = ds["peak_force"].dims
-    shape = tuple(ds.sizes[d] for d in dims)
-    rng = np.random.default_rng(1)
-    for side, n in (("left", 3), ("right", 5)):  # one storey dim: the lower building NaN-padded
-        drift = np.full((*shape, 5), np.nan)
-        drift[..., :n] = rng.uniform(0.001, 0.02, (*shape, n))
-        long = f"peak storey drift of the {side} building"
-        ds[f"peak_drift_{side}"] = ((*dims, "storey"), drift, {"units": "m", "long_name": long})
-        long = f"peak ductility of the {side} building"
-        ductility = drift / 0.01
-        ds[f"peak_ductility_{side}"] = (
-            (*dims, "storey"),
-            ductility,
-            {"units": "1", "long_name": long},
-        )
-    return ds.assign_coords(storey=np.arange(1, 6))
-
-
-@pytest.mark.filterwarnings("ignore:All-NaN slice:RuntimeWarning")
-def test_drift_and_ductility_profiles_draw_the_dataset_values(datasets):
-    ds = _inelastic(datasets)
-    gap = ds["peak_force"].dims[1]
-    for quantity, scale in (("drift", 1e3), ("ductility", 1.0)):
-        axes = getattr(ds.pound.plot, quantity)()
-        assert len(axes) == 2
-        for ax, side in zip(axes, ("left", "right"), strict=True):
-            values = ds[f"peak_{quantity}_{side}"].where(ds["status"] == 0)
-            median = values.quantile(0.5, dim=("record", "sample")).transpose(gap, "storey")
-            assert len(ax.lines) == ds.sizes[gap]
-            for k, line in enumerate(ax.lines):
-                np.testing.assert_allclose(line.get_xdata(), median.isel({gap: k}).values * scale)
-                np.testing.assert_allclose(line.get_ydata(), ds["storey"].values)
-        unit = "mm" if quantity == "drift" else "-"
-        assert axes[0].get_xlabel().endswith(f"[{unit}]")
-
-
 def test_worst_and_to_dataframe(datasets):
     shear = next(p for p in STUDIES if p.stem == "shear_spectrum")
     with xr.open_dataset(datasets(shear)) as ds:
