@@ -9,13 +9,9 @@ import pytest
 import xarray as xr
 from scipy import optimize, stats
 
-from pound_mc.analysis.fragility import (
-    fit_fragility,
-    fragility_probability,
-    required_gap,
-    wilson_interval,
-)
+from pound_mc.analysis.fragility import fit_fragility, fragility_probability
 from pound_mc.analysis.fragility_chart import fragility_chart
+from pound_mc.analysis.gap_probability import required_gap, wilson_interval
 from pound_mc.analysis.risk import fragility
 from pound_mc.analysis.risk_chart import fragility_panels
 from pound_mc.cli import main

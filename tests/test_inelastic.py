@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from pound_mc.analysis.plot import inelastic_chart
+from pound_mc.analysis.inelastic_chart import inelastic_chart
 from pound_mc.errors import InputError
 from pound_mc.integrators import OUTPUTS, run_kernel
 from pound_mc.integrators.outputs import INELASTIC_OUTPUTS

@@ -9,7 +9,8 @@ import pytest
 import xarray as xr
 
 import pound_mc  # noqa: F401  (registers ds.pound)
-from pound_mc.analysis.fragility import fit_fragility, wilson_interval
+from pound_mc.analysis.fragility import fit_fragility
+from pound_mc.analysis.gap_probability import wilson_interval
 from pound_mc.analysis.risk_chart import required_gap_chart
 from pound_mc.cli import main
 from pound_mc.errors import InputError, InputErrors

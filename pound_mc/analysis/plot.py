@@ -28,7 +28,6 @@ from pound_mc.analysis.style import (
     axis_label,
     chart_doc,
     fit_tick_labels,
-    legend_below,
     legend_outside,
     line_style,
     new_axes,
@@ -43,7 +42,6 @@ __all__ = [
     "restitution_ranges_chart",
     "droptest_chart",
     "spectrum_chart",
-    "inelastic_chart",
     "probability_chart",
     "distribution_chart",
     "spectrum_quantiles",
@@ -213,74 +211,6 @@ def spectrum_chart(
     )
     if line is not None:
         ax.get_legend().set_title(axis_label(ds, line), prop={"size": 8})
-    return save(fig, path)
-
-
-@chart_doc
-def inelastic_chart(ds, path: str | Path | None = None, *, side="left", record=0) -> Figure:
-    """Inelastic spectrum: median ductility demand and peak force against a grid axis.
-
-    The horizontal axis is the first grid axis, one line per value of the second (the yield
-    displacement ``{side}_yield_disp_m`` in ``studies/inelastic_spectrum.toml``); other grid
-    axes are held at their first value; 5-95 % bands over the samples.  A line whose building
-    never yields (ductility below 1 everywhere) is the elastic reference: its ductility demand
-    is its peak displacement over the smallest yield displacement of the line axis.
-
-    Parameters
-    ----------
-    ds : xarray.Dataset
-        A dataset of a study with yielding buildings (``peak_ductility_left`` ...).
-    %(path)s
-    side : {"left", "right"}
-        The building whose ductility is drawn.
-    record : int
-        Which record (index).
-    """
-    x, line, others = _spectrum_selection(ds)
-    hold = {"record": record, **{d: 0 for d in others}}
-    duct = ds[f"peak_ductility_{side}"].isel(hold)
-    disp = ds[f"peak_disp_{side}"].isel(hold)
-    force = ds["peak_force"].isel(hold) / 1e6
-    values = [None] if line is None else list(ds[line].values)
-    u_ref = float(min(values)) if line == f"{side}_yield_disp_m" else np.nan
-    ref_text = _value_text(ds, line, int(np.argmin(values))) if np.isfinite(u_ref) else ""
-    fig = Figure(figsize=(9.6, 4.6), layout="constrained")
-    ax_mu, ax_f = fig.subplots(1, 2, sharex=True)
-    xs = ds[x].values * scale_of(ds, x)
-    for i, value in enumerate(values):
-        pick = {} if value is None else {line: value}
-        mu = duct.sel(pick)
-        label = "median" if value is None else _value_text(ds, line, i)
-        elastic = not bool((mu > 1.0).any())
-        if elastic and np.isfinite(u_ref):
-            mu = disp.sel(pick) / u_ref
-            label = f"elastic (never yields; ductility demand: peak displacement / {ref_text})"
-        elif np.isfinite(u_ref):
-            label = f"bilinear, yield displacement {_value_text(ds, line, i)}"
-        look = line_style(i)
-        look["linestyle"] = "--" if elastic else "-"
-        for ax, data, text in ((ax_mu, mu, label), (ax_f, force.sel(pick), f"_{label}")):
-            q = data.quantile([0.05, 0.5, 0.95], dim="sample").values
-            ax.plot(xs, q[1], lw=1.6, ms=4, label=text, **look)
-            ax.fill_between(xs, q[0], q[2], color=look["color"], alpha=0.15, lw=0)
-    ax_mu.axhline(1.0, color="k", lw=0.6, alpha=0.5)
-    for ax, ylabel, title in (
-        (ax_mu, f"ductility demand, {side} building [-]", f"Ductility demand, {side} building"),
-        (ax_f, "peak impact force [MN]", "Peak impact force"),
-    ):
-        ax.set(xlabel=_axis_label(ds, x), ylabel=ylabel, title=title)
-        ax.title.set_fontsize(9)
-        ax.grid(True, alpha=0.3)
-    held = ", ".join(
-        [f"record {ds['record'].values[_record_index(ds, record)]}"]
-        + [f"{d} = {value_text(ds, d, 0)}" for d in others]
-    )
-    fig.suptitle(
-        f"Inelastic spectrum ({ds.attrs.get('study_name', '')}, {held}): "
-        f"median over {ds.sizes['sample']} samples and 5-95 % band",
-        fontsize=9,
-    )
-    legend_below(fig, ax_mu, title=axis_label(ds, line) if line is not None else None)
     return save(fig, path)
 
 

@@ -25,6 +25,7 @@ from pound_mc.analysis import (
     risk,
     risk_chart,
 )
+from pound_mc.analysis.inelastic_chart import inelastic_chart
 
 __all__ = ["chart_png", "report_html", "write_report"]
 
@@ -120,8 +121,8 @@ def _provenance_html(ds) -> str:
 def _yielding_sides(ds) -> list[str]:
     """Buildings with a ductility value per simulation, those with a yield-displacement axis first.
 
-    The sides :func:`pound_mc.analysis.plot.inelastic_chart` can draw: ``peak_ductility_{side}``
-    over the dims of ``peak_force``, not NaN throughout.
+    The sides :func:`pound_mc.analysis.inelastic_chart.inelastic_chart` can draw:
+    ``peak_ductility_{side}`` over the dims of ``peak_force``, not NaN throughout.
     """
     ok = ds["status"] == 0
     sides = [
@@ -164,7 +165,7 @@ def report_html(ds: xr.Dataset, *, base_dir: str | Path | None = None, history: 
         figures.append(
             _figure_html(
                 "inelastic",
-                plot.inelastic_chart(ds, side=sides[0]),
+                inelastic_chart(ds, side=sides[0]),
                 f"Inelastic spectrum of the {sides[0]} building: median ductility demand (a "
                 "building that never yields: its peak displacement over the smallest yield "
                 "displacement) and peak impact force over the samples, with the 5-95 % band, "

@@ -6,7 +6,7 @@ had an event; :func:`fragility` fits the lognormal fragility of
 :func:`pound_mc.analysis.fragility.fit_fragility` to these stripes for every combination of
 the other grid axes (e.g. per gap).  :func:`required_gap` reads, per combination of the grid
 axes other than the gap, the smallest gap whose pounding probability (over records and
-samples) is at or below a target (:func:`pound_mc.analysis.fragility.required_gap`), and sets
+samples) is at or below a target (:func:`pound_mc.analysis.gap_probability.required_gap`), and sets
 the separation rules' gaps beside it (:func:`pound_mc.analysis.gaps.study_gaps`).
 
 Events (``event=``): ``"pounding"`` (at least one impact), ``"peak_force>N"`` (a peak impact
@@ -24,7 +24,7 @@ import numpy as np
 import xarray as xr
 
 from pound_mc.analysis.fragility import fit_fragility
-from pound_mc.analysis.fragility import required_gap as _required_gap
+from pound_mc.analysis.gap_probability import required_gap as _required_gap
 from pound_mc.analysis.gaps import study_gaps
 from pound_mc.errors import InputError
 
@@ -194,7 +194,7 @@ def required_gap(
 
     The probability at each gap is the fraction of the simulations (records x samples, status
     ok) with an impact; the gap and its Wilson interval are
-    :func:`pound_mc.analysis.fragility.required_gap`'s.
+    :func:`pound_mc.analysis.gap_probability.required_gap`'s.
 
     Parameters
     ----------

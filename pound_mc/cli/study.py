@@ -14,7 +14,8 @@ from pathlib import Path
 
 import xarray as xr
 
-from pound_mc.analysis.plot import distribution_chart, inelastic_chart, spectrum_chart
+from pound_mc.analysis.inelastic_chart import inelastic_chart
+from pound_mc.analysis.plot import distribution_chart, spectrum_chart
 from pound_mc.analysis.risk_chart import fragility_panels, required_gap_chart
 from pound_mc.errors import InputError
 from pound_mc.integrators import METHODS
@@ -110,7 +111,7 @@ def _charts(study, path: Path, out: Path) -> list[Path]:
     """The charts ``run`` draws: the spectrum, or with an intensity axis two risk charts.
 
     With yielding buildings and a yield-displacement axis, also the inelastic spectrum
-    (ductility demand and peak force, :func:`~pound_mc.analysis.plot.inelastic_chart`).
+    (ductility demand and peak force, :func:`~pound_mc.analysis.inelastic_chart.inelastic_chart`).
 
     With an intensity axis: the required gap against the rules (when the gap is on the grid)
     and the fragility curves.  A study without ``[grid]`` has no axis to draw a spectrum
