@@ -29,7 +29,7 @@ from pound_mc.analysis.style import (
     value_text,
 )
 
-__all__ = ["inelastic_chart"]
+__all__ = ["inelastic_chart", "yielding_sides"]
 
 
 @chart_doc
@@ -98,3 +98,20 @@ def inelastic_chart(ds, path: str | Path | None = None, *, side="left", record=0
     )
     legend_below(fig, ax_mu, title=axis_label(ds, line) if line is not None else None)
     return save(fig, path)
+
+
+def yielding_sides(ds) -> list[str]:
+    """Buildings with a ductility value per simulation, those with a yield-displacement axis first.
+
+    The sides :func:`inelastic_chart` can draw (``pound-mc run`` and the report draw the
+    first): ``peak_ductility_{side}`` over the dims of ``peak_force``, not NaN throughout.
+    """
+    ok = ds["status"] == 0
+    sides = [
+        s
+        for s in ("left", "right")
+        if f"peak_ductility_{s}" in ds
+        and ds[f"peak_ductility_{s}"].dims == ds["peak_force"].dims
+        and bool(ds[f"peak_ductility_{s}"].where(ok).notnull().any())
+    ]
+    return sorted(sides, key=lambda s: f"{s}_yield_disp_m" not in ds.dims)

@@ -25,7 +25,7 @@ from pound_mc.analysis import (
     risk,
     risk_chart,
 )
-from pound_mc.analysis.inelastic_chart import inelastic_chart
+from pound_mc.analysis.inelastic_chart import inelastic_chart, yielding_sides
 
 __all__ = ["chart_png", "report_html", "write_report"]
 
@@ -118,23 +118,6 @@ def _provenance_html(ds) -> str:
     return f'<h2>Provenance</h2><table id="provenance">{"".join(rows)}</table>'
 
 
-def _yielding_sides(ds) -> list[str]:
-    """Buildings with a ductility value per simulation, those with a yield-displacement axis first.
-
-    The sides :func:`pound_mc.analysis.inelastic_chart.inelastic_chart` can draw:
-    ``peak_ductility_{side}`` over the dims of ``peak_force``, not NaN throughout.
-    """
-    ok = ds["status"] == 0
-    sides = [
-        s
-        for s in ("left", "right")
-        if f"peak_ductility_{s}" in ds
-        and ds[f"peak_ductility_{s}"].dims == ds["peak_force"].dims
-        and bool(ds[f"peak_ductility_{s}"].where(ok).notnull().any())
-    ]
-    return sorted(sides, key=lambda s: f"{s}_yield_disp_m" not in ds.dims)
-
-
 def report_html(ds: xr.Dataset, *, base_dir: str | Path | None = None, history: bool = True) -> str:
     """The results page of a study dataset as one HTML string.
 
@@ -160,7 +143,7 @@ def report_html(ds: xr.Dataset, *, base_dir: str | Path | None = None, history: 
             "the median over the records of each record's values.",
         )
     )
-    sides = _yielding_sides(ds) if plot._grid_dims(ds) else []
+    sides = yielding_sides(ds) if plot._grid_dims(ds) else []
     if sides:
         figures.append(
             _figure_html(

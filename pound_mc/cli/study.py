@@ -14,7 +14,7 @@ from pathlib import Path
 
 import xarray as xr
 
-from pound_mc.analysis.inelastic_chart import inelastic_chart
+from pound_mc.analysis.inelastic_chart import inelastic_chart, yielding_sides
 from pound_mc.analysis.plot import distribution_chart, spectrum_chart
 from pound_mc.analysis.risk_chart import fragility_panels, required_gap_chart
 from pound_mc.errors import InputError
@@ -110,8 +110,9 @@ def run_command(args) -> int:
 def _charts(study, path: Path, out: Path) -> list[Path]:
     """The charts ``run`` draws: the spectrum, or with an intensity axis two risk charts.
 
-    With yielding buildings and a yield-displacement axis, also the inelastic spectrum
-    (ductility demand and peak force, :func:`~pound_mc.analysis.inelastic_chart.inelastic_chart`).
+    With yielding buildings (:func:`~pound_mc.analysis.inelastic_chart.yielding_sides`), also the
+    inelastic spectrum (ductility demand and peak force,
+    :func:`~pound_mc.analysis.inelastic_chart.inelastic_chart`).
 
     With an intensity axis: the required gap against the rules (when the gap is on the grid)
     and the fragility curves.  A study without ``[grid]`` has no axis to draw a spectrum
@@ -129,8 +130,8 @@ def _charts(study, path: Path, out: Path) -> list[Path]:
         if study.intensity_key is None:
             written.append(out / f"{study.name}_spectrum.png")
             spectrum_chart(ds, written[-1])
-            sides = [s for s in ("left", "right") if f"{s}_yield_disp_m" in ds.dims]
-            if "peak_ductility_left" in ds and sides:
+            sides = yielding_sides(ds)
+            if sides:
                 written.append(out / f"{study.name}_inelastic.png")
                 inelastic_chart(ds, written[-1], side=sides[0])
             return written
