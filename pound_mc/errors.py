@@ -68,3 +68,41 @@ class ClusterError(InputError):
     The message says what happened; the chunks written so far are kept, so running the same
     command again resumes.
     """
+
+
+def named_by(exc: InputError, file, *, table: str = "record") -> InputError:
+    """``exc``, met reading what ``file`` names (a record), as an error of ``file``.
+
+    The message says each thing once: ``file`` and its key (``exc``'s own ``record.*`` key
+    moved to ``table``, ``"records[2].component"``; ``table.source`` for a problem inside the
+    record), then the record's own file and line where ``exc`` names them, then what is wrong.
+    An error of ``file`` itself, or one that names no file and a key that is not dotted (a
+    command-line option), is returned as it is; one that names neither is ``table.source``'s;
+    :class:`InputErrors` item by item.
+
+    Parameters
+    ----------
+    exc : InputError
+        The error as raised (``file``: the record, ``key``: a ``record.*`` key or a line).
+    file : str or Path
+        The study or scene file that names the record.
+    table : str
+        The record's table in ``file`` (``"record"``, ``"records[2]"``).
+
+    Returns
+    -------
+    InputError
+    """
+    if isinstance(exc, InputErrors):
+        return InputErrors(named_by(e, file, table=table) for e in exc.errors)
+    file = None if file is None else str(file)
+    key = exc.key or ""
+    if exc.file == file or (exc.file is None and key and "." not in key):
+        return exc  # the naming file's own error, or an option's
+    inner = [exc.file] if exc.file else []
+    if key == "record" or key.startswith("record."):
+        key = table + key.removeprefix("record")
+    elif "." not in key or key.startswith("line "):  # a place in the record's file
+        inner += [key] if key else []
+        key = f"{table}.source"
+    return InputError(": ".join([*inner, exc.message]), file=file, key=key)

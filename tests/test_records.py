@@ -458,3 +458,41 @@ def test_cli_records_info_bad_files(tmp_path, capsys, problem):
         "empty": "the file is empty",
     }[problem]
     assert expected in captured.err
+
+
+# ------------------------------------------------- record errors in a study: each thing once
+
+
+def _study_error(tmp_path, capsys, make_study, **tables) -> str:
+    """``pound-mc run`` on the small study with ``tables``: exit 2, one line, nothing written;
+    the message after the program's prefix, the study's folder written as ``DIR``."""
+    path = make_study(**tables)
+    out = tmp_path / "outputs"
+    assert main(["run", str(path), "--out", str(out), "--no-progress", "--no-plot"]) == 2
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and err.count("\n") == 1, err
+    assert not out.exists()
+    return err.removeprefix("pound-mc run: error: ").rstrip("\n").replace(str(tmp_path), "DIR")
+
+
+def test_record_file_line_is_the_record_files_not_the_studys(tmp_path, capsys, make_study):
+    # a glob matching a three-line file: "line 4" was given as the study's key, and the
+    # record's name twice ("small.toml: line 4: r/a.AT2: r/a.AT2: line 4: ...")
+    (tmp_path / "r").mkdir()
+    (tmp_path / "r" / "a.AT2").write_text("PEER\nquake\nACCELERATION IN G\n")
+    records = [{"source": "r/*.AT2", "duration_s": 0.5}]
+    err = _study_error(tmp_path, capsys, make_study, record=None, records=records)
+    assert err.startswith(
+        "DIR/small.toml: records[0].source: DIR/r/a.AT2: line 4: not a PEER AT2 file: "
+    ), err
+    assert err.count("a.AT2") == 1 and err.count("line 4") == 2  # "... line 4 must give ..."
+
+
+def test_record_key_error_names_the_record_once(tmp_path, capsys, make_study):
+    err = _study_error(tmp_path, capsys, make_study, record={"component": "XYZ"})
+    # was "small.toml: record.component: builtin:knet-akt013 (test.knet): builtin:knet-akt013
+    # (test.knet): record.component: no component ..."
+    assert err == (
+        "DIR/small.toml: record.component: builtin:knet-akt013 (test.knet): no component 'XYZ' "
+        "in the file; choose one of ('EW')"
+    )

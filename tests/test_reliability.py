@@ -411,3 +411,38 @@ def test_adaptive_very_stiff_building_is_not_unstable(period_s):
     acc_fine = np.interp(fine, np.arange(acc.size) * dt_rec, acc)
     sd = response_spectrum(dt_rec / 1000, acc_fine, [period_s], 0.05) / (2 * np.pi / period_s) ** 2
     np.testing.assert_allclose(out["peak_disp_left"], np.ravel(sd)[:1], rtol=1e-4)
+
+
+# ------------------------------------------- class 7: every error names the study or scene file
+
+
+def test_method_refusal_names_the_study_file(make_study, tmp_path):
+    """Class 7: a law ``adaptive`` cannot step was refused without the study file's name."""
+    study = _tiny(make_study, left={"hysteresis": "bouc-wen", "yield_disp_m": 0.02})
+    for command in ("check", "run"):
+        rc, _, err = _run(command, study, *(["--out", tmp_path / "o"] if command == "run" else []))
+        _assert_clean_error(rc, err)
+        assert err == (
+            f"pound-mc {command}: error: {study}: integrator.method: hysteresis = 'bouc-wen' "
+            "runs with method = 'newmark' (or 'newmark-explicit'); set it and a step dt_s "
+            "(1e-3 s or less)\n"
+        )
+
+
+def test_simulate_names_the_scene_file_with_its_records_error(tmp_path):
+    """Class 7: ``simulate`` reported a record's error without the scene file's name."""
+    scene = tmp_path / "s.toml"
+    scene.write_text(
+        '[record]\nsource = "suite:fema-p695-farfield"\nduration_s = 1.0\n'
+        "[left]\nperiod_s = 0.5\nmass_kg = 1.0e6\n[right]\nperiod_s = 1.0\nmass_kg = 1.0e6\n"
+        "[contact]\ne = 0.65\n"
+    )
+    rc, out, err = _run("simulate", scene)
+    _assert_clean_error(rc, err)
+    assert not out
+    # was "suite:fema-p695-farfield: record.component: a suite is ..."
+    assert err == (
+        f"pound-mc simulate: error: {scene}: record.component: suite:fema-p695-farfield: a "
+        "suite is one record per component: a study's [[records]] expands it, a single record "
+        'names the component (e.g. component = "NORTHR/MUL009")\n'
+    )

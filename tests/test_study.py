@@ -137,3 +137,72 @@ def test_all_problems_reported_at_once():
         study_from_text(text, file="multi.toml")
     keys = {e.key for e in info.value.errors}
     assert {"sampling.n", "study.seed", "contact.e"} <= keys
+
+
+def _refused(tmp_path, capsys, text: str, name: str = "bad") -> str:
+    """``pound-mc run`` on ``text``: exit 2, one line, nothing written; the message after the
+    program's prefix, with the study path written as ``STUDY``."""
+    path = tmp_path / f"{name}.toml"
+    path.write_text(text)
+    out = tmp_path / "outputs"
+    assert main(["run", str(path), "--out", str(out), "--no-progress", "--no-plot"]) == 2
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and err.count("\n") == 1, err
+    assert not out.exists()  # nothing written: no .part file, no chunk
+    return err.removeprefix("pound-mc run: error: ").rstrip("\n").replace(str(path), "STUDY")
+
+
+@pytest.mark.parametrize("table", ["study", "sampling"])
+def test_seed_the_dataset_cannot_store_is_refused(tmp_path, capsys, table):
+    # the seeds are netCDF attributes: unsigned 64-bit at most (2^64 - 1 was written and
+    # read back; 2^64 failed writing the dataset after every simulation had run)
+    text = _replace("seed = 7", "seed = 18446744073709551616") if table == "study" else (
+        _replace("n = 4", "n = 4\nseed = 18446744073709551616"))  # fmt: skip
+    assert _refused(tmp_path, capsys, text) == (
+        f"STUDY: {table}.seed: must be an integer in [0, 18446744073709551615], got "
+        "18446744073709551616"
+    )
+    assert study_from_text(_replace("seed = 7", "seed = 18446744073709551615")).seed == 2**64 - 1
+
+
+def test_sampled_values_out_of_bounds_are_blamed_on_the_sampled_key_once(tmp_path, capsys):
+    # beta uniform over [-2e9, 1e9] on a two-value gap axis: its draws were reported as
+    # grid.contact.gap_m's, once per gap.  Sobol (seed 7) draws -1.14e9 first, < 0.
+    vary = ('"contact.beta" = { material = "concrete" }',
+            '"contact.beta" = { distribution = "uniform", low = -2e9, high = 1e9 }')  # fmt: skip
+    err = _refused(tmp_path, capsys, _replace(*vary))
+    assert re.fullmatch(
+        r"STUDY: sampling\.vary\.contact\.beta: uniform \(low -2e\+09, high 1e\+09\) draws "
+        r"values outside the key's bounds: must be > 0, got -[0-9.e+]+",
+        err,
+    ), err
+
+
+@pytest.mark.parametrize("table", ["grid", "sampling.vary"])
+def test_unquoted_dotted_key_says_to_quote_it(tmp_path, capsys, table):
+    # TOML reads `contact.gap_m = [...]` as the table contact = { gap_m = [...] }
+    if table == "grid":
+        text = _replace('"contact.gap_m" = [0.0, 0.002]', "contact.gap_m = [0.0, 0.002]")
+    else:
+        text = _replace('"contact.beta" = { material = "concrete" }',
+                        'contact.beta = { material = "concrete" }')  # fmt: skip
+    leaf = "gap_m" if table == "grid" else "beta"
+    err = _refused(tmp_path, capsys, text)
+    assert err.startswith(
+        f"STUDY: {table}.contact: not a numeric scene key (a dotted key must be quoted: "
+        f'"contact.{leaf}" = ...); '
+    ), err
+
+
+@pytest.mark.parametrize("where", ["grid", "sampling.vary"])
+def test_varied_xi_with_a_fixed_e_is_refused(tmp_path, capsys, where):
+    # the study dropped [contact] e = 0.65 without a word; a scene refuses e and xi together
+    if where == "grid":
+        text = GOOD.replace("[grid]", '[grid]\n"contact.xi" = [0.1, 0.3]')
+    else:
+        xi = '"contact.xi" = { distribution = "uniform", low = 0.1, high = 0.3 }'
+        text = _replace('"contact.e" = { material = "concrete" }', xi)
+    assert _refused(tmp_path, capsys, text) == (
+        f"STUDY: {where}.contact.xi: varies contact.xi while [contact] gives e = 0.65 "
+        "(contact.e): give either xi or e, not both; remove e from [contact]"
+    )

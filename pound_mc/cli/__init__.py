@@ -12,10 +12,11 @@ import argparse
 import importlib
 import os
 import sys
+from pathlib import Path
 
 from pound_mc._version import __version__
 from pound_mc.cli.commands import COMMANDS, HelpFormatter, add_commands
-from pound_mc.errors import InputError
+from pound_mc.errors import InputError, OutputError, named_by
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -48,6 +49,9 @@ def main(argv: list[str] | None = None) -> int:
     try:
         status = command_function(args.handler)(args)
     except InputError as exc:
+        scene = getattr(args, "scene", None)  # simulate: its record's errors, and the kernels'
+        if scene is not None and (exc.file or exc.key) and not isinstance(exc, OutputError):
+            exc = named_by(exc, Path(scene))  # (a law a method cannot step), in the scene file
         print(f"pound-mc {args.command}: error: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:

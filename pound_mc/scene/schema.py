@@ -100,15 +100,15 @@ class Field:
 
     def bounds_text(self) -> str:
         """The bounds as text (``"> 0"``, ``"[0, 1)"``), empty without bounds."""
-        lo, hi = self.minimum, self.maximum
+        lo, hi = (_bound_text(x) for x in (self.minimum, self.maximum))
         if lo is not None and hi is not None:
             left = "(" if self.exclusive_minimum else "["
             right = ")" if self.exclusive_maximum else "]"
-            return f"{left}{lo:g}, {hi:g}{right}"
+            return f"{left}{lo}, {hi}{right}"
         if lo is not None:
-            return f"{'>' if self.exclusive_minimum else '>='} {lo:g}"
+            return f"{'>' if self.exclusive_minimum else '>='} {lo}"
         if hi is not None:
-            return f"{'<' if self.exclusive_maximum else '<='} {hi:g}"
+            return f"{'<' if self.exclusive_maximum else '<='} {hi}"
         return ""
 
     def choices_for(self, values: dict) -> tuple | None:
@@ -180,6 +180,13 @@ class Table:
 
     def __getitem__(self, name: str) -> Field:
         return self._by_name[name]
+
+
+def _bound_text(x: float | None) -> str | None:
+    """A bound as written: an integer in full (a seed's 2^64 - 1), a float with ``:g``."""
+    if x is None:
+        return None
+    return str(x) if isinstance(x, int) else f"{x:g}"
 
 
 def _is_number(x) -> bool:

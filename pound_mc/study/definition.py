@@ -58,10 +58,10 @@ import numpy as np
 
 from pound_mc.errors import InputError, InputErrors
 from pound_mc.physics import materials
-from pound_mc.scene import scene_from_dict
 from pound_mc.scene.schema import BUILDINGS, check_table
 from pound_mc.study import records as records_mod
 from pound_mc.study import sampling
+from pound_mc.study.probe import EXCLUSIVE, fixed_partner, probe
 from pound_mc.study.schema import (
     GRID_AXIS,
     GRID_DIGITS,
@@ -86,8 +86,6 @@ __all__ = [
     "grid_values",
 ]
 
-# Keys that replace each other: varying e drops a fixed xi from the scene and vice versa.
-_EXCLUSIVE = {"contact.e": "contact.xi", "contact.xi": "contact.e"}
 #: The scene tables a study shares between its records.
 _SCENE_TABLES = ("left", "right", "contact", "integrator")
 
@@ -231,7 +229,7 @@ def set_key(data: dict, key: str, value) -> None:
     if isinstance(current, list) and not isinstance(value, list):
         value = [value] * len(current)
     data[table][name] = value
-    other = _EXCLUSIVE.get(key)
+    other = EXCLUSIVE.get(key)
     if other is not None:
         t2, n2 = other.split(".", 1)
         data.get(t2, {}).pop(n2, None)
@@ -374,6 +372,14 @@ def _records(data: dict, file, errors: list) -> tuple[list[dict], list[str], lis
     return [], [], []
 
 
+def _quote_hint(key: str, value) -> str:
+    """For ``contact.gap_m = ...`` unquoted (TOML's table ``contact``): quote the dotted key."""
+    if not (isinstance(value, dict) and key in _SCENE_TABLES + ("record",)):
+        return ""
+    quoted = ", ".join(f'"{key}.{name}" = ...' for name in value)
+    return f" (a dotted key must be quoted: {quoted})"
+
+
 def _grid(spec: dict, file, errors: list) -> tuple[dict, dict]:
     """``[grid]``: the axes' values and the names behind the material axis."""
     grid: dict[str, np.ndarray] = {}
@@ -387,7 +393,7 @@ def _grid(spec: dict, file, errors: list) -> tuple[dict, dict]:
         elif key not in NUMERIC_SCENE_KEYS and key not in INTENSITY_KEYS:
             errors.append(
                 InputError(
-                    "not a numeric scene key; a grid axis is one of "
+                    f"not a numeric scene key{_quote_hint(key, axis)}; a grid axis is one of "
                     f"{sorted([*NUMERIC_SCENE_KEYS, *INTENSITY_KEYS])}",
                     file=file,
                     key=f"grid.{key}",
@@ -449,7 +455,8 @@ def _vary(vary: dict, grid: dict, labels: dict, file, errors: list) -> tuple[lis
         elif key not in NUMERIC_SCENE_KEYS:
             errors.append(
                 InputError(
-                    f"not a numeric scene key; choose from {sorted(NUMERIC_SCENE_KEYS)}",
+                    f"not a numeric scene key{_quote_hint(key, vspec)}; choose from "
+                    f"{sorted(NUMERIC_SCENE_KEYS)}",
                     file=file,
                     key=where,
                 )
@@ -511,61 +518,6 @@ def _structure_keys(scene: dict, grid: dict, variables: list, file, errors: list
     return [v for v in variables if v.key not in refused]
 
 
-def _scene_errors(data: dict, file) -> list[InputError]:
-    """Problems :func:`pound_mc.scene.scene_from_dict` finds in scene tables."""
-    try:
-        scene_from_dict(data, file=file)
-    except InputErrors as exc:
-        return list(exc.errors)
-    except InputError as exc:
-        return [exc]
-    return []
-
-
-def _probe(study: Study, prefixes: list[str], file, errors: list) -> None:
-    """Every record's scene, and every grid value and sampled value, must make a valid scene.
-
-    The scene as written is checked once per record, a key that only a grid axis or a
-    sampled variable gives taking its value at the study's first simulation; then each
-    varied key at its smallest and largest value, the others at the first simulation's.
-    """
-    draws = study.draw() if study.variables else {}
-    first = {
-        key: float(value)
-        for key, value in study.values_at((0,) * (len(study.grid) + 2), draws).items()
-        if key not in INTENSITY_KEYS  # not scene keys: they scale the record (see _intensity)
-    }
-    found = len(errors)
-    for i in range(len(study.records)):
-        probe = study.scene_dict(i)
-        for key, value in first.items():
-            table, leaf = key.split(".", 1)
-            partner = _EXCLUSIVE.get(key, "").partition(".")[2]
-            present = probe.get(table, {})
-            if leaf not in present and partner not in present:
-                probe.setdefault(table, {})[leaf] = value
-        for err in _scene_errors(probe, file):
-            key = err.key or ""
-            if key.startswith("record") and prefixes[i]:
-                key = prefixes[i] + key.split(".", 1)[-1] if "." in key else prefixes[i][:-1]
-            elif i > 0:
-                continue  # scene problems are reported once, with the first record
-            errors.append(InputError(err.message, file=file, key=key or None))
-    if len(errors) > found or not study.records:
-        return  # the scene itself is wrong: its varied values would repeat the problem
-    ranges = [
-        (f"grid.{k}", k, v)
-        for k, v in study.grid.items()
-        if k != MATERIAL_KEY and k not in INTENSITY_KEYS
-    ]
-    ranges += [(f"sampling.vary.{k}", k, v) for k, v in draws.items()]
-    for where, key, values in ranges:
-        for value in dict.fromkeys((float(values.min()), float(values.max()))):
-            overrides = {**first, key: value}
-            for err in _scene_errors(study.scene_dict(0, overrides), file)[:1]:
-                errors.append(InputError(f"value {value:g}: {err.message}", file=file, key=where))
-
-
 def _record_names(records: list[dict]) -> list[str]:
     names: list[str] = []
     for i, record in enumerate(records):
@@ -607,6 +559,7 @@ def study_from_text(text: str, *, file: str | Path | None = None) -> Study:
     vary = sampling.per_impact(spec.get("vary", {}), scene, fname, errors)
     variables, material_variables = _vary(vary, grid, labels, fname, errors)
     variables = _structure_keys(scene, grid, variables, fname, errors)
+    fixed_partner(scene, grid, variables, fname, errors)
     study = Study(
         path=None if file is None else Path(file),
         name=head["name"],
@@ -629,7 +582,7 @@ def study_from_text(text: str, *, file: str | Path | None = None) -> Study:
         record_meta=meta if any(meta) else [],
     )
     records_mod.check_intensity(study, prefixes, fname, errors)
-    _probe(study, prefixes, fname, errors)
+    probe(study, prefixes, fname, errors)
     if errors:
         raise InputErrors(errors)
     return study

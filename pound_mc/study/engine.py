@@ -27,7 +27,7 @@ import xarray as xr
 
 import pound_mc.integrators as integrators
 from pound_mc._version import __version__
-from pound_mc.errors import InputError, InputErrors
+from pound_mc.errors import InputError, InputErrors, named_by
 from pound_mc.integrators.threads import numba_threads
 from pound_mc.motions import G, load_record, record_arrays
 from pound_mc.motions.intensity import sa_g
@@ -116,10 +116,8 @@ def load_traces(study) -> list:
         try:
             out.append(load_record(source, base_dir=base_dir, **spec))
         except InputError as exc:
-            key = exc.key or "record.source"
-            key = where + key.split(".", 1)[-1] if key.startswith("record") else key
-            detail = exc.message if not exc.file or exc.file == fname else f"{exc.file}: {exc}"
-            errors.append(InputError(detail, file=fname, key=key))
+            exc = named_by(exc, fname, table=where[:-1])
+            errors.extend(getattr(exc, "errors", [exc]))
         except (OSError, ValueError, TypeError) as exc:
             errors.append(
                 InputError(f"cannot read {source!r}: {exc}", file=fname, key=where + "source")
@@ -430,16 +428,19 @@ class StudyEngine:
     def _run_scenes(self, indices: np.ndarray, out: dict) -> dict:
         """Run simulations ``indices`` one by one, each its own :meth:`scene_of`."""
         names = (*RESULT_VARIABLES, *(INELASTIC_VARIABLES if self.inelastic else ()))
-        for k, index in enumerate(indices):
-            res = simulate(self.scene_of(int(index)), record=self.record_of(int(index)))
-            for name in names:
-                out[name][k] = res.outputs[name]
-            if self.mdof:
-                for name in CONTACT_VARIABLES:
-                    out[name][k] = res.contacts[name.removeprefix("contact_")]
-            if self.per_storey:
-                for name, key in _STOREY_KEYS.items():
-                    out[name][k] = res.storeys[key]
+        try:
+            for k, index in enumerate(indices):
+                res = simulate(self.scene_of(int(index)), record=self.record_of(int(index)))
+                for name in names:
+                    out[name][k] = res.outputs[name]
+                if self.mdof:
+                    for name in CONTACT_VARIABLES:
+                        out[name][k] = res.contacts[name.removeprefix("contact_")]
+                if self.per_storey:
+                    for name, key in _STOREY_KEYS.items():
+                        out[name][k] = res.storeys[key]
+        except InputError as exc:  # a law the method cannot step: the key, without the file
+            raise named_by(exc, self.study.path) from None
         return out
 
     def run_indices(self, indices: np.ndarray) -> dict[str, np.ndarray]:

@@ -36,10 +36,14 @@ __all__ = [
     "reference_markdown",
     "json_schema",
     "write_reference",
+    "MAX_SEED",
 ]
 
 #: Largest number of samples per grid point (2^24: Sobol designs and memory stay sane).
 MAX_SAMPLES = 2**24
+#: Largest seed: the dataset keeps ``seed`` and ``sampling_seed`` as netCDF attributes, whose
+#: widest integer type is an unsigned 64-bit one.
+MAX_SEED = 2**64 - 1
 #: The one non-numeric grid axis: the material whose measured ranges ``{ material = "grid" }``
 #: sampled variables take.
 MATERIAL_KEY = "contact.material"
@@ -64,7 +68,8 @@ STUDY = Table(
         Field("name", "string", "Name of the study and of its dataset: letters, digits, - and "
               "_, at most 100 characters (file names).", required=True,
               pattern=r"^[A-Za-z0-9][A-Za-z0-9_-]{0,99}$"),
-        Field("seed", "integer", "Root seed of the sampling.", required=True, minimum=0),
+        Field("seed", "integer", "Root seed of the sampling.", required=True, minimum=0,
+              maximum=MAX_SEED),
         Field("description", "string", "Free text, kept in the dataset.", default=""),
         Field("chunk_size", "integer", "Simulations per chunk file (default about 1/50 of the "
               "study, between 256 and 8192).", minimum=1),
@@ -98,7 +103,8 @@ SAMPLING = Table(
               maximum=MAX_SAMPLES),
         Field("method", "string", "Design of the samples.", default="sobol",
               choices=tuple(sorted(sampling.DESIGNS))),
-        Field("seed", "integer", "Seed of the design (default: the study's seed).", minimum=0),
+        Field("seed", "integer", "Seed of the design (default: the study's seed).", minimum=0,
+              maximum=MAX_SEED),
         Field("vary", "table", "Sampled scene keys: `\"KEY\" = { ... }` (below)."),
     ),
 )  # fmt: skip
