@@ -18,9 +18,10 @@ SDOF_6M = Whole(
 )
 
 
-def _study_text(name="shear_small", left=None, right=None, grid=None, vary=None) -> str:
-    """``studies.SMALL_SHEAR`` (3 + 5 storeys) with its name, buildings, grid or vary replaced."""
-    tables = {"left": left, "right": right, "grid": grid}
+def _study_text(name="shear_small", left=None, right=None, grid=None, vary=None, contact=None):
+    """``studies.SMALL_SHEAR`` (3 + 5 storeys) with its name, buildings, grid, vary or contact
+    replaced."""
+    tables = {"left": left, "right": right, "grid": grid, "contact": contact}
     tables = {k: Whole(v) for k, v in tables.items() if v is not None}
     if vary is not None:
         tables["sampling"] = {"vary": vary}
@@ -121,8 +122,9 @@ def test_chunk_files_carry_the_contacts_and_resume(tmp_path, make_shear_study):
 def test_sdof_with_height_beside_a_shear_building(tmp_path):
     path = tmp_path / "mixed.toml"
     beta = {"contact.beta": {"material": "concrete"}}
-    grid = {"contact.xi": [0.2, 0.4]}
-    path.write_text(_study_text(name="mixed", left=SDOF_6M, grid=grid, vary=beta))
+    grid = {"contact.xi": [0.2, 0.4]}  # a damping axis: [contact] without e
+    contact = {k: v for k, v in SMALL_SHEAR["contact"].items() if k not in ("e", "relation")}
+    path.write_text(_study_text(name="mixed", left=SDOF_6M, grid=grid, vary=beta, contact=contact))
     out = tmp_path / "out"
     assert main(["run", str(path), "--out", str(out), "--no-progress", "--no-plot"]) == 0
     with xr.open_dataset(out / "mixed.nc") as ds:
