@@ -377,3 +377,171 @@ def test_package_import_registers_the_accessor():
     code = "import xarray as xr, pound_mc; print(hasattr(xr.Dataset(), 'pound'))"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "True"
+
+
+# -- bad input: one line naming the file and the option, exit status 2, nothing left behind ----
+def _fails(capsys, *argv, names=()) -> str:
+    """Run ``pound-mc argv``; check a clean input error (status 2, one line, no traceback)."""
+    assert main([str(a) for a in argv]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "Traceback" not in err, err
+    for name in names:
+        assert str(name) in err, (name, err)
+    return err
+
+
+def _left(folder: Path) -> list[str]:
+    """Names under ``folder`` other than the datasets a test wrote itself."""
+    return sorted(p.name for p in folder.rglob("*") if p.suffix != ".nc")
+
+
+def test_report_and_distribution_of_a_study_without_grid(tmp_path):
+    # a study without [grid]: the report crashed on the spectrum, plot --kind distribution
+    # refused the chart run draws
+    study = tmp_path / "nogrid.toml"
+    study.write_text(study_text(study={"name": "nogrid"}, grid=None, sampling={"n": 6}))
+    assert main(["run", str(study), "--out", str(tmp_path), "--no-progress", "--no-plot"]) == 0
+    nogrid = tmp_path / "nogrid.nc"
+    page = tmp_path / "nogrid.html"
+    assert main(["report", str(nogrid), "--out", str(page)]) == 0
+    text = page.read_text()
+    assert 'id="chart-distribution"' in text and 'id="chart-spectrum"' not in text
+    # the chart run drew: one group, the samples that pounded
+    fig = draw(nogrid, "distribution")
+    with xr.open_dataset(nogrid) as ds:
+        pounded = int(((ds["impacts"] > 0) & (ds["status"] == 0)).sum())
+    assert pounded > 0 and fig.axes[1].patches[0].get_data().values.sum() == pounded
+
+
+def test_dataset_with_an_empty_dimension_is_an_input_error(ds, tmp_path, capsys):
+    empty = tmp_path / "empty.nc"
+    ds.isel(sample=slice(0, 0)).to_netcdf(empty, unlimited_dims=["sample"])
+    _fails(capsys, "report", empty, "--out", tmp_path / "r.html", names=(empty, "'sample'"))
+    _fails(capsys, "plot", empty, "--kind", "spectrum", "--out", tmp_path / "s.png")
+    assert _left(tmp_path) == []
+
+
+def test_sel_values_are_read_against_the_coordinate(tiny, tmp_path, capsys):
+    out = tmp_path / "x.png"
+    for item, hint in (("sample=0", "--sample"), ("record=builtin:elcentro", "--record")):
+        _fails(capsys, "plot", tiny, "--kind", "history", "--sel", item, "--out", out,
+               names=(tiny, "--sel", hint))  # fmt: skip
+    for kind in ("spectrum", "probability", "distribution", "contacts", "history"):
+        for value in ("abc", ""):
+            _fails(capsys, "plot", tiny, "--kind", kind, "--sel", f"contact_gap_m={value}",
+                   "--out", out, names=(tiny, "--sel", "contact_gap_m"))  # fmt: skip
+    assert _left(tmp_path) == []
+
+
+def test_sel_takes_a_material_name_on_a_material_axis():
+    from pound_mc.cli.analysis import _typed_sel
+    from pound_mc.errors import InputError
+
+    grid = {"contact_material": [0.0, 1.0], "record": ["a"], "sample": [0]}
+    ds = xr.Dataset(
+        {"peak_force": (("record", "contact_material", "sample"), np.zeros((1, 2, 1))),
+         "material": ("contact_material", ["steel", "concrete"])},
+        coords=grid,
+    )  # fmt: skip
+    assert _typed_sel(ds, {"contact_material": "concrete"}) == {"contact_material": 1.0}
+    assert _typed_sel(ds, {"contact_material": "0"}) == {"contact_material": 0.0}
+    with pytest.raises(InputError, match="--sel: contact_material='wood'.*steel, concrete"):
+        _typed_sel(ds, {"contact_material": "wood"})
+
+
+def test_output_path_is_checked_before_drawing(tiny, tmp_path, capsys):
+    from matplotlib.figure import Figure
+
+    from pound_mc.analysis.style import save
+    from pound_mc.errors import OutputError
+
+    folder = tmp_path / "adir.png"
+    folder.mkdir()
+    afile = tmp_path / "afile"
+    afile.write_text("keep")
+    _fails(capsys, "plot", tiny, "--kind", "spectrum", "--out", folder, names=(folder,))
+    _fails(capsys, "plot", tiny, "--kind", "spectrum", "--out", afile / "x.png",
+           names=(afile / "x.png", "is a file"))  # fmt: skip
+    _fails(capsys, "plot", tiny, "--kind", "spectrum", "--out", tmp_path / "x.txt",
+           names=("--out", ".png"))  # fmt: skip
+    _fails(capsys, "report", tiny, "--out", folder, names=(folder, "--out"))
+    scene = ROOT / "studies" / "scenes" / "b1.toml"
+    for argv in (["simulate", scene], ["materials"], ["droptest"]):
+        _fails(capsys, *argv, "--plot", folder, names=(folder, "--plot"))
+        _fails(capsys, *argv, "--plot", tmp_path / "x.txt", names=("--plot", ".png"))
+    with pytest.raises(OutputError, match=f"^{re.escape(str(folder))}: is a folder"):
+        save(Figure(), folder)
+    assert _left(tmp_path) == ["adir.png", "afile"] and afile.read_text() == "keep"
+
+
+def test_required_gap_probability_must_lie_between_0_and_1(tiny, tmp_path, capsys):
+    out = tmp_path / "gap.png"
+    for value in ("0", "1", "1.5", "-0.1", "nan"):
+        _fails(capsys, "plot", tiny, "--kind", "required-gap", "--probability", value,
+               "--out", out, names=(tiny, "--probability"))  # fmt: skip
+    assert not out.exists()
+    assert main(["plot", str(tiny), "--kind", "required-gap", "--probability", "0.25",
+                 "--out", str(out)]) == 0  # fmt: skip
+    labels = [t.get_label() for t in draw(tiny, "required-gap", probability=0.25).axes[0].lines]
+    assert "target 0.25" in labels
+
+
+@pytest.mark.parametrize(
+    ("kind", "text", "names"),
+    [
+        ("work-precision", "scene,method,seconds,err_peak_force\nB1,adaptive,abc,xyz\n",
+         ("seconds", "'abc'")),
+        ("work-precision", "scene,method,seconds,err_peak_force\n", ("no rows",)),
+        ("work-precision", "", ("not a CSV",)),
+        ("stability", "method,beta,predicted,observed\nnewmark,abc,1,2\n", ("beta", "'abc'")),
+        ("stability", "method,beta,predicted,observed\n", ("no rows",)),
+    ],
+)  # fmt: skip
+def test_bad_numerics_tables_are_input_errors(tmp_path, capsys, kind, text, names):
+    table = tmp_path / "table.csv"
+    table.write_text(text)
+    _fails(capsys, "plot", table, "--kind", kind, "--out", tmp_path / "x.png",
+           names=(table, *names))  # fmt: skip
+    assert _left(tmp_path) == ["table.csv"]
+
+
+def test_analysis_options_out_of_range_are_input_errors(tiny, ds, tmp_path, capsys):
+    out = tmp_path / "x.png"
+    _fails(capsys, "plot", tiny, "--kind", "history", "--record", "5", "--out", out,
+           names=(tiny, "record must be in 0..0, got 5"))  # fmt: skip
+    for line in ("foo", "sample"):
+        _fails(capsys, "plot", tiny, "--kind", "spectrum", "--line", line, "--out", out,
+               names=(tiny, "--line", f"'{line}' is not a grid dimension"))  # fmt: skip
+    _fails(capsys, "plot", tmp_path, "--kind", "spectrum", "--out", out,
+           names=(tmp_path, "is a folder"))  # fmt: skip
+    # every simulation unstable (numbers NaN): no blank chart; the report still says so
+    unstable = tmp_path / "unstable.nc"
+    ds.assign(status=ds["status"] * 0 + 1, peak_force=ds["peak_force"] * np.nan).to_netcdf(unstable)
+    for kind in ("spectrum", "probability", "distribution", "required-gap"):
+        _fails(capsys, "plot", unstable, "--kind", kind, "--out", out,
+               names=(unstable, "no simulation ended with status ok"))  # fmt: skip
+    assert _left(tmp_path) == []
+    page = tmp_path / "unstable.html"
+    assert (
+        main(
+            [
+                "report",
+                str(unstable),
+                "--out",
+                str(page),
+            ]
+        )
+        == 0
+    )
+    assert "No charts: no simulation ended with status ok" in page.read_text()
+
+
+def test_separation_rule_of_infinite_peaks_is_nan_without_warning():
+    import warnings
+
+    from pound_mc.physics.separation import gap_ddc
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert np.isnan(gap_ddc(np.inf, np.inf, 0.5)) and np.isnan(gap_ddc(np.nan, 1.0, 0.5))
+        assert gap_ddc(3.0, 4.0, 0.0) == 5.0  # sqrt(3^2 + 4^2) with rho = 0 (the SRSS rule)

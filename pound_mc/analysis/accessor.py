@@ -125,6 +125,8 @@ def scene_at(
     if unknown:
         raise ValueError(f"{unknown[0]!r} is not a grid dimension of this study")
     r = record if isinstance(record, int | np.integer) else _position(ds, "record", record)
+    if not 0 <= int(r) < ds.sizes["record"]:
+        raise ValueError(f"record must be in 0..{ds.sizes['record'] - 1}, got {record}")
     if not 0 <= int(sample) < study.n:
         raise ValueError(f"sample must be in 0..{study.n - 1}, got {sample}")
     index = {"record": int(r)}

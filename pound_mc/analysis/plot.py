@@ -542,7 +542,7 @@ def distribution_chart(
     by : str, optional
         Dimension with one box and one histogram per value (default the material axis
         ``contact_material`` when the dataset has it, else the gap, else the last grid
-        dimension).
+        dimension; a study without grid: one group, its samples).
     %(record)s
     sel : dict, optional
         ``{dim: value}`` of grid dimensions to hold at one value (nearest) instead of pooling.
@@ -557,6 +557,10 @@ def distribution_chart(
         Box plot on the first Axes, one histogram (``patches``, [MN]) per value on the second.
     """
     grid = _grid_dims(ds)
+    if not grid and by is None:  # no grid: the samples of the study's one scene, as run draws
+        ds = ds[["peak_force", "status", "impacts"]].expand_dims(scene=["study scene"])
+        ds["scene"].attrs = {"long_name": "scene", "units": "1"}
+        grid, by = ["scene"], "scene"
     if by is None:
         by = MATERIAL_DIM if MATERIAL_DIM in grid else (GAP_DIM if GAP_DIM in grid else None)
         by = by or (grid[-1] if grid else None)

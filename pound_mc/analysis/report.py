@@ -11,7 +11,6 @@ from __future__ import annotations
 import base64
 import html
 import io
-import os
 from pathlib import Path
 
 import numpy as np
@@ -26,6 +25,8 @@ from pound_mc.analysis import (
     risk_chart,
 )
 from pound_mc.analysis.inelastic_chart import inelastic_chart, yielding_sides
+from pound_mc.analysis.style import output_path, write_atomically
+from pound_mc.errors import InputError
 
 __all__ = ["chart_png", "report_html", "write_report"]
 
@@ -131,18 +132,50 @@ def report_html(ds: xr.Dataset, *, base_dir: str | Path | None = None, history: 
         Include the time history of the simulation with the largest peak force (rebuilt from
         the study text and run again).
     """
+    empty = [d for d, n in ds["peak_force"].sizes.items() if n == 0]
+    if empty:
+        raise InputError(f"has no simulations: its dimension {empty[0]!r} is empty")
     name = ds.attrs.get("study_name", "study")
     description = ""
-    figures = []
-    figures.append(
-        _figure_html(
-            "spectrum",
-            plot.spectrum_chart(ds),
-            "Impact force spectrum: median peak impact force over the samples (line) and the "
-            "5-95 % range (band) against the first grid axis, one line per value of the second; "
-            "the median over the records of each record's values.",
-        )
+    if bool(ds.pound.ok.any()):
+        figures = _figures(ds, base_dir, history)
+    else:  # every chart would be blank: the summary below says what happened
+        figures = ["<p>(No charts: no simulation ended with status ok.)</p>"]
+    for line in str(ds.attrs.get("study_text", "")).splitlines():
+        if line.strip().startswith("description"):
+            description = line.split("=", 1)[1].strip().strip('"')
+    body = [
+        f"<h1>pound-mc results: {html.escape(name)}</h1>",
+        f'<p class="lead">{html.escape(description)}</p>',
+        "<h2>Charts</h2>",
+        *figures,
+        _summary_html(ds),
+        "<h2>Study</h2>",
+        f'<pre id="study-text">{html.escape(str(ds.attrs.get("study_text", "")))}</pre>',
+        _provenance_html(ds),
+    ]
+    return (
+        "<!DOCTYPE html>\n"
+        '<html lang="en"><head><meta charset="utf-8">'
+        '<meta name="viewport" content="width=device-width, initial-scale=1">'
+        f"<title>pound-mc results: {html.escape(name)}</title>"
+        f"<style>{_CSS}</style></head>\n<body>\n" + "\n".join(body) + "\n</body></html>\n"
     )
+
+
+def _figures(ds: xr.Dataset, base_dir, history: bool) -> list[str]:
+    """The charts of the page that apply to ``ds``, as HTML."""
+    figures = []
+    if plot._grid_dims(ds):
+        figures.append(
+            _figure_html(
+                "spectrum",
+                plot.spectrum_chart(ds),
+                "Impact force spectrum: median peak impact force over the samples (line) and "
+                "the 5-95 % range (band) against the first grid axis, one line per value of the "
+                "second; the median over the records of each record's values.",
+            )
+        )
     sides = yielding_sides(ds) if plot._grid_dims(ds) else []
     if sides:
         figures.append(
@@ -257,26 +290,7 @@ def report_html(ds: xr.Dataset, *, base_dir: str | Path | None = None, history: 
                         "penetration and contact force.",
                     )
                 )
-    for line in str(ds.attrs.get("study_text", "")).splitlines():
-        if line.strip().startswith("description"):
-            description = line.split("=", 1)[1].strip().strip('"')
-    body = [
-        f"<h1>pound-mc results: {html.escape(name)}</h1>",
-        f'<p class="lead">{html.escape(description)}</p>',
-        "<h2>Charts</h2>",
-        *figures,
-        _summary_html(ds),
-        "<h2>Study</h2>",
-        f'<pre id="study-text">{html.escape(str(ds.attrs.get("study_text", "")))}</pre>',
-        _provenance_html(ds),
-    ]
-    return (
-        "<!DOCTYPE html>\n"
-        '<html lang="en"><head><meta charset="utf-8">'
-        '<meta name="viewport" content="width=device-width, initial-scale=1">'
-        f"<title>pound-mc results: {html.escape(name)}</title>"
-        f"<style>{_CSS}</style></head>\n<body>\n" + "\n".join(body) + "\n</body></html>\n"
-    )
+    return figures
 
 
 def write_report(
@@ -287,10 +301,6 @@ def write_report(
     history: bool = True,
 ) -> Path:
     """Write the results page (:func:`report_html`) to ``path`` atomically."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
+    path = output_path(path)  # before the charts are drawn
     text = report_html(ds, base_dir=base_dir, history=history)
-    tmp = path.with_name(f".{path.name}.part")
-    tmp.write_text(text, encoding="utf-8")
-    os.replace(tmp, path)
-    return path
+    return write_atomically(path, lambda tmp: tmp.write_text(text, encoding="utf-8"))

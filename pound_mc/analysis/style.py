@@ -23,6 +23,7 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from pound_mc._docstring import fill
+from pound_mc.errors import InputError, OutputError
 
 __all__ = [
     "PALETTE",
@@ -37,6 +38,7 @@ __all__ = [
     "new_axes",
     "save",
     "legend_below",
+    "output_path",
 ]
 
 #: Okabe & Ito (2008) colour-blind-safe colours (yellow left out: too pale on white).
@@ -191,14 +193,64 @@ def new_axes(
     return axes[0].figure, axes
 
 
+def output_path(path: str | Path, *, key: str | None = None, suffix: str | None = None) -> Path:
+    """``path`` as a :class:`~pathlib.Path`, after checking a file can be written there.
+
+    Checked before anything is drawn, so a bad path costs nothing and leaves nothing behind.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file to write (its folders are made when it is written).
+    key : str, optional
+        The option that gave it (``"--plot"``), named in the error.
+    suffix : str, optional
+        The file type required (``".png"``), case aside.
+
+    Raises
+    ------
+    InputError
+        ``path`` does not end in ``suffix``.
+    OutputError
+        ``path`` is a folder, or one of its parents is a file.
+    """
+    path = Path(path)
+    if suffix is not None and path.suffix.lower() != suffix:
+        kind = suffix.lstrip(".").upper()
+        raise InputError(
+            f"the chart is written as {kind}; give a {suffix} file, got {str(path)!r}", key=key
+        )
+    if path.is_dir():
+        raise OutputError("is a folder; give a file name", file=str(path), key=key)
+    parent = next((p for p in path.parents if p.exists()), None)
+    if parent is not None and not parent.is_dir():
+        raise OutputError(f"{parent} is a file, not a folder", file=str(path), key=key)
+    return path
+
+
+def write_atomically(path: str | Path, write) -> Path:
+    """Call ``write(tmp)`` on a temporary file next to ``path``, then move it to ``path``.
+
+    The folders of ``path`` are made first; on failure the temporary file is removed and an
+    :class:`~pound_mc.errors.OutputError` names ``path`` (never the temporary file).
+    """
+    path = output_path(path)
+    tmp = path.with_name(f".{path.name}.part")
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        write(tmp)
+        tmp.replace(path)
+    except OSError as exc:
+        if tmp.is_file():
+            tmp.unlink()
+        raise OutputError(f"cannot be written: {exc.strerror or exc}", file=str(path)) from None
+    return path
+
+
 def save(fig: Figure, path: str | Path | None) -> Figure:
     """Write ``fig`` as PNG to ``path`` (parent folders created, atomically) and return it."""
     if path is not None:
-        path = Path(path)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        tmp = path.with_name(path.name + ".part")
-        fig.savefig(tmp, dpi=130, format="png")
-        tmp.replace(path)
+        write_atomically(path, lambda tmp: fig.savefig(tmp, dpi=130, format="png"))
     return fig
 
 

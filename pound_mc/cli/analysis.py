@@ -17,20 +17,51 @@ import xarray as xr
 from pound_mc.analysis import plot, plot_numerics, profiles, risk_chart
 from pound_mc.analysis.report import write_report
 from pound_mc.analysis.risk import fragility
-from pound_mc.errors import InputError
+from pound_mc.analysis.style import output_path
+from pound_mc.errors import InputError, OutputError
 from pound_mc.scene import load_scene, simulate
 
 
 def _parse_sel(items) -> dict:
+    """``--sel DIM=VALUE`` items as ``{dim: text}`` (:func:`_typed_sel` reads the values)."""
     out = {}
     for item in items:
         dim, sep, value = item.partition("=")
         if not sep or not dim:
             raise InputError(f"expected DIM=VALUE, got {item!r}", key="--sel")
-        try:
-            out[dim] = float(value)
-        except ValueError:
+        out[dim] = value
+    return out
+
+
+def _typed_sel(ds, sel: dict) -> dict:
+    """``sel``'s text values as the dimension's coordinate holds them: numbers, or names.
+
+    A material axis takes its materials' names too.  ``record`` and ``sample`` are
+    ``--record`` and ``--sample``: they are refused here.
+    """
+    out = {}
+    grid = ds.pound.grid_dims
+    for dim, value in sel.items():
+        if dim in ("record", "sample"):
+            raise InputError(f"{dim} is not held with --sel; use --{dim}", key="--sel")
+        if dim not in ds.dims:
+            raise InputError(f"no dimension {dim!r}; the grid has {grid}", key="--sel")
+        if not isinstance(value, str):
             out[dim] = value
+            continue
+        names = [str(n) for n in ds["material"].values] if dim == plot.MATERIAL_DIM else []
+        if value in names and ds["material"].dims == (dim,):
+            out[dim] = ds[dim].values[names.index(value)]
+        elif ds[dim].dtype.kind not in "fiu":
+            out[dim] = value
+        else:
+            try:
+                out[dim] = float(value)
+            except ValueError:
+                out[dim] = math.nan
+            if not math.isfinite(out[dim]):
+                allowed = f"one of {', '.join(names)} or a number" if names else "a number"
+                raise InputError(f"{dim}={value!r}: {dim} takes {allowed}", key="--sel")
     return out
 
 
@@ -40,10 +71,17 @@ def _record(value):
     return int(value) if value.lstrip("-").isdigit() else value
 
 
+def _no_file(path: Path, what: str) -> InputError:
+    """The error for a ``path`` that is not a file: a folder, or nothing."""
+    if path.is_dir():
+        return InputError(f"is a folder; give {what}", file=str(path))
+    return InputError("no such file", file=str(path))
+
+
 def _open_dataset(path: Path):
     """The study dataset at ``path``, or an :class:`InputError` saying what is wrong with it."""
     if not path.is_file():
-        raise InputError("no such file", file=str(path))
+        raise _no_file(path, "a study dataset (pound-mc run writes OUT/NAME.nc)")
     try:
         ds = xr.open_dataset(path)
     except (OSError, ValueError, TypeError):
@@ -56,13 +94,17 @@ def _open_dataset(path: Path):
         raise InputError(
             f"is not a pound-mc study dataset: no variable {missing[0]!r}", file=str(path)
         )
+    empty = [d for d, n in ds["peak_force"].sizes.items() if n == 0]
+    if empty:
+        ds.close()
+        raise InputError(f"has no simulations: its dimension {empty[0]!r} is empty", file=str(path))
     return ds
 
 
-def _read_csv(path: Path, columns):
-    """The CSV table at ``path`` with ``columns``, or an :class:`InputError`."""
+def _read_csv(path: Path, columns, numbers=()):
+    """The CSV table at ``path`` with ``columns``, those in ``numbers`` numeric, or an error."""
     if not path.is_file():
-        raise InputError("no such file", file=str(path))
+        raise _no_file(path, f"a CSV table with the columns {', '.join(columns)}")
     try:
         table = pd.read_csv(path)
     except (UnicodeDecodeError, pd.errors.ParserError, pd.errors.EmptyDataError, OSError):
@@ -72,6 +114,16 @@ def _read_csv(path: Path, columns):
     missing = [c for c in columns if c not in table]
     if missing:
         raise InputError(f"is not the right CSV: no column {missing[0]!r}", file=str(path))
+    if table.empty:
+        raise InputError("has no rows: nothing to draw", file=str(path))
+    for column in numbers:
+        values = pd.to_numeric(table[column], errors="coerce")
+        bad = np.flatnonzero(values.isna() & table[column].notna())
+        if bad.size:
+            text = table[column].iloc[bad[0]]
+            raise InputError(f"row {bad[0] + 1}: {text!r} is not a number", file=str(path),
+                             key=column)  # fmt: skip
+        table[column] = values
     return table
 
 
@@ -86,13 +138,14 @@ def draw(path: str | Path, kind: str, *, out=None, sel=None, record=None, sample
     """
     path = Path(path)
     sel = dict(sel or {})
+    wp_numbers, st_numbers = ("seconds", "err_peak_force"), ("beta", "predicted", "observed")
     if kind == "work-precision":
         return plot_numerics.work_precision_chart(
-            _read_csv(path, ("scene", "method", "seconds", "err_peak_force")), out
+            _read_csv(path, ("scene", "method", "seconds", "err_peak_force"), wp_numbers), out
         )
     if kind == "stability":
         return plot_numerics.stability_map_chart(
-            _read_csv(path, ("method", "beta", "predicted", "observed")), out
+            _read_csv(path, ("method", "beta", "predicted", "observed"), st_numbers), out
         )
     if kind == "restitution" and str(path) == "-":
         return plot.restitution_chart(out)
@@ -101,6 +154,14 @@ def draw(path: str | Path, kind: str, *, out=None, sel=None, record=None, sample
     ds = _open_dataset(path)
     with ds:
         ds.load()
+        sel = _typed_sel(ds, sel)
+        line = kwargs.get("line")
+        if line is not None and line not in ds.pound.grid_dims:
+            raise InputError(f"{line!r} is not a grid dimension; the grid has "
+                             f"{ds.pound.grid_dims}", key="--line")  # fmt: skip
+        if kind not in ("history", "restitution") and not bool(ds.pound.ok.any()):
+            counts = ", ".join(f"{n} {s}" for s, n in ds.pound.status_counts().items() if n)
+            raise InputError(f"nothing to draw: no simulation ended with status ok ({counts})")
         if kind == "spectrum":
             return plot.spectrum_chart(
                 ds,
@@ -109,6 +170,8 @@ def draw(path: str | Path, kind: str, *, out=None, sel=None, record=None, sample
                 record="median" if record is None else record,
                 sel=sel,
             )
+        if kind in ("contacts", "drift", "ductility") and record is not None:  # one record
+            sel["record"] = ds["record"].values[plot._record_index(ds, record)]
         if kind == "contacts":
             return profiles.contacts_chart(ds, out, line=kwargs.get("line"), sel=sel)
         if kind in ("drift", "ductility"):
@@ -134,12 +197,21 @@ def draw(path: str | Path, kind: str, *, out=None, sel=None, record=None, sample
             return risk_chart.required_gap_chart(
                 ds,
                 out,
-                probability=kwargs.get("probability") or 0.1,
+                probability=_probability(kwargs.get("probability")),
                 line=kwargs.get("line"),
                 sel=sel,
                 base_dir=path.parent,
             )
     raise ValueError(f"unknown kind {kind!r}")  # pragma: no cover - argparse checks it
+
+
+def _probability(value) -> float:
+    """The target probability of the required-gap chart: 0.1, or ``value`` in (0, 1)."""
+    if value is None:
+        return 0.1
+    if not 0.0 < value < 1.0:
+        raise InputError(f"must lie in (0, 1), got {value}", key="--probability")
+    return float(value)
 
 
 def plot_command(args) -> int:
@@ -150,6 +222,7 @@ def plot_command(args) -> int:
     else:
         stem = "restitution" if args.file == "-" else path.stem
         out = (Path("outputs") if args.file == "-" else path.parent) / f"{stem}_{args.kind}.png"
+    output_path(out, key="--out", suffix=".png")  # before anything is read or drawn
     try:
         draw(
             path,
@@ -164,10 +237,13 @@ def plot_command(args) -> int:
             event=args.event,
             probability=args.probability,
         )
+    except OutputError:
+        raise
     except InputError as exc:
         raise InputError(exc.message, file=args.file, key=exc.key) from None
     except (ValueError, KeyError, IndexError) as exc:
-        text = str(exc).strip("'\"").splitlines()
+        message = str(exc.args[0]) if isinstance(exc, KeyError) and exc.args else str(exc)
+        text = message.splitlines()
         raise InputError(text[0] if text else type(exc).__name__, file=args.file) from None
     print(f"wrote {out}")
     return 0
@@ -177,15 +253,16 @@ def report_command(args) -> int:
     """``pound-mc report``: the HTML results page of a study dataset."""
     path = Path(args.file)
     out = Path(args.out) if args.out else path.with_name(f"{path.stem}_report.html")
+    output_path(out, key="--out")
     ds = _open_dataset(path)
     with ds:
         ds.load()
         try:
             write_report(ds, out, base_dir=path.parent)
+        except OutputError:
+            raise
         except InputError as exc:
             raise InputError(exc.message, file=str(path), key=exc.key) from None
-        except OSError as exc:
-            raise InputError(f"cannot be written: {exc.strerror}", file=str(out)) from None
     print(f"wrote {out}")
     return 0
 

@@ -334,7 +334,7 @@ def _analysis(sub: argparse._SubParsersAction) -> None:
         action="append",
         default=[],
         metavar="DIM=VALUE",
-        help="hold a grid dimension at a value (nearest); repeatable",
+        help="hold a grid dimension at a value (nearest; a material by name); repeatable",
     )
     p.add_argument(
         "--record",

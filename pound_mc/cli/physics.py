@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from pound_mc.analysis.plot import droptest_chart, restitution_chart, restitution_ranges_chart
+from pound_mc.analysis.style import output_path
 from pound_mc.errors import InputError
 from pound_mc.physics import materials
 from pound_mc.physics.droptest import drop_test
@@ -21,6 +22,8 @@ from pound_mc.physics.relations import RELATIONS, effective_restitution, xi_from
 def materials_command(args) -> int:
     """``pound-mc materials``: the seed's Tables 1-3."""
     numbers = (args.table,) if args.table else (1, 2, 3)
+    if args.plot:
+        output_path(args.plot, key="--plot", suffix=".png")
     if args.json:
         out = {f"table{n}": materials.table(n).to_dict(orient="records") for n in numbers}
         print(json.dumps(out, indent=1))
@@ -97,6 +100,8 @@ def droptest_command(args) -> int:
         raise InputError(f"must be > 0, got {args.velocity}", key="--velocity")
     if not (mass > 0 and math.isfinite(mass)):
         raise InputError(f"must be > 0, got {mass}", key="--mass")
+    if args.plot:
+        output_path(args.plot, key="--plot", suffix=".png")
     beta = args.beta
     if beta is None:
         beta = materials.stiffness_range(args.material, mass)[2]

@@ -12,7 +12,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from pound_mc.analysis.plot import save
-from pound_mc.errors import InputError
+from pound_mc.analysis.style import output_path
 from pound_mc.motions import (
     BUILTIN_RECORDS,
     G,
@@ -63,6 +63,8 @@ def info_command(args) -> int:
     trace = load_record(
         source, demean=not args.raw, units=args.units, component=args.component, seed=seed
     )
+    if args.plot:
+        output_path(args.plot, key="--plot", suffix=".png")
     info = record_info(trace)
     if args.plot:
         _plot(trace, info, args.plot)
@@ -83,10 +85,6 @@ def info_command(args) -> int:
 
 
 def _plot(trace, info: dict, path: str) -> None:
-    if not str(path).lower().endswith(".png"):
-        raise InputError(
-            f"the chart is written as PNG; give a .png file, got {path!r}", key="--plot"
-        )
     dt, acc = record_arrays(trace)
     t = np.arange(acc.size) * dt
     periods = np.geomspace(max(0.02, 2.0 * dt), 5.0, 120)

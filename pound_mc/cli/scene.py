@@ -13,6 +13,7 @@ from pound_mc.analysis.plot_numerics import (
     time_history_chart,
     work_precision_chart,
 )
+from pound_mc.analysis.style import output_path
 from pound_mc.errors import InputError
 from pound_mc.integrators import METHODS
 from pound_mc.numerics.bench import SCENES, benchmark, head_to_head, shear_scaling
@@ -28,6 +29,8 @@ def simulate_command(args) -> int:
                          key="--method")  # fmt: skip
     if args.dt is not None and not args.dt > 0:
         raise InputError(f"must be > 0, got {args.dt}", key="--dt")
+    if args.plot:
+        output_path(args.plot, key="--plot", suffix=".png")
     res = simulate(scene, history=args.plot is not None, method=args.method, dt_s=args.dt)
     if args.plot:
         time_history_chart(res, args.plot)

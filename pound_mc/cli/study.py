@@ -123,9 +123,7 @@ def _charts(study, path: Path, out: Path) -> list[Path]:
         ds.load()
         if not study.grid:
             written.append(out / f"{study.name}_distribution.png")
-            view = ds[["peak_force", "status", "impacts"]].expand_dims(scene=["study scene"])
-            view["scene"].attrs = {"long_name": "scene", "units": "1"}
-            distribution_chart(view, written[-1], by="scene")
+            distribution_chart(ds, written[-1])
             return written
         if study.intensity_key is None:
             written.append(out / f"{study.name}_spectrum.png")

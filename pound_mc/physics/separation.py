@@ -138,7 +138,8 @@ def gap_ddc(u1, u2, rho):
         Required gap [m] (Jeng et al. 1992; Penzien 1997).
     """
     a, b = np.abs(u1), np.abs(u2)
-    return np.sqrt(np.maximum(a**2 + b**2 - 2.0 * np.asarray(rho) * a * b, 0.0))
+    with np.errstate(invalid="ignore"):  # NaN or infinite peaks in, NaN out (inf - inf)
+        return np.sqrt(np.maximum(a**2 + b**2 - 2.0 * np.asarray(rho) * a * b, 0.0))
 
 
 @dataclass(frozen=True)
