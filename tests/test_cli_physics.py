@@ -1,4 +1,5 @@
 import json
+import math
 
 import pytest
 
@@ -94,3 +95,40 @@ def test_help_imports_no_command_module():
     # only the parser's own module; the command modules (and the study engine, the
     # kernels' callers, matplotlib charts behind them) wait for their command
     assert out.strip().splitlines()[-1] == "['pound_mc.cli.commands']"
+
+
+@pytest.mark.parametrize("argv", [["--e", "1e-9"], ["--e", "0.001", "--relation", "exact"]])
+def test_calibrate_names_e_and_its_range(capsys, argv):
+    """``calibrate`` blamed xi (the table's end) for an e below a relation's reach."""
+    assert main(["calibrate", *argv]) == 2
+    err = capsys.readouterr().err
+    # jankowski2006 reaches xi = 71.17 (the exact table's end) at e = 0.008776, rounded up
+    assert err.count("\n") == 1 and "--e:" in err and "[0.00878, 1]" in err, err
+    assert main(["calibrate", "--e", "0.00878", "--json"]) == 0
+    rows = json.loads(capsys.readouterr().out)["relations"]
+    assert rows["exact"]["e_effective"] == pytest.approx(0.00878, abs=1e-6)
+
+
+def test_lowest_e_of_each_relation_reaches_the_table_end():
+    from pound_mc.physics.relations import RELATIONS, largest_xi, lowest_e
+
+    # the exact table's last row: xi = 71.174474935359157, e = 0.0078499663098766138
+    assert largest_xi() == pytest.approx(71.174474935359157, rel=1e-15)
+    assert lowest_e("exact") == pytest.approx(0.0078499663098766138, rel=1e-15)
+    # Jankowski (2008) eq. (2.9) solved for e at that xi: e = (-b + sqrt(b^2 + 4)) / 2 with
+    # b = 2 pi xi / sqrt(5)
+    b = 2 * math.pi * 71.174474935359157 / math.sqrt(5)
+    assert lowest_e("jankowski2008") == pytest.approx((-b + math.sqrt(b * b + 4)) / 2, rel=1e-9)
+    assert RELATIONS["jankowski2006"](lowest_e("jankowski2006")) == pytest.approx(71.1744749, 1e-9)
+    assert lowest_e("kelvin") == 0.0
+
+
+def test_droptest_elastic_law_takes_no_restitution(capsys):
+    """``droptest --model hertz --e 0.5`` claimed the target e while it rebounded with e = 1."""
+    assert main(["droptest", "--model", "hertz", "--e", "0.5"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--e:" in err and "'hertz' law has no damping" in err
+    assert main(["droptest", "--model", "hertz", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["e_target"] is None
+    assert out["restitution"] == pytest.approx(1.0, abs=1e-8)  # elastic: no energy lost

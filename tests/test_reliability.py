@@ -20,7 +20,7 @@ from test_drills import _at2_text
 
 from pound_mc.cli import main
 from pound_mc.study.runner import output_lock
-from studies import study_text
+from studies import Whole, study_text
 
 _OPTIONS = ["--no-progress", "--no-plot"]
 SHIPPED = sorted((Path(__file__).resolve().parent.parent / "studies").glob("*.toml"))
@@ -446,3 +446,102 @@ def test_simulate_names_the_scene_file_with_its_records_error(tmp_path):
         "suite is one record per component: a study's [[records]] expands it, a single record "
         'names the component (e.g. component = "NORTHR/MUL009")\n'
     )
+
+
+# ------------------------------------------------- bad input of one scene (simulate, check)
+
+#: studies/scenes/b1.toml on 3 s of El Centro, the gap closed (impacts from the start).
+_SCENE = {
+    "record": {"source": "builtin:elcentro", "duration_s": 3.0, "pga_g": 0.3},
+    "left": {"model": "sdof", "period_s": 0.5, "mass_kg": 1.0e6},
+    "right": {"model": "sdof", "period_s": 1.0, "mass_kg": 1.0e6},
+    "contact": {"gap_m": 0.0, "beta": 2.75e9, "xi": 0.35},
+    "integrator": {"method": "adaptive", "dt_s": 0.01},
+}
+
+
+def _scene(tmp_path, **tables) -> Path:
+    """``_SCENE`` with ``tables`` merged in (``studies.study_data``), written to a file."""
+    path = tmp_path / "scene.toml"
+    path.write_text(study_text(_SCENE, **tables))
+    return path
+
+
+@pytest.mark.parametrize(
+    ("tables", "argv", "status"),
+    [
+        ({"contact": {"beta": 1e16}, "integrator": {"method": "central-difference",
+                                                    "dt_s": 0.02}}, [], "unstable"),
+        ({}, ["--dt", "1e-12"], "not_converged"),
+    ],
+    ids=["unstable", "not-converged"],
+)  # fmt: skip
+def test_simulate_reports_a_run_that_is_not_ok(tmp_path, tables, argv, status):
+    """``simulate`` crashed formatting the NaN outputs of an unstable or not converged run.
+
+    Central difference is stable for omega dt < 2: a contact of beta = 1e16 at dt = 0.02 s is
+    far beyond; 3 s at 1e-12 s is over the kernels' step budget.
+    """
+    scene = _scene(tmp_path, **tables)
+    rc, text, err = _run("simulate", scene, *argv)
+    assert rc == 1 and "Traceback" not in err, err
+    assert f"status           {status}" in text and "peak force       nan N" in text
+    rc, text, _ = _run("simulate", scene, *argv, "--json")
+    info = json.loads(text)
+    assert rc == 1 and info["status"] == status and info["peak_force_N"] is None
+    if status == "not_converged":  # no count of the impacts either
+        assert info["contacts"][0]["impacts"] is None
+
+
+_SHEAR_1KG = {"model": "shear", "storey_mass_kg": [1.0], "storey_stiffness_N_per_m": [1.0e9],
+              "storey_height_m": [3.0]}  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    ("tables", "argv", "key"),
+    [
+        ({"left": {"period_s": 1e-7}}, [], "left.period_s"),
+        ({"left": Whole(_SHEAR_1KG), "right": {"height_m": 3.0}}, [],
+         "left.storey_stiffness_N_per_m"),
+        ({"contact": {"xi": 100.0}}, [], "contact.xi"),
+        ({"contact": {"model": "hertz"}}, [], "contact.xi"),
+        ({"contact": {"model": "linear", "beta": None, "xi": None, "e": 0.5,
+                      "k_N_per_m": 1e9}}, [], "contact.e"),
+        ({}, ["--dt", "inf"], "--dt"),
+        ({}, ["--dt", "5"], "--dt"),
+    ],
+    ids=["period-1e-7", "shear-period-2e-4", "xi-100", "hertz-xi", "linear-e", "dt-inf",
+         "dt-5"],
+)  # fmt: skip
+def test_simulate_refuses_what_cannot_run(tmp_path, tables, argv, key):
+    """Refused before the run, naming the file and key.
+
+    T = 1e-7 s ran for minutes; 1 kg on 1e9 N/m has T = 2 pi sqrt(m / k) = 2e-4 s; xi = 100
+    is beyond the exact table's 71.17; the elastic hertz and linear laws ignored xi and e;
+    ``--dt inf`` and ``--dt 5`` were clamped while the file's integrator.dt_s takes (0, 1].
+    """
+    scene = _scene(tmp_path, **tables)
+    rc, _, err = _run("simulate", scene, *argv)
+    _assert_clean_error(rc, err, key, *([] if argv else [str(scene)]))
+
+
+@pytest.mark.parametrize(
+    ("tables", "key"),
+    [
+        ({"contact": {"e": None, "xi": 1e6}, "sampling": Whole(
+            {"n": 2, "vary": {"contact.beta": {"material": "concrete"}}})}, "contact.xi"),
+        ({"contact": {"e": None, "xi": 0.3}, "sampling": {"vary": Whole(
+            {"contact.xi": {"distribution": "uniform", "low": 0.1, "high": 1e6}})}},
+         "sampling.vary.contact.xi"),
+        ({"grid": {"left.period_s": [0.5, 1e-9]}}, "grid.left.period_s"),
+    ],
+    ids=["xi-fixed", "xi-sampled", "period-grid"],
+)  # fmt: skip
+def test_study_refuses_xi_and_period_out_of_range_at_check(make_study, tmp_path, tables, key):
+    """xi = 1e6 failed after every simulation (writing e_effective); T = 1e-9 s hung a run."""
+    study = make_study(**tables)
+    for command in ("check", "run"):
+        rc, _, err = _run(command, study, *(["--out", tmp_path / "o"] if command == "run" else []))
+        assert rc == 2 and "Traceback" not in err, err
+        assert key in err and str(study) in err, err
+    assert not (tmp_path / "o").exists()

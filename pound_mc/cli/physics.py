@@ -15,8 +15,15 @@ from pound_mc.analysis.plot import droptest_chart, restitution_chart, restitutio
 from pound_mc.analysis.style import output_path
 from pound_mc.errors import InputError
 from pound_mc.physics import materials
+from pound_mc.physics.contact import CONTACT_MODELS
 from pound_mc.physics.droptest import drop_test
-from pound_mc.physics.relations import RELATIONS, effective_restitution, xi_from_e
+from pound_mc.physics.relations import (
+    RELATIONS,
+    effective_restitution,
+    largest_xi,
+    lowest_e,
+    xi_from_e,
+)
 
 
 def materials_command(args) -> int:
@@ -50,6 +57,16 @@ def calibrate_command(args) -> int:
         raise InputError(
             f"unknown relation {args.relation!r}; choose one of {sorted(RELATIONS)}",
             key="--relation",
+        )
+    # every relation's row is shown: e from where each reaches the Jankowski law's table
+    # (xi <= 71.17) to 1, the lower end rounded up to 1e-5
+    low = math.ceil(max(lowest_e(name) for name in RELATIONS) * 1e5) / 1e5
+    if 0.0 < e < low:  # outside (0, 1]: refused by the relations
+        raise InputError(
+            f"coefficient of restitution must lie in [{low:g}, 1] (below {low:g} a relation's "
+            f"xi exceeds {largest_xi():.4g}, the end of the Jankowski law's restitution table), "
+            f"got {e:g}",
+            key="--e",
         )
     rows = {}
     for name in RELATIONS:
@@ -106,7 +123,12 @@ def droptest_command(args) -> int:
     if beta is None:
         beta = materials.stiffness_range(args.material, mass)[2]
     xi, e = args.xi, args.e
-    if xi is None and e is None:
+    elastic = args.model in CONTACT_MODELS and CONTACT_MODELS[args.model].damping is None
+    if elastic and (e is not None or xi not in (None, 0.0)):
+        raise InputError(f"the {args.model!r} law has no damping (elastic: it rebounds with "
+                         "e = 1); give neither --e nor --xi",
+                         key="--e" if e is not None else "--xi")  # fmt: skip
+    if xi is None and e is None and not elastic:
         e = float(np.mean(materials.restitution_range(args.material, args.velocity)))
     result = drop_test(
         mass, args.velocity, beta, xi=xi, e=e, relation=args.relation, model=args.model

@@ -18,7 +18,7 @@ from pound_mc.errors import InputError
 from pound_mc.integrators import METHODS
 from pound_mc.numerics.bench import SCENES, benchmark, head_to_head, shear_scaling
 from pound_mc.numerics.stability import stability_map
-from pound_mc.scene import load_scene, simulate
+from pound_mc.scene import load_scene, schema, simulate
 
 
 def simulate_command(args) -> int:
@@ -27,8 +27,8 @@ def simulate_command(args) -> int:
     if args.method is not None and args.method not in METHODS:
         raise InputError(f"unknown method {args.method!r}; allowed: {', '.join(METHODS)}",
                          key="--method")  # fmt: skip
-    if args.dt is not None and not args.dt > 0:
-        raise InputError(f"must be > 0, got {args.dt}", key="--dt")
+    if args.dt is not None and (problem := schema.INTEGRATOR["dt_s"].problem(args.dt)):
+        raise InputError(problem, key="--dt")  # the bounds of the file's integrator.dt_s
     if args.plot:
         output_path(args.plot, key="--plot", suffix=".png")
     res = simulate(scene, history=args.plot is not None, method=args.method, dt_s=args.dt)
@@ -41,17 +41,23 @@ def simulate_command(args) -> int:
         print(f"scene            {args.scene}")
         print(f"method           {info['method']} (contact law {info['contact_model']})")
         print(f"status           {info['status']}")
-        print(f"impacts          {info['impacts']}")
-        print(f"peak force       {info['peak_force_N']:.6g} N at t = {info['peak_force_time_s']} s")
-        print(f"max penetration  {info['max_penetration_m']:.6g} m")
-        print(f"peak disp left   {info['peak_disp_left_m']:.6g} m")
-        print(f"peak disp right  {info['peak_disp_right_m']:.6g} m")
-        print(f"energy residual  {info['energy_residual']:.3g} (of the energy put in)")
+        print(f"impacts          {_text(info['impacts'], 'd')}")
+        print(f"peak force       {_text(info['peak_force_N'], '.6g')} N at t = "
+              f"{_text(info['peak_force_time_s'], '')} s")  # fmt: skip
+        print(f"max penetration  {_text(info['max_penetration_m'], '.6g')} m")
+        print(f"peak disp left   {_text(info['peak_disp_left_m'], '.6g')} m")
+        print(f"peak disp right  {_text(info['peak_disp_right_m'], '.6g')} m")
+        print(f"energy residual  {_text(info['energy_residual'], '.3g')} (of the energy put in)")
         for line in scene.contact_lines():
             print(line)
         if args.plot:
             print(f"chart            {args.plot}")
     return 0 if info["status"] == "ok" else 1
+
+
+def _text(value, spec: str) -> str:
+    """``value`` formatted by ``spec``; ``nan`` where a run that is not ok has none (None)."""
+    return "nan" if value is None else format(value, spec)
 
 
 def bench_command(args) -> int:

@@ -80,7 +80,7 @@ def drop_test(
         Impact stiffness [N/m^1.5] (``k`` [N/m] for the ``linear`` and ``kelvin`` laws).
     xi : float, optional
         Impact damping ratio [-] (the damping constant ``zeta`` [s/m] for ``hertzdamp``);
-        give either ``xi`` or ``e``.
+        give either ``xi`` or ``e`` (neither for the elastic ``linear`` and ``hertz`` laws).
     e : float, optional
         Target coefficient of restitution [-], turned into ``xi`` with ``relation``.
     relation : str, optional
@@ -112,6 +112,14 @@ def drop_test(
             f"unknown contact model {model!r}; choose one of {sorted(CONTACT_MODELS)}", key="model"
         )
     force_law = CONTACT_MODELS[model]["force"]
+    if CONTACT_MODELS[model].damping is None:  # elastic: no damping to set
+        if e is not None or xi not in (None, 0.0):
+            raise InputError(
+                f"the {model!r} law has no damping (elastic: it rebounds with e = 1); give "
+                "neither xi nor e",
+                key="e" if xi is None else "xi",
+            )
+        xi = 0.0
     if (xi is None) == (e is None):
         raise InputError("give exactly one of xi and e", key="xi")
     if xi is None:

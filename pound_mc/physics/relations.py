@@ -35,6 +35,7 @@ import pandas as pd
 from numpy.typing import ArrayLike
 from scipy.integrate import solve_ivp
 from scipy.interpolate import PchipInterpolator
+from scipy.optimize import brentq
 
 from pound_mc.errors import InputError
 
@@ -51,6 +52,8 @@ __all__ = [
     "restitution_of_xi",
     "single_impact_restitution",
     "exact_table",
+    "largest_xi",
+    "lowest_e",
 ]
 
 
@@ -215,6 +218,29 @@ def restitution_of_xi(xi: ArrayLike) -> float | np.ndarray:
     if not np.all(np.isfinite(xi)) or np.any(xi < 0.0) or np.any(xi > xi_max):
         raise InputError(f"impact damping ratio must lie in [0, {xi_max:.4g}]", key="xi")
     return _scalar_or_array(forward(xi))
+
+
+def largest_xi() -> float:
+    """Largest impact damping ratio of the ``exact`` table (71.17), the end of its e = 0.00785.
+
+    The restitution the Jankowski law rebounds with (:func:`restitution_of_xi`) is known up to
+    it; a larger ``xi`` is refused.
+    """
+    return _exact_interpolants()[3]
+
+
+@functools.cache
+def lowest_e(relation: str) -> float:
+    """Smallest restitution ``relation`` takes for the Jankowski law (0 for ``kelvin``).
+
+    Below it the relation's ``xi`` exceeds :func:`largest_xi` (``exact``: its table ends).
+    """
+    if relation == "kelvin":
+        return 0.0
+    if relation == "exact":
+        return _exact_interpolants()[2]
+    func = RELATIONS[relation]  # decreasing in e, 0 at e = 1
+    return float(brentq(lambda e: float(func(e)) - largest_xi(), 1e-9, 1.0, xtol=1e-15))
 
 
 #: xi-e relations for the Jankowski and Kelvin laws, by name.

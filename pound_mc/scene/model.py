@@ -334,6 +334,10 @@ class SimulationResult:
             x = float(x)
             return x if math.isfinite(x) else None
 
+        def count(x):  # NaN where a run that is not ok has no count
+            x = float(x)
+            return int(x) if math.isfinite(x) else None
+
         o = self.outputs
         inelastic = {}
         if self.scene.inelastic:
@@ -341,7 +345,7 @@ class SimulationResult:
             inelastic = {name: num(o[name]) for name in INELASTIC_OUTPUTS}
         return {
             "peak_force_N": num(o["peak_force"]),
-            "impacts": int(o["impacts"]),
+            "impacts": count(o["impacts"]),
             "peak_disp_left_m": num(o["peak_disp_left"]),
             "peak_disp_right_m": num(o["peak_disp_right"]),
             "max_penetration_m": num(o["max_penetration"]),
@@ -354,7 +358,7 @@ class SimulationResult:
             "method": self.scene.method,
             "contact_model": self.scene.contact_model,
             "xi": num(self.scene.xi) if self.scene.xi is not None else None,
-            "steps": int(o["steps"]),
+            "steps": count(o["steps"]),
             "max_impact_velocity": num(o["max_impact_velocity"]),
             "median_impact_velocity": num(o["median_impact_velocity"]),
             "peak_force_restitution": num(o["peak_force_restitution"]),
@@ -366,7 +370,7 @@ class SimulationResult:
                     "elevation_m": c.elevation_m,
                     "gap_m": float(self.scene.gap_m[k]),
                     "peak_force_N": num(self.contacts["peak_force"][k]),
-                    "impacts": int(self.contacts["impacts"][k]),
+                    "impacts": count(self.contacts["impacts"][k]),
                     "max_impact_velocity": num(self.contacts["max_impact_velocity"][k]),
                     **({"pair": c.pair + 1} if self.scene.row is not None else {}),
                 }
@@ -421,16 +425,26 @@ def _building(spec, side: str, file, errors: list, wall_ok: bool | None = None) 
                         hysteresis=v["hysteresis"], yield_disp_m=v.get("yield_disp_m"),
                         post_yield_ratio=v.get("post_yield_ratio"), file=file,
                         prefix=f"{side}.", bw_exponent=v.get("bw_exponent"))  # fmt: skip
-        return shear_building(v["storey_mass_kg"], v["storey_stiffness_N_per_m"],
-                              v["storey_height_m"], v["damping_ratio"],
-                              hysteresis=v["hysteresis"],
-                              storey_yield_disp_m=v.get("storey_yield_disp_m"),
-                              post_yield_ratio=v.get("post_yield_ratio"), file=file,
-                              prefix=f"{side}.",
-                              bw_exponent=v.get("bw_exponent"))  # fmt: skip
+        building = shear_building(v["storey_mass_kg"], v["storey_stiffness_N_per_m"],
+                                  v["storey_height_m"], v["damping_ratio"],
+                                  hysteresis=v["hysteresis"],
+                                  storey_yield_disp_m=v.get("storey_yield_disp_m"),
+                                  post_yield_ratio=v.get("post_yield_ratio"), file=file,
+                                  prefix=f"{side}.",
+                                  bw_exponent=v.get("bw_exponent"))  # fmt: skip
     except InputError as exc:  # rules across keys: storey lists of equal length
         errors.append(exc)
         return None
+    shortest = 2.0 * math.pi / float(np.max(building.omega))
+    if shortest < schema.SHORTEST_PERIOD_S:  # the period_s bound, for storeys
+        errors.append(
+            InputError(f"storeys with a shortest period of {shortest:.3g} s, below "
+                       f"{schema.SHORTEST_PERIOD_S:g} s (stiffer than any building; the step "
+                       "control would take billions of steps)", file=file,
+                       key=f"{side}.storey_stiffness_N_per_m")
+        )  # fmt: skip
+        return None
+    return building
 
 
 def _contact(ct: dict, n_contacts: int | None, file, errors: list) -> dict:
@@ -468,6 +482,12 @@ def _contact(ct: dict, n_contacts: int | None, file, errors: list) -> dict:
         if key in ct:
             errors.append(InputError("applies only with restitution = 'velocity'", file=file,
                                      key=f"contact.{key}"))  # fmt: skip
+    if CONTACT_MODELS[model].damping is None:  # its declaration lists neither xi nor e
+        for key in ("xi", "e"):
+            if key in ct:
+                errors.append(InputError(f"the {model!r} law has no damping (elastic: it "
+                                         f"rebounds with e = 1) and takes no {key!r}",
+                                         file=file, key=f"contact.{key}"))  # fmt: skip
     if "xi" in ct and "e" in ct:
         errors.append(InputError("give either xi or e, not both", file=file, key="contact.xi"))
     elif "e" not in ct and "xi" not in ct and model in ("jankowski", "kelvin"):

@@ -27,6 +27,7 @@ from pound_mc.motions import UNITS, builtin_catalogue, suites, synthetic
 from pound_mc.physics import contact
 from pound_mc.physics.contact import CONTACT_MODELS
 from pound_mc.physics.materials import MATERIALS, PER_IMPACT_OUTSIDE
+from pound_mc.physics.relations import largest_xi
 from pound_mc.physics.structures import HYSTERESIS
 
 __all__ = [
@@ -46,6 +47,7 @@ __all__ = [
     "SCENE_TABLES",
     "LINEAR_LAWS",
     "varied_keys",
+    "SHORTEST_PERIOD_S",
 ]
 
 #: Type names of :class:`Field` and what they accept (``numbers``: a number or a list of them).
@@ -322,6 +324,10 @@ def source_problem(source: str, base_dir: str | Path | None) -> str | None:
 
 # --------------------------------------------------------------------------- the tables
 
+#: Shortest building period a scene takes [s]: stiffer than any building (a 1-kHz mode); a
+#: shorter one makes the step control take billions of steps (a run that does not end).
+SHORTEST_PERIOD_S = 1.0e-3
+
 RECORD = Table(
     "record",
     "The ground motion: one `[record]` table, or several `[[records]]` tables in a study "
@@ -389,9 +395,10 @@ SDOF = Table(
     (
         Field("model", "string", "Building model.", default="sdof",
               choices=("sdof", "shear", "wall")),
-        Field("period_s", "number", "Natural period (up to 1e6 s: a nearly free mass, as in "
-              "verification against closed forms).", unit="s", required=True, minimum=0.0,
-              exclusive_minimum=True, maximum=1.0e6, varied=True),
+        Field("period_s", "number", "Natural period, from 1e-3 s (stiffer than any building; "
+              "a shorter one makes the step control take billions of steps) up to 1e6 s (a "
+              "nearly free mass, as in verification against closed forms).", unit="s",
+              required=True, minimum=SHORTEST_PERIOD_S, maximum=1.0e6, varied=True),
         Field("mass_kg", "number", "Mass.", unit="kg", required=True, minimum=0.0,
               exclusive_minimum=True, maximum=1.0e10, varied=True),
         _BUILDING_DAMPING,
@@ -455,7 +462,8 @@ CONTACT = Table(
     "contact",
     "The impact law between the buildings (Jankowski 2008 and the laws compared with it).  "
     "Give the damping as `xi` or as a restitution coefficient `e` (with `relation`), not "
-    "both; `jankowski` and `kelvin` need one of them, `hertzdamp` needs `e`.",
+    "both; `jankowski` and `kelvin` need one of them, `hertzdamp` needs `e`, the elastic "
+    "`linear` and `hertz` laws take neither.",
     (
         Field("model", "string", "Contact law.", default="jankowski",
               choices=tuple(CONTACT_MODELS)),
@@ -467,7 +475,9 @@ CONTACT = Table(
               exclusive_minimum=True, varied=True),
         Field("k_N_per_m", "number", "Linear impact stiffness of the linear and kelvin laws.",
               unit="N/m", default=2.75e9, minimum=0.0, exclusive_minimum=True, varied=True),
-        Field("xi", "number", "Impact damping ratio.", minimum=0.0, varied=True),
+        Field("xi", "number", "Impact damping ratio, up to 71.17: the end of the table of the "
+              "restitution the Jankowski law rebounds with (e = 0.00785).", minimum=0.0,
+              maximum=largest_xi(), varied=True),
         Field("e", "number", "Coefficient of restitution; the damping follows from it through "
               "`relation`.", minimum=0.0, exclusive_minimum=True, maximum=1.0, varied=True),
         Field("relation", "string", "Relation from e to the damping, one of the law's own (default:"
