@@ -17,9 +17,11 @@ def test_calibrate_json(capsys):
 
 
 def test_calibrate_bad_e_exit_2(capsys):
-    assert main(["calibrate", "--e", "1.5"]) == 2
-    err = capsys.readouterr().err
-    assert "e:" in err and "(0, 1]" in err
+    # every e outside the range each relation reaches names the option and that range
+    for e in ("1.5", "0", "-0.2", "nan"):
+        assert main(["calibrate", "--e", e]) == 2
+        err = capsys.readouterr().err
+        assert "--e:" in err and "must lie in [0.00878, 1]" in err, err
 
 
 def test_materials_table_text(capsys):

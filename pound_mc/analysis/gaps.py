@@ -21,7 +21,11 @@ from pound_mc.physics.separation import (
 from pound_mc.study.definition import Study, grid_dim_name, study_from_text
 from pound_mc.study.engine import StudyEngine
 
-__all__ = ["study_gaps"]
+__all__ = ["RulesDoNotApply", "study_gaps"]
+
+
+class RulesDoNotApply(InputError):
+    """A study whose buildings are not two SDOF buildings (shear buildings, a wall)."""
 
 
 def _linear_peaks(records, rec_idx, periods, dampings, substeps) -> np.ndarray:
@@ -63,7 +67,8 @@ def study_gaps(study_or_dataset, *, base_dir=None, substeps: int = 8):
     Raises
     ------
     pound_mc.errors.InputError
-        Where a building is not an SDOF building (shear, wall): the rules do not describe it.
+        Every problem of the study or its records; :class:`RulesDoNotApply` where a building is
+        not an SDOF building (shear, wall): the rules do not describe it.
 
     Returns
     -------
@@ -86,7 +91,7 @@ def study_gaps(study_or_dataset, *, base_dir=None, substeps: int = 8):
     p = engine.parameters(np.arange(study.n_simulations))
     lacking = [side for side in ("left", "right") if f"{side}.period_s" not in p]
     if lacking:
-        raise InputError(
+        raise RulesDoNotApply(
             "does not apply: the separation rules compare the linear responses of two SDOF "
             f"buildings; the {' and '.join(lacking)} building of study {study.name!r} is not one",
             key=f"{lacking[0]}.model",

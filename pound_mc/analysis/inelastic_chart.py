@@ -14,10 +14,8 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from pound_mc.analysis.plot import (
-    _axis_label,
     _record_index,
     _spectrum_selection,
-    _value_text,
 )
 from pound_mc.analysis.style import (
     axis_label,
@@ -49,30 +47,30 @@ def inelastic_chart(ds, path: str | Path | None = None, *, side="left", record=0
     %(path)s
     side : {"left", "right"}
         The building whose ductility is drawn.
-    record : int
-        Which record (index).
+    record : int or str
+        Which record (index or name).
     """
     x, line, others = _spectrum_selection(ds)
-    hold = {"record": record, **{d: 0 for d in others}}
+    hold = {"record": _record_index(ds, record), **{d: 0 for d in others}}
     duct = ds[f"peak_ductility_{side}"].isel(hold)
     disp = ds[f"peak_disp_{side}"].isel(hold)
     force = ds["peak_force"].isel(hold) / 1e6
     values = [None] if line is None else list(ds[line].values)
     u_ref = float(min(values)) if line == f"{side}_yield_disp_m" else np.nan
-    ref_text = _value_text(ds, line, int(np.argmin(values))) if np.isfinite(u_ref) else ""
+    ref_text = value_text(ds, line, int(np.argmin(values))) if np.isfinite(u_ref) else ""
     fig = Figure(figsize=(9.6, 4.6), layout="constrained")
     ax_mu, ax_f = fig.subplots(1, 2, sharex=True)
     xs = ds[x].values * scale_of(ds, x)
     for i, value in enumerate(values):
         pick = {} if value is None else {line: value}
         mu = duct.sel(pick)
-        label = "median" if value is None else _value_text(ds, line, i)
+        label = "median" if value is None else value_text(ds, line, i)
         elastic = not bool((mu > 1.0).any())
         if elastic and np.isfinite(u_ref):
             mu = disp.sel(pick) / u_ref
             label = f"elastic (never yields; ductility demand: peak displacement / {ref_text})"
         elif np.isfinite(u_ref):
-            label = f"bilinear, yield displacement {_value_text(ds, line, i)}"
+            label = f"bilinear, yield displacement {value_text(ds, line, i)}"
         look = line_style(i)
         look["linestyle"] = "--" if elastic else "-"
         for ax, data, text in ((ax_mu, mu, label), (ax_f, force.sel(pick), f"_{label}")):
@@ -84,7 +82,7 @@ def inelastic_chart(ds, path: str | Path | None = None, *, side="left", record=0
         (ax_mu, f"ductility demand, {side} building [-]", f"Ductility demand, {side} building"),
         (ax_f, "peak impact force [MN]", "Peak impact force"),
     ):
-        ax.set(xlabel=_axis_label(ds, x), ylabel=ylabel, title=title)
+        ax.set(xlabel=axis_label(ds, x), ylabel=ylabel, title=title)
         ax.title.set_fontsize(9)
         ax.grid(True, alpha=0.3)
     held = ", ".join(

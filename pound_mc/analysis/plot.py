@@ -17,7 +17,7 @@ import xarray as xr
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-from pound_mc.analysis.gaps import study_gaps
+from pound_mc.analysis.gaps import RulesDoNotApply, study_gaps
 from pound_mc.analysis.physics_charts import (  # noqa: F401  (charts of this module before)
     droptest_chart,
     restitution_chart,
@@ -35,7 +35,6 @@ from pound_mc.analysis.style import (
     scale_of,
     value_text,
 )
-from pound_mc.errors import InputError
 
 __all__ = [
     "restitution_chart",
@@ -262,9 +261,7 @@ def rule_gaps(
         return found  # the rules' linear SDOF responses do not describe shear buildings
     try:
         gaps = study_gaps(ds, base_dir=base_dir)
-    except InputError as exc:
-        if "does not apply" not in exc.message:
-            raise
+    except RulesDoNotApply:
         return {}  # nor a wall
     return {"ABS": gaps["gap_abs"], "SRSS": gaps["gap_srss"], "DDC": gaps["gap_ddc"]}
 
@@ -290,10 +287,6 @@ def _reduce_rule(value, ds, line, record, hold):
 
 def _line_label(ds, dim, i) -> str:
     return f"{ds[dim].attrs.get('long_name', dim)} = {value_text(ds, dim, i)}"
-
-
-def _axis_label(ds, dim) -> str:
-    return axis_label(ds, dim)
 
 
 def _hold(ds, dims, sel):
@@ -353,11 +346,6 @@ def _record_index(ds, record) -> int:
             raise ValueError(f"record index {record} out of range: the dataset has {n} records")
         return int(record) % n
     return _nearest_index(ds, "record", record)
-
-
-def _value_text(ds, dim, i) -> str:
-    """The ``i``-th value of ``dim`` as text (:func:`pound_mc.analysis.style.value_text`)."""
-    return value_text(ds, dim, i)
 
 
 def _grid_dims(ds) -> list[str]:

@@ -103,7 +103,8 @@ def _selection(ds, line, sel, *, x_axis: bool = False):
     rest = [d for d in grid if d not in (x, line)]
     line = line if line is not None else (rest.pop(0) if rest else None)
     wanted = sel.pop(line, None) if line is not None else None
-    sel.pop(x, None)
+    if x in sel:
+        raise ValueError(f"sel names {x!r}, the chart's horizontal axis: it draws all its values")
     hold = _hold(ds, rest + (["record"] if "record" in sel else []), sel)
     if line is None:
         picks = [None]

@@ -25,7 +25,7 @@ import xarray as xr
 
 from pound_mc.analysis.fragility import fit_fragility
 from pound_mc.analysis.gap_probability import required_gap as _required_gap
-from pound_mc.analysis.gaps import study_gaps
+from pound_mc.analysis.gaps import RulesDoNotApply, study_gaps
 from pound_mc.errors import InputError
 
 __all__ = ["INTENSITY_DIMS", "GAP_DIM", "event_mask", "fragility", "required_gap"]
@@ -261,7 +261,7 @@ def required_gap(
     if rules:
         try:
             gaps_ds = study_gaps(ds, base_dir=base_dir)
-        except InputError as exc:  # shear buildings, a wall: the rules do not describe them
+        except RulesDoNotApply as exc:  # shear buildings, a wall: the rules do not describe them
             out.attrs["rules"] = exc.message
             return out
         for name in ("gap_abs", "gap_srss", "gap_ddc"):

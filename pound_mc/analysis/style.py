@@ -241,9 +241,11 @@ def write_atomically(path: str | Path, write) -> Path:
         write(tmp)
         tmp.replace(path)
     except OSError as exc:
-        if tmp.is_file():
-            tmp.unlink()
+        tmp.unlink(missing_ok=True)
         raise OutputError(f"cannot be written: {exc.strerror or exc}", file=str(path)) from None
+    except BaseException:  # any other failure of ``write`` (or an interrupt): nothing left
+        tmp.unlink(missing_ok=True)
+        raise
     return path
 
 

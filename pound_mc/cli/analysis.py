@@ -44,8 +44,8 @@ def _typed_sel(ds, sel: dict) -> dict:
     for dim, value in sel.items():
         if dim in ("record", "sample"):
             raise InputError(f"{dim} is not held with --sel; use --{dim}", key="--sel")
-        if dim not in ds.dims:
-            raise InputError(f"no dimension {dim!r}; the grid has {grid}", key="--sel")
+        if dim not in grid:
+            raise InputError(f"no grid dimension {dim!r}; the grid has {grid}", key="--sel")
         if not isinstance(value, str):
             out[dim] = value
             continue

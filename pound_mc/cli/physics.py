@@ -61,7 +61,7 @@ def calibrate_command(args) -> int:
     # every relation's row is shown: e from where each reaches the Jankowski law's table
     # (xi <= 71.17) to 1, the lower end rounded up to 1e-5
     low = math.ceil(max(lowest_e(name) for name in RELATIONS) * 1e5) / 1e5
-    if 0.0 < e < low:  # outside (0, 1]: refused by the relations
+    if not low <= e <= 1.0:  # nan too
         raise InputError(
             f"coefficient of restitution must lie in [{low:g}, 1] (below {low:g} a relation's "
             f"xi exceeds {largest_xi():.4g}, the end of the Jankowski law's restitution table), "

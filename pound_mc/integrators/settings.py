@@ -27,7 +27,7 @@ from pound_mc.integrators.laws import LAW_CODES, RELATION_CODES
 from pound_mc.integrators.outputs import PEAK_FORCE_RESTITUTION, STATUS
 from pound_mc.physics.contact import CONTACT_MODELS, check_relation, reported_xi
 from pound_mc.physics.materials import E_FLOOR, PER_IMPACT_OUTSIDE, restitution_rows
-from pound_mc.physics.relations import exact_table, restitution_of_xi
+from pound_mc.physics.relations import largest_xi, restitution_of_xi
 
 __all__ = ["METHODS", "KernelSettings", "kernel_settings", "fixed_restitution"]
 
@@ -54,8 +54,8 @@ KernelSettings = namedtuple(
     "xi_tab",
 )
 _LAW_NAMES = {code: name for name, code in LAW_CODES.items()}
-#: Largest damping ratio of the ``exact`` table [-].
-_XI_MAX = float(exact_table()["xi"].max())
+#: Largest damping ratio of the ``exact`` table [-]: :func:`~pound_mc.physics.relations.largest_xi`.
+_XI_MAX = largest_xi()
 #: Spacing of the ``e`` grid of a relation's ``xi`` table [-] (linear interpolation in it is
 #: within 2e-8 of the relation for e >= 0.3).
 XI_TABLE_DE = 1e-4

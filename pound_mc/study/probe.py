@@ -89,14 +89,14 @@ def probe(study, prefixes: list[str], file, errors: list) -> None:
     ranges += [(f"sampling.vary.{k}", k, v) for k, v in draws.items()]
     bad = _out_of_bounds(study, ranges, file, errors)
     for i in range(len(study.records)):
-        probe = study.scene_dict(i)
+        scene = study.scene_dict(i)
         for key, value in first.items():
             table, leaf = key.split(".", 1)
             partner = EXCLUSIVE.get(key, "").partition(".")[2]
-            present = probe.get(table, {})
+            present = scene.get(table, {})
             if leaf not in present and partner not in present and key not in bad:
-                probe.setdefault(table, {})[leaf] = value
-        for err in _scene_errors(probe, file):
+                scene.setdefault(table, {})[leaf] = value
+        for err in _scene_errors(scene, file):
             key = err.key or ""
             if key in bad:
                 continue  # a key only a varied value gives, reported above
