@@ -22,6 +22,7 @@ from pound_mc.analysis.style import (
     chart_doc,
     legend_below,
     line_style,
+    no_values,
     save,
     scale_of,
     value_text,
@@ -104,12 +105,11 @@ def yielding_sides(ds) -> list[str]:
     The sides :func:`inelastic_chart` can draw (``pound-mc run`` and the report draw the
     first): ``peak_ductility_{side}`` over the dims of ``peak_force``, not NaN throughout.
     """
-    ok = ds["status"] == 0
     sides = [
         s
         for s in ("left", "right")
         if f"peak_ductility_{s}" in ds
         and ds[f"peak_ductility_{s}"].dims == ds["peak_force"].dims
-        and bool(ds[f"peak_ductility_{s}"].where(ok).notnull().any())
+        and not no_values(ds, ds[f"peak_ductility_{s}"])
     ]
     return sorted(sides, key=lambda s: f"{s}_yield_disp_m" not in ds.dims)

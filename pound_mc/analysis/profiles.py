@@ -147,16 +147,14 @@ def has_values(ds: xr.Dataset, quantity: str) -> bool:
     A variable NaN in every simulation with status ok has none (the drift ratios of SDOF
     buildings without ``height_m``, the ductility of a building that cannot yield).
     """
-    ok = ds["status"] == 0
     names = [v for v in PROFILE_VARIABLES[quantity] if v in ds]
-    return any(not bool(ds[v].where(ok).isnull().all()) for v in names)
+    return any(not style.no_values(ds, ds[v]) for v in names)
 
 
 def _with_values(ds, quantity) -> tuple[list[str], list[str]]:
     """The variables of ``quantity`` in ``ds`` with values, and those NaN throughout."""
     names = [v for v in PROFILE_VARIABLES[quantity] if v in ds]
-    ok = ds["status"] == 0
-    empty = [v for v in names if bool(ds[v].where(ok).isnull().all())]
+    empty = [v for v in names if style.no_values(ds, ds[v])]
     if not names:
         raise ValueError(
             f"does not apply: the dataset has no {quantity} outputs "
@@ -334,10 +332,9 @@ def _storey_chart(ds, path, quantity, line, sel, ax) -> Figure:
     it (``storey_number``), the panels sharing their storey and value scales.
     """
     name = STOREY_VARIABLES[quantity]
-    ok = ds[name].where(ds["status"] == 0)
     building = ds["storey_building"].values.astype(str)
     sides = [s for s in _SIDES if (building == s).any()]
-    empty = [s for s in sides if bool(ok.isel({STOREY_DIM: building == s}).isnull().all())]
+    empty = [s for s in sides if style.no_values(ds, ds[name].isel({STOREY_DIM: building == s}))]
     sides = [s for s in sides if s not in empty]
     _, line, hold, picks = _selection(ds, line, sel)
     units, scale = _storey_units(ds, name, quantity)

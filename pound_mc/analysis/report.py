@@ -25,8 +25,7 @@ from pound_mc.analysis import (
     risk_chart,
 )
 from pound_mc.analysis.inelastic_chart import inelastic_chart, yielding_sides
-from pound_mc.analysis.style import output_path, write_atomically
-from pound_mc.errors import InputError
+from pound_mc.analysis.style import output_path, require_simulations, write_atomically
 
 __all__ = ["chart_png", "report_html", "write_report"]
 
@@ -132,9 +131,7 @@ def report_html(ds: xr.Dataset, *, base_dir: str | Path | None = None, history: 
         Include the time history of the simulation with the largest peak force (rebuilt from
         the study text and run again).
     """
-    empty = [d for d, n in ds["peak_force"].sizes.items() if n == 0]
-    if empty:
-        raise InputError(f"has no simulations: its dimension {empty[0]!r} is empty")
+    require_simulations(ds)
     name = ds.attrs.get("study_name", "study")
     description = ""
     if bool(ds.pound.ok.any()):

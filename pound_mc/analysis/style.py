@@ -39,6 +39,8 @@ __all__ = [
     "save",
     "legend_below",
     "output_path",
+    "no_values",
+    "require_simulations",
 ]
 
 #: Okabe & Ito (2008) colour-blind-safe colours (yellow left out: too pale on white).
@@ -247,6 +249,22 @@ def write_atomically(path: str | Path, write) -> Path:
         tmp.unlink(missing_ok=True)
         raise
     return path
+
+
+def no_values(ds: xr.Dataset, values: xr.DataArray) -> bool:
+    """Whether ``values`` (a variable of ``ds``, or a part of one) is NaN where status is ok.
+
+    Nothing a chart could draw: the drift of SDOF buildings without ``height_m``, the
+    ductility of a building that cannot yield.
+    """
+    return bool(values.where(ds["status"] == 0).isnull().all())
+
+
+def require_simulations(ds: xr.Dataset, file: str | None = None) -> None:
+    """Refuse a study dataset with an empty dimension (no simulation to chart or report)."""
+    empty = [d for d, n in ds["peak_force"].sizes.items() if n == 0]
+    if empty:
+        raise InputError(f"has no simulations: its dimension {empty[0]!r} is empty", file=file)
 
 
 def save(fig: Figure, path: str | Path | None) -> Figure:

@@ -17,7 +17,7 @@ import xarray as xr
 from pound_mc.analysis import plot, plot_numerics, profiles, risk_chart
 from pound_mc.analysis.report import write_report
 from pound_mc.analysis.risk import fragility
-from pound_mc.analysis.style import output_path
+from pound_mc.analysis.style import output_path, require_simulations
 from pound_mc.errors import InputError, OutputError
 from pound_mc.scene import load_scene, simulate
 
@@ -94,10 +94,11 @@ def _open_dataset(path: Path):
         raise InputError(
             f"is not a pound-mc study dataset: no variable {missing[0]!r}", file=str(path)
         )
-    empty = [d for d, n in ds["peak_force"].sizes.items() if n == 0]
-    if empty:
+    try:
+        require_simulations(ds, file=str(path))
+    except InputError:
         ds.close()
-        raise InputError(f"has no simulations: its dimension {empty[0]!r} is empty", file=str(path))
+        raise
     return ds
 
 
