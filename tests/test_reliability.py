@@ -427,6 +427,25 @@ def test_method_refusal_names_the_study_file(make_study, tmp_path):
             "runs with method = 'newmark' (or 'newmark-explicit'); set it and a step dt_s "
             "(1e-3 s or less)\n"
         )
+    # refused at its first simulation, after the manifest: the run left it behind
+    assert not (tmp_path / "o" / study.stem).exists()
+
+
+def test_refused_run_keeps_earlier_results(make_study, tmp_path):
+    """A refused run removes only what it wrote itself: earlier results stay, --fresh's go."""
+    study = _tiny(make_study)
+    rc, _, err = _run("run", study, "--out", tmp_path / "o", "--no-plot")
+    assert rc == 0, err
+    work = tmp_path / "o" / study.stem
+    before = sorted(p.name for p in work.iterdir())
+    assert "manifest.json" in before and any(p.startswith("chunk_") for p in before)
+    _tiny(make_study, left={"hysteresis": "bouc-wen", "yield_disp_m": 0.02})
+    rc, _, err = _run("run", study, "--out", tmp_path / "o")
+    _assert_clean_error(rc, err, "changed since")
+    assert sorted(p.name for p in work.iterdir()) == before
+    rc, _, err = _run("run", study, "--out", tmp_path / "o", "--fresh")
+    _assert_clean_error(rc, err, "bouc-wen")  # --fresh discarded them, the refusal the rest
+    assert not work.exists()
 
 
 def test_simulate_names_the_scene_file_with_its_records_error(tmp_path):

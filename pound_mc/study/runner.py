@@ -361,6 +361,22 @@ def _check_manifest(work: Path, study, fresh: bool) -> None:
         )
 
 
+def _discard_unstarted(work: Path) -> None:
+    """Remove the manifest and folder of a run refused before its first chunk file.
+
+    Bad input found only once the kernels start (a hysteresis ``adaptive`` cannot step, say)
+    would otherwise leave ``<out>/<name>/manifest.json`` of a run that never ran.  A folder
+    that holds anything else is left as it is.
+    """
+    if not work.is_dir() or work.is_symlink() or any(work.glob("chunk_*.npz")):
+        return
+    (work / _MANIFEST).unlink(missing_ok=True)
+    try:
+        work.rmdir()
+    except OSError:  # not empty: not ours to remove
+        pass
+
+
 def _remove_tree(work: Path) -> None:
     """Remove earlier results (``--fresh``); a file or link in their place goes too."""
     try:
@@ -508,10 +524,17 @@ def run_study(
     _check_memory(study, layout)
     with output_lock(out_dir, study.name):
         _remove_parts(out_dir, study.name)
-        return _run_locked(
-            study, out_dir, engine, layout, fresh, chunk_size, progress, max_chunks, executor,
-            on_chunk,
-        )  # fmt: skip
+        work = out_dir / study.name
+        started = not fresh and (work / _MANIFEST).exists()
+        try:
+            return _run_locked(
+                study, out_dir, engine, layout, fresh, chunk_size, progress, max_chunks,
+                executor, on_chunk,
+            )  # fmt: skip
+        except InputError:
+            if not started:  # refused before its first chunk: leave nothing behind
+                _discard_unstarted(work)
+            raise
 
 
 def _run_locked(study, out_dir, engine, layout, fresh, chunk_size, progress, max_chunks, executor,
