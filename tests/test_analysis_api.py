@@ -134,9 +134,9 @@ def test_analysis_notebook_runs_on_the_studies_it_meets(stem, small, monkeypatch
         assert len(images) == 4  # spectrum, probability, required gap, history
         rerun, stored = re.search(r"rerun: ([\d.e+-]+) MN; dataset: ([\d.e+-]+) MN", text).groups()
         assert float(rerun) == pytest.approx(float(stored), rel=1e-12)
-    else:  # yielding buildings: no histories, said in a line
-        assert "no history for this study" in text
-        assert len(images) == 2  # spectrum, probability
+    else:  # yielding buildings: no intensity axis, no fragility cell
+        assert "no intensity axis" in text and "no history for this study" not in text
+        assert len(images) == 3  # spectrum, probability, history
 
 
 def test_a_rule_hidden_under_another_says_so(small):

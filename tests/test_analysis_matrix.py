@@ -201,8 +201,6 @@ def _applies(ds, kind) -> bool:
         return "contact_gap_m" in grid and ds.sizes["contact_gap_m"] > 1
     if kind == "contacts":
         return "contact" in ds.dims
-    if kind == "history":
-        return "hysteretic_energy" not in ds  # yielding buildings: no histories recorded
     if kind in profiles.PROFILE_VARIABLES:  # present and not NaN throughout (SDOF drift)
         ok = ds["status"] == 0
         variables = [v for v in profiles.PROFILE_VARIABLES[kind] if v in ds]

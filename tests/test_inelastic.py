@@ -21,6 +21,7 @@ import pytest
 import xarray as xr
 
 from pound_mc.analysis.inelastic_chart import inelastic_chart
+from pound_mc.analysis.plot_numerics import time_history_chart
 from pound_mc.errors import InputError
 from pound_mc.integrators import OUTPUTS, run_kernel
 from pound_mc.integrators.outputs import INELASTIC_OUTPUTS
@@ -157,7 +158,14 @@ def test_yield_never_reached_gives_the_elastic_results():
     assert got["hysteretic_energy"] == 0.0
     # the general elastic kernel (histories route an SDOF pair to it): bitwise
     arrays = scene.kernel_arrays()
-    general = run_kernel(*rec[::-1], **arrays, method="newmark", dt_s=1e-3, history=True).outputs
+    general, _, hist = run_kernel(*rec[::-1], **arrays, method="newmark", dt_s=1e-3, history=True)
+    # the inelastic kernel's histories are the elastic kernel's, bit for bit
+    kept = simulate(limit, record=rec, method="newmark", dt_s=1e-3, history=True)
+    assert list(kept.outputs.values()) == pytest.approx(list(got.values()), rel=0, abs=0,
+                                                        nan_ok=True)  # fmt: skip
+    np.testing.assert_array_equal(np.c_[kept.disp_left_m, kept.disp_right_m], hist[0])
+    np.testing.assert_array_equal(kept.penetration_m, hist[1])
+    np.testing.assert_array_equal(kept.force_N, hist[2])
     # the scalar SDOF-pair kernel: the same scheme with G summed in another order
     pair = simulate(scene, record=rec, method="newmark", dt_s=1e-3).outputs
     for name in OUTPUTS[: OUTPUTS.index("peak_force_time") + 1]:  # every elastic output
@@ -188,6 +196,49 @@ def test_bilinear_b1_newmark_converges_to_the_reference(gap_m):
         "hysteretic_energy",
     ):
         assert rel(out[name], ref[name]) < 3e-4, name
+
+
+@pytest.mark.slow
+def test_histories_of_yielding_buildings_follow_the_reference():
+    """Histories at the record's samples of both inelastic kernels, both buildings yielding.
+
+    Reference: :func:`reference_solution`'s dense output at the samples (DOP853 at 1e-11 with
+    located yield, unload and contact events).  Measured: ``adaptive`` 3.5e-5 of the peak
+    displacement and 8e-5 of the peak force, ``newmark`` at 1e-4 s 1.0e-4 and 1.4e-4.
+    """
+    scene, rec = _b1_window()
+    scene = _bilinear_b1(scene, 0.01)
+    scene.left = sdof(0.5, 1e6, 0.05, hysteresis="bilinear", yield_disp_m=0.012,
+                      post_yield_ratio=0.05)  # fmt: skip
+    ref = reference_solution(scene, record=rec)
+    assert ref["peak_ductility_left"] > 1.5 and ref["peak_ductility_right"] > 2.5
+    x_ref, f_ref = ref["x_samples"], ref["f_samples"][:, 0]
+    assert ref["impacts"] > 0 and not np.isnan(x_ref).any()
+    for method, dt_s, tol in (("adaptive", None, 1e-4), ("newmark", 1e-4, 3e-4)):
+        res = simulate(scene, record=rec, method=method, dt_s=dt_s, history=True)
+        plain = simulate(scene, record=rec, method=method, dt_s=dt_s)
+        assert list(res.outputs.values()) == pytest.approx(list(plain.outputs.values()),
+                                                           rel=0, abs=0, nan_ok=True)  # fmt: skip
+        x = np.c_[res.disp_left_m, res.disp_right_m]
+        assert np.abs(x - x_ref).max() < tol * np.abs(x_ref).max(), method
+        assert np.abs(res.force_N[:, 0] - f_ref).max() < 3 * tol * f_ref.max(), method
+        # the penetration is the floors' (an SDOF pair: left less right less the gap)
+        np.testing.assert_array_equal(res.penetration_m[:, 0], x[:, 0] - x[:, 1] - 0.01)
+        assert res.time_s.size == rec[1].size
+
+
+def test_history_chart_of_yielding_buildings_shades_the_tail():
+    """The run goes on ``tail_s`` after the record (residual drifts); the chart says where."""
+    scene, rec = _b1_window(n=200)
+    scene = replace(_bilinear_b1(scene, 0.0), tail_s=0.5)
+    res = simulate(scene, record=rec, history=True)
+    assert res.time_s.size == rec[1].size + 50  # the 0.5-s tail at the record's 0.01 s
+    fig = time_history_chart(res)
+    spans = [p for p in fig.axes[0].patches if p.get_label().startswith("free vibration")]
+    (x0, x1) = spans[0].get_x(), spans[0].get_x() + spans[0].get_width()
+    assert (x0, x1) == pytest.approx(((rec[1].size - 1) * 0.01, res.time_s[-1]), abs=1e-12)
+    plain = time_history_chart(simulate(load_scene(B1_FILE), record=rec, history=True))
+    assert not plain.axes[0].patches  # elastic buildings: no tail, nothing shaded
 
 
 @pytest.mark.slow

@@ -270,8 +270,6 @@ class PoundPlot:
         See :func:`scene_at` for the arguments; three panels (displacements, penetration,
         force); the figure's title names the simulation.
         """
-        if "hysteretic_energy" in self._ds:  # yielding buildings: their kernels keep none
-            raise ValueError("does not apply: histories of yielding buildings are not recorded")
         result, index = self._ds.pound.simulate(
             record=record, sample=sample, study_path=study_path, **coords
         )

@@ -123,7 +123,9 @@ def time_history_chart(
     """Displacements, penetration and contact force of one simulation against time.
 
     The top panel draws the displacements of the two floors that meet at each contact (the
-    same height), in the contact's colour: left building solid, right building dashed.
+    same height), in the contact's colour: left building solid, right building dashed.  With
+    yielding buildings the run goes on after the record for ``integrator.tail_s`` (residual
+    drifts): that free vibration is shaded.
 
     Parameters
     ----------
@@ -156,6 +158,12 @@ def time_history_chart(
     if len(floors) > 1:
         legend_outside(ax2, size=7)
         legend_outside(ax3, size=7)
+    tail = result.scene.tail_s if result.storeys is not None else 0.0
+    if tail > 0.0 and t.size > 1:  # yielding buildings: free vibration after the record
+        for k, a in enumerate((ax1, ax2, ax3)):
+            a.axvspan(t[-1] - tail, t[-1], color="0.92", lw=0, zorder=0,
+                      label="free vibration after the record" if k == 0 else None)  # fmt: skip
+        legend_outside(ax1, size=7)
     ax2.axhline(0.0, color="0.5", lw=0.6)
     ax2.set_ylabel("penetration delta [mm]")
     ax3.set_ylabel("contact force [MN]")

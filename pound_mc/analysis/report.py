@@ -275,7 +275,7 @@ def _figures(ds: xr.Dataset, base_dir, history: bool) -> list[str]:
                     .ravel()[0]
                     .figure
                 )
-            except ValueError as exc:  # records not readable here, or no histories: say so
+            except ValueError as exc:  # records not readable here: say so
                 figures.append(f"<p>(No time history: {html.escape(str(exc))})</p>")
             else:
                 figures.append(

@@ -26,7 +26,8 @@ as in :mod:`pound_mc.integrators.hysteretic`, and the hysteretic dissipation
 ``(1 - alpha) k s u_y dx`` is summed exactly.  Outputs as the inelastic ``newmark`` kernel
 (:func:`~pound_mc.integrators.hysteretic.storey_outputs`); floor accelerations at the steps'
 and sub-steps' ends.  The yielding branch must be an underdamped oscillator
-(``alpha > z^2``, :func:`branch_supported`); no histories, no shared response before contact.
+(``alpha > z^2``, :func:`branch_supported`); histories at the record's samples as the pair
+kernel's, no shared response before contact.
 """
 
 from __future__ import annotations
@@ -53,6 +54,7 @@ from pound_mc.integrators.adaptive_pair import (
     _rk4_pair,
     _rk4_pot,
     _stage,
+    _store_pair,
     _track_floor,
 )
 from pound_mc.integrators.hysteretic import S_ALPHA, S_BW, S_K, S_YIELD, storey_outputs
@@ -158,12 +160,13 @@ def _branch(j, br, up, ww, zw2, ff, kk, uy, al, ps):
 @jit
 def adaptive_bilinear(
     ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi, settings,
-    q, v, out, cout, store, sout,
+    q, v, out, cout, hx, hd, hf, store, sout,
 ):  # fmt: skip
     """``adaptive`` for an SDOF pair with bilinear buildings (module docstring).
 
-    Arguments as :func:`~pound_mc.integrators.adaptive_pair.adaptive_pair` (no histories, no
-    ``pre``) and the storey table ``store`` of
+    Arguments as :func:`~pound_mc.integrators.adaptive_pair.adaptive_pair` (no ``pre``;
+    ``hx, hd, hf``: histories at the record's samples, empty arrays for none) and the storey
+    table ``store`` of
     :func:`~pound_mc.integrators.hysteretic.newmark_hysteretic` (row ``j``: building ``j``;
     yield drift inf: elastic).  Longer than 150 lines because the linear steps and the contact
     sub-steps share the branch state and its events in one loop.
@@ -228,7 +231,11 @@ def adaptive_bilinear(
     fsal = False
     fc_end = 0.0
     gpe = gp
+    store_h = hx.shape[0] > 0
     for i in range(npts - 1):
+        if store_h:
+            _store_pair(i, q[0], q[1], v[0], v[1], ff[0], ff[1], ps[0], ps[1], gp, b, cd, zhd,
+                        phase, model, hx, hd, hf)  # fmt: skip
         ag0 = ag[i]
         slope = (ag[i + 1] - ag[i]) * inv_dt
         s = 0.0
@@ -469,6 +476,9 @@ def adaptive_bilinear(
                 break
         if status != 0:
             break
+    if store_h and status == outputs.STATUS_OK:
+        _store_pair(npts - 1, q[0], q[1], v[0], v[1], ff[0], ff[1], ps[0], ps[1], gp, b, cd, zhd,
+                    phase, model, hx, hd, hf)  # fmt: skip
     cout[0, outputs.C_PEAK_FORCE], cout[0, outputs.C_IMPACTS] = peak_f, impacts
     cout[0, outputs.C_MAX_PENETRATION], cout[0, outputs.C_IMPULSE] = maxpen, impulse
     cout[0, outputs.C_MAX_IMPACT_VELOCITY] = outputs.log_max(vlog, nlog)

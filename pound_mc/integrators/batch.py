@@ -176,7 +176,7 @@ def _run_fixed(
               q, v, out, cout, hx, hd, hf)  # fmt: skip
 
 
-def _check_inelastic(settings, history: bool, pair: bool = False, store=None, zeta=None) -> None:
+def _check_inelastic(settings, pair: bool = False, store=None, zeta=None) -> None:
     """Refuse what the inelastic kernels do not do, naming the key.
 
     ``pair``: an SDOF pair (``adaptive`` runs it where
@@ -196,8 +196,6 @@ def _check_inelastic(settings, history: bool, pair: bool = False, store=None, ze
             "dt_s (1e-3 s or less)",
             key="integrator.method",
         )
-    if history:
-        raise InputError("histories of inelastic buildings are not recorded", key="history")
 
 
 def _inelastic_run(storeys, sout, pair=False):
@@ -213,10 +211,11 @@ def _inelastic_run(storeys, sout, pair=False):
             out, cout, hx, hd, hf, pre):  # fmt: skip
         if pair:
             _run_adaptive_bilinear(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff,
-                                   beta, xi, settings, q, v, out, cout, store, sout)  # fmt: skip
+                                   beta, xi, settings, q, v, out, cout, hx, hd, hf, store,
+                                   sout)  # fmt: skip
             return
         _run_inelastic(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi,
-                       settings, q, v, out, cout, dmat, store, sout)  # fmt: skip
+                       settings, q, v, out, cout, hx, hd, hf, dmat, store, sout)  # fmt: skip
 
     return run
 
@@ -224,7 +223,7 @@ def _inelastic_run(storeys, sout, pair=False):
 @jit
 def _run_adaptive_bilinear(
     ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi, settings,
-    q, v, out, cout, store, sout,
+    q, v, out, cout, hx, hd, hf, store, sout,
 ):  # fmt: skip
     """One run of ``adaptive`` on a bilinear SDOF pair; a step bound that cannot end fails."""
     if _endless(ag, dt_rec, settings):
@@ -232,13 +231,13 @@ def _run_adaptive_bilinear(
         sout[:] = np.nan
         return
     adaptive_bilinear(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi,
-                      settings, q, v, out, cout, store, sout)  # fmt: skip
+                      settings, q, v, out, cout, hx, hd, hf, store, sout)  # fmt: skip
 
 
 @jit
 def _run_inelastic(
     ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi, settings,
-    q, v, out, cout, dmat, store, sout,
+    q, v, out, cout, hx, hd, hf, dmat, store, sout,
 ):  # fmt: skip
     """One run of the inelastic ``newmark`` kernel; a step that could not end is not converged."""
     if _endless(ag, dt_rec, settings):
@@ -246,7 +245,7 @@ def _run_inelastic(
         sout[:] = np.nan
         return
     newmark_hysteretic(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi,
-                       settings, q, v, out, cout, dmat, store, sout)  # fmt: skip
+                       settings, q, v, out, cout, hx, hd, hf, dmat, store, sout)  # fmt: skip
 
 
 #: One run of each method (same arguments), by method code: a run compiles only its method's
@@ -346,7 +345,7 @@ def run_kernel(
         Also return histories at the record's samples.
     storeys : tuple (drift rows, storey table), optional
         Yielding storeys (:meth:`pound_mc.scene.Scene.storey_arrays`): run the inelastic
-        kernel (``newmark`` or ``newmark-explicit``; no histories).
+        kernel (``newmark``, ``newmark-explicit``, or ``adaptive`` for an SDOF pair).
     restitution : dict, optional
         Restitution set per impact (:func:`kernel_settings`); ``xi`` then holds its quantile.
     storey_out : numpy.ndarray, optional
@@ -357,7 +356,7 @@ def run_kernel(
                                restitution=restitution)  # fmt: skip
     pair = _is_sdof_pair(omega, gap, phi)
     if storeys is not None:
-        _check_inelastic(settings, history, pair, np.asarray(storeys[1]), np.asarray(zeta))
+        _check_inelastic(settings, pair, np.asarray(storeys[1]), np.asarray(zeta))
     n = omega.size
     nc = gap.size
     nf = phi.shape[0]

@@ -354,6 +354,16 @@ def final_contacts(model, dpen, beta):
     return stored_energy, phase
 
 
+@jit(inline=True)
+def keep_sample(i, phi, q, dpen, fc, hx, hd, hf):
+    """Floor displacements, penetrations and contact forces at record sample ``i``."""
+    for f in range(hx.shape[1]):
+        hx[i, f] = rowdot(phi, f, q)
+    for c in range(hd.shape[1]):
+        hd[i, c] = dpen[c]
+        hf[i, c] = fc[c]
+
+
 @jit
 def fixed(
     ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi, settings,
@@ -396,11 +406,7 @@ def fixed(
     for step in range(n_steps):
         i, k = divmod(step, m_sub)  # record interval, sub-step in it
         if store and k == 0:
-            for f in range(nf):
-                hx[i, f] = rowdot(phi, f, q)
-            for c in range(nc):
-                hd[i, c] = dpen[c]
-                hf[i, c] = fc[c]
+            keep_sample(i, phi, q, dpen, fc, hx, hd, hf)
         t1 = (step + 1) * h
         ag1 = ag[i] + (ag[i + 1] - ag[i]) * ((k + 1) * inv_m)
         steps += 1
@@ -476,12 +482,7 @@ def fixed(
             status = outputs.STATUS_UNSTABLE
             break
     if store and status != outputs.STATUS_UNSTABLE:
-        i = npts - 1
-        for f in range(nf):
-            hx[i, f] = rowdot(phi, f, q)
-        for c in range(nc):
-            hd[i, c] = dpen[c]
-            hf[i, c] = fc[c]
+        keep_sample(npts - 1, phi, q, dpen, fc, hx, hd, hf)
     if method == CENTRAL_DIFFERENCE:
         # energies were integrated up to the last step n with its central velocity
         for j in range(n):

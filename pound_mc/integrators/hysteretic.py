@@ -42,6 +42,7 @@ from pound_mc.integrators.fixed import (
     impact_start,
     impulses,
     initial_state,
+    keep_sample,
     newmark_arrays,
     newmark_matrices,
     newmark_rates,
@@ -186,9 +187,12 @@ def storey_outputs(out, store, peak_u, drift, peak_acc, side_f, e_h, sout):
 @jit
 def newmark_hysteretic(
     ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi, settings,
-    q, v, out, cout, dmat, store, sout,
+    q, v, out, cout, hx, hd, hf, dmat, store, sout,
 ):  # fmt: skip
     """``newmark`` / ``newmark-explicit`` with bilinear or Bouc-Wen storeys (module docstring).
+
+    ``hx, hd, hf``: floor displacements, penetrations and contact forces at the record's
+    samples, as :func:`~pound_mc.integrators.fixed.fixed` keeps them (empty arrays: none).
 
     ``dmat``: drift rows of the storeys in modal coordinates (storeys x modes); ``store``: the
     storey table (columns ``S_*``: stiffness [N/m], yield drift [m] (inf: elastic), post-yield
@@ -231,8 +235,11 @@ def newmark_hysteretic(
     pp_prev = 0.0
     steps = 0
     inv_m = 1.0 / m_sub
+    keep = hx.shape[0] > 0
     for step in range(n_steps):
         i, k = divmod(step, m_sub)  # record interval, sub-step in it
+        if keep and k == 0:
+            keep_sample(i, phi, q, dpen, fc, hx, hd, hf)
         t1 = (step + 1) * h
         ag1 = ag[i] + (ag[i + 1] - ag[i]) * ((k + 1) * inv_m)
         steps += 1
@@ -282,6 +289,8 @@ def newmark_hysteretic(
         if diverged(phi, q, peaks):
             status = outputs.STATUS_UNSTABLE
             break
+    if keep and status != outputs.STATUS_UNSTABLE:
+        keep_sample(npts - 1, phi, q, dpen, fc, hx, hd, hf)
     stored_energy, phase = final_contacts(model, dpen, beta)
     # the plastic load's work enters the balance as a negative damping work
     outputs.finish(out, cout, peaks, side, phase, q, v, omega, e0, e_in, e_d - w_p, w_c,

@@ -44,6 +44,7 @@ This is slow (seconds for a 30 s SDOF-pair record) and meant for tests and check
 
 from __future__ import annotations
 
+import math
 import time
 
 import numpy as np
@@ -150,6 +151,8 @@ def reference_solution(
         every impact), ``peak_force_restitution`` (``e`` of the peak-force episode, NaN with
         fixed restitution), ``peak_force_time`` [s], per-contact arrays
         ``contact_peak_force`` and ``contact_impacts``, ``x_end``, ``v_end`` (final state),
+        ``x_samples``, ``f_samples`` (floor displacements [m] and contact forces [N] at the
+        record's samples, one row per sample),
         ``segments`` (solver calls), ``wall_s``.
     """
     t_wall = time.perf_counter()
@@ -394,6 +397,10 @@ def reference_solution(
     stalled = 0
     for f_idx in range(n):
         peak_x[f_idx] = abs(y[f_idx])
+    # floor displacements at the record's samples (the dense output of the segment holding each)
+    x_samples = np.full((npts, n), np.nan)
+    x_samples[0] = y[:n]
+    f_samples = np.zeros((npts, nc))  # contact forces there (0 while a contact is open)
 
     def scan_segment(sol_t, dense):
         """Continuous-time maxima of |x| per floor and of the contact forces."""
@@ -401,6 +408,10 @@ def reference_solution(
         tt = np.asarray(sol_t)
         if tt.size < 2:
             return
+        k = np.arange(math.ceil(tt[0] / dt_rec), min(math.floor(tt[-1] / dt_rec), npts - 1) + 1)
+        y_k = dense(k * dt_rec) if k.size else None
+        if k.size:
+            x_samples[k] = y_k[:n].T
         frac = np.linspace(0.0, 1.0, _SAMPLES_PER_STEP + 1)[:-1]
         grid = (tt[:-1, None] + np.diff(tt)[:, None] * frac[None, :]).ravel()
         grid = np.r_[grid, tt[-1]]
@@ -420,6 +431,8 @@ def reference_solution(
             def force_at(t, force_of=force_of):
                 return force_of(dense(t))
 
+            if y_k is not None:
+                f_samples[k, j] = force_of(y_k)
             fs = force_of(yy)
             kk = int(np.argmax(fs))
             val = float(fs[kk])
@@ -565,6 +578,8 @@ def reference_solution(
         "contact_impacts": impacts.copy(),
         "x_end": y[:n].copy(),
         "v_end": y[n : 2 * n].copy(),
+        "x_samples": x_samples,
+        "f_samples": f_samples,
         "segments": segments,
         "wall_s": time.perf_counter() - t_wall,
         **storey_out,

@@ -296,7 +296,8 @@ class SimulationResult:
     contacts : dict
         Per-contact arrays (``peak_force``, ``impacts``, ``max_penetration``, ``impulse``).
     time_s, disp_left_m, disp_right_m, penetration_m, force_N : numpy.ndarray or None
-        Histories at the record's samples (only with ``history=True``).
+        Histories at the record's samples (only with ``history=True``); with yielding
+        buildings they go on over the free-vibration tail (``integrator.tail_s``) after it.
     storeys : dict or None
         With yielding buildings, per storey (left building's first, bottom to top):
         ``building`` ("left" / "right"), ``storey`` (1-based within it), ``peak_drift_ratio``
