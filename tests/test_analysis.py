@@ -201,6 +201,10 @@ def test_history_from_the_dataset_reproduces_the_stored_simulation(ds, tiny, tmp
     args = ["plot", str(tiny), "--kind", "history", "--out", str(out), "--sample", "2"]
     assert main([*args, "--sel", "left_period_s=0.6", "--sel", "contact_gap_m=0.002"]) == 0
     assert out.stat().st_size > 10_000
+    # the study file's keys name the same dimensions
+    keys = ["--sel", "left.period_s=0.6", "--sel", "contact.gap_m=0.002"]
+    assert main([*args[:-3], str(tmp_path / "keys.png"), *args[-2:], *keys]) == 0
+    assert (tmp_path / "keys.png").read_bytes() == out.read_bytes()
     result, index = ds.pound.simulate(sample=2, left_period_s=0.6, contact_gap_m=0.002)
     assert index == {"record": 0, "left_period_s": 1, "contact_gap_m": 1, "sample": 2}
     # the rerun is the dataset's simulation: same kernel, same parameters, same record

@@ -20,6 +20,7 @@ from pound_mc.analysis.risk import fragility
 from pound_mc.analysis.style import output_path, require_simulations
 from pound_mc.errors import InputError, OutputError
 from pound_mc.scene import load_scene, simulate
+from pound_mc.study.definition import grid_dim_name
 
 
 def _parse_sel(items) -> dict:
@@ -36,7 +37,8 @@ def _parse_sel(items) -> dict:
 def _typed_sel(ds, sel: dict) -> dict:
     """``sel``'s text values as the dimension's coordinate holds them: numbers, or names.
 
-    A material axis takes its materials' names too.  ``record`` and ``sample`` are
+    A dimension may be named by the study file's key (``left.period_s`` for
+    ``left_period_s``).  A material axis takes its materials' names too.  ``record`` and ``sample`` are
     ``--record`` and ``--sample``: they are refused here.
     """
     out = {}
@@ -44,6 +46,8 @@ def _typed_sel(ds, sel: dict) -> dict:
     for dim, value in sel.items():
         if dim in ("record", "sample"):
             raise InputError(f"{dim} is not held with --sel; use --{dim}", key="--sel")
+        if dim not in grid and grid_dim_name(dim) in grid:  # the study file's key
+            dim = grid_dim_name(dim)
         if dim not in grid:
             raise InputError(f"no grid dimension {dim!r}; the grid has {grid}", key="--sel")
         if not isinstance(value, str):

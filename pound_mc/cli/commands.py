@@ -334,7 +334,8 @@ def _analysis(sub: argparse._SubParsersAction) -> None:
         action="append",
         default=[],
         metavar="DIM=VALUE",
-        help="hold a grid dimension at a value (nearest; a material by name); repeatable",
+        help="hold a grid dimension (or its study key, left.period_s) at a value (nearest; a "
+        "material by name); repeatable",
     )
     p.add_argument(
         "--record",
