@@ -38,8 +38,8 @@ def _typed_sel(ds, sel: dict) -> dict:
     """``sel``'s text values as the dimension's coordinate holds them: numbers, or names.
 
     A dimension may be named by the study file's key (``left.period_s`` for
-    ``left_period_s``).  A material axis takes its materials' names too.  ``record`` and ``sample`` are
-    ``--record`` and ``--sample``: they are refused here.
+    ``left_period_s``).  A material axis takes its materials' names too.  ``record`` and
+    ``sample`` are ``--record`` and ``--sample``: they are refused here.
     """
     out = {}
     grid = ds.pound.grid_dims
