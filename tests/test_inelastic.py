@@ -227,6 +227,23 @@ def test_histories_of_yielding_buildings_follow_the_reference():
         assert res.time_s.size == rec[1].size
 
 
+@pytest.mark.parametrize("npts", [30, 118])  # (npts - 1) * 0.01 / 0.01 falls short of npts - 1
+def test_reference_samples_reach_the_last_sample(npts):
+    """The reference's ``x_samples`` at every sample: the last one was left NaN for such npts.
+
+    Reference: the elastic pair kernel's exact linear steps (no contact at this level), whose
+    histories are the exact response to the piecewise-linear record.
+    """
+    scene = load_scene(B1_FILE)
+    rec = (0.01, scene.record_arrays()[1][:npts] * 20)
+    ref = reference_solution(scene, record=rec)
+    np.testing.assert_allclose(ref["x_samples"][-1], ref["x_end"], rtol=1e-12)
+    res = simulate(scene, record=rec, history=True)
+    assert res.outputs["impacts"] == 0
+    x = np.c_[res.disp_left_m, res.disp_right_m]
+    np.testing.assert_allclose(ref["x_samples"], x, rtol=0, atol=1e-10 * np.abs(x).max())
+
+
 def test_history_chart_of_yielding_buildings_shades_the_tail():
     """The run goes on ``tail_s`` after the record (residual drifts); the chart says where."""
     scene, rec = _b1_window(n=200)

@@ -18,7 +18,9 @@ import pytest
 import xarray as xr
 from test_drills import _at2_text
 
+from pound_mc.analysis.plot_numerics import time_history_chart
 from pound_mc.cli import main
+from pound_mc.scene import load_scene, simulate
 from pound_mc.study.runner import output_lock
 from studies import Whole, study_text
 
@@ -510,6 +512,19 @@ def test_simulate_reports_a_run_that_is_not_ok(tmp_path, tables, argv, status):
     assert rc == 1 and info["status"] == status and info["peak_force_N"] is None
     if status == "not_converged":  # no count of the impacts either
         assert info["contacts"][0]["impacts"] is None
+
+
+def test_histories_of_a_run_that_stopped_end_where_it_stopped(tmp_path):
+    """After an unstable stop the histories read 0 (a penetration of 0: touching), now NaN."""
+    method = {"method": "central-difference", "dt_s": 0.02}
+    scene = load_scene(_scene(tmp_path, contact={"beta": 1e16}, integrator=method))
+    res = simulate(scene, history=True)
+    assert res.status == "unstable"
+    reached = np.isfinite(res.penetration_m[:, 0])
+    stop = int(np.argmin(reached))  # the first sample not reached
+    assert 0 < stop < reached.size and not reached[stop:].any() and reached[:stop].all()
+    assert np.isnan(res.disp_left_m[stop:]).all() and np.isnan(res.force_N[stop:]).all()
+    time_history_chart(res, tmp_path / "stopped.png")  # draws what was reached
 
 
 _SHEAR_1KG = {"model": "shear", "storey_mass_kg": [1.0], "storey_stiffness_N_per_m": [1.0e9],

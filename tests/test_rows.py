@@ -2,14 +2,17 @@
 the independent SciPy reference.
 """
 
+import numpy as np
 import pytest
 
+from pound_mc.analysis.plot_numerics import time_history_chart
 from pound_mc.errors import InputError
 from pound_mc.integrators.reference import reference_solution
 from pound_mc.scene import scene_from_dict, simulate
 
 SDOF = {"model": "sdof", "damping_ratio": 0.05, "mass_kg": 1.0e6}
 RECORD = {"source": "builtin:knet-akt013", "duration_s": 6.0, "pga_g": 0.5}
+BILINEAR = {"hysteresis": "bilinear", "yield_disp_m": 0.01}
 
 
 def row(*buildings, **contact):
@@ -59,7 +62,29 @@ def test_row_validation():
           "left": {**SDOF, "period_s": 0.5}}, "left"),
         ({"buildings": [{**SDOF, "period_s": 0.5}, {"model": "wall"},
                         {**SDOF, "period_s": 1.0}]}, "buildings[1].model"),
+        # a yielding building anywhere in a row: its storeys were taken as another's (wrong
+        # stiffness, a row of three bilinear SDOFs 'unstable' at 970 m) or ignored (the middle)
+        ({"buildings": [{**SDOF, "period_s": 0.5}, {**SDOF, "period_s": 1.0, **BILINEAR},
+                        {**SDOF, "period_s": 0.7}]}, "buildings[1].hysteresis"),
+        ({"buildings": [{**SDOF, "period_s": 0.5, **BILINEAR}, {**SDOF, "period_s": 1.0}]},
+         "buildings[0].hysteresis"),
     ):  # fmt: skip
         with pytest.raises(InputError) as info:
             scene_from_dict({**base, **data})
         assert key in str(info.value)
+
+
+def test_history_chart_draws_each_contacts_neighbours(tmp_path):
+    """Contact 2 of a row redrew building 1 against building 2; building 3 was never drawn."""
+    s = row({**SDOF, "period_s": 0.5}, {**SDOF, "period_s": 1.0}, {**SDOF, "period_s": 0.7})
+    res = simulate(s, history=True)
+    floors = np.hstack([res.disp_left_m, res.disp_right_m])  # buildings 1, 2, 3
+    np.testing.assert_array_equal(floors[:, 0] - floors[:, 1] - 0.003, res.penetration_m[:, 0])
+    np.testing.assert_array_equal(floors[:, 1] - floors[:, 2] - 0.003, res.penetration_m[:, 1])
+    lines = time_history_chart(res, tmp_path / "row.png").axes[0].lines
+    assert [ln.get_label() for ln in lines] == [
+        "contact 1: building 1, floor 1", "contact 1: building 2, floor 1",
+        "contact 2: building 2, floor 1", "contact 2: building 3, floor 1",
+    ]  # fmt: skip
+    for ln, k in zip(lines, (0, 1, 1, 2), strict=True):
+        np.testing.assert_allclose(ln.get_ydata(), floors[:, k] * 1e3)

@@ -104,13 +104,31 @@ def stability_map_chart(table: pd.DataFrame, path: str | Path | None = None) -> 
     return save(fig, path)
 
 
-def _contact_floors(result) -> list[tuple[int, int]]:
-    """(left floor, right floor) of each contact, 1-based (the top floors for SDOF pairs)."""
-    contacts = getattr(getattr(result, "scene", None), "contacts", None)
+def _contact_floors(result) -> list[tuple[str, np.ndarray, str, np.ndarray]]:
+    """Per contact: the label and displacement history of its floor in each building.
+
+    The top floors for SDOF pairs; in a row (``[[buildings]]``) the floors of the contact's
+    two neighbours, named by their place in the row.
+    """
+    scene = getattr(result, "scene", None)
+    contacts = getattr(scene, "contacts", None)
+    left, right = result.disp_left_m, result.disp_right_m
     n = result.penetration_m.shape[1]
     if contacts is None or len(contacts) != n:
-        return [(result.disp_left_m.shape[1], result.disp_right_m.shape[1])] * n
-    return [(int(c.left_floor) + 1, int(c.right_floor) + 1) for c in contacts]
+        nl, nr = left.shape[1], right.shape[1]
+        return [(f"left, floor {nl}", left[:, -1], f"right, floor {nr}", right[:, -1])] * n
+    row = getattr(scene, "row", None)
+    if row is None:
+        return [(f"left, floor {c.left_floor + 1}", left[:, c.left_floor],
+                 f"right, floor {c.right_floor + 1}", right[:, c.right_floor])
+                for c in contacts]  # fmt: skip
+    floors = np.hstack([left, right])  # the row's buildings, left to right
+    start = np.cumsum([0] + [b.n_floors for b in row])
+    return [(f"building {c.pair + 1}, floor {c.left_floor + 1}",
+             floors[:, start[c.pair] + c.left_floor],
+             f"building {c.pair + 2}, floor {c.right_floor + 1}",
+             floors[:, start[c.pair + 1] + c.right_floor])
+            for c in contacts]  # fmt: skip
 
 
 @chart_doc
@@ -141,15 +159,13 @@ def time_history_chart(
         ax2.sharex(ax1)
         ax3.sharex(ax1)
     floors = _contact_floors(result)
-    for c, (fl, fr) in enumerate(floors):
+    for c, (name_l, x_l, name_r, x_r) in enumerate(floors):
         style = line_style(c)
         colour = style["color"]
         many = len(floors) > 1
         where = f"contact {c + 1}: " if many else ""
-        ax1.plot(t, result.disp_left_m[:, fl - 1] * 1e3, lw=0.8, color=colour,
-                 label=f"{where}left, floor {fl}")  # fmt: skip
-        ax1.plot(t, result.disp_right_m[:, fr - 1] * 1e3, lw=0.8, color=colour, ls="--",
-                 label=f"{where}right, floor {fr}")  # fmt: skip
+        ax1.plot(t, x_l * 1e3, lw=0.8, color=colour, label=f"{where}{name_l}")
+        ax1.plot(t, x_r * 1e3, lw=0.8, color=colour, ls="--", label=f"{where}{name_r}")
         ax2.plot(t, result.penetration_m[:, c] * 1e3, lw=0.8, color=colour,
                  label=f"contact {c + 1}")  # fmt: skip
         ax3.plot(t, result.force_N[:, c] / 1e6, lw=0.8, color=colour, label=f"contact {c + 1}")
@@ -159,9 +175,10 @@ def time_history_chart(
         legend_outside(ax2, size=7)
         legend_outside(ax3, size=7)
     tail = result.scene.tail_s if result.storeys is not None else 0.0
-    if tail > 0.0 and t.size > 1:  # yielding buildings: free vibration after the record
+    n_tail = int(round(tail / (t[1] - t[0]))) if t.size > 1 else 0  # samples, as with_tail
+    if 0 < n_tail < t.size:  # yielding buildings: free vibration after the record
         for k, a in enumerate((ax1, ax2, ax3)):
-            a.axvspan(t[-1] - tail, t[-1], color="0.92", lw=0, zorder=0,
+            a.axvspan(t[-1 - n_tail], t[-1], color="0.92", lw=0, zorder=0,
                       label="free vibration after the record" if k == 0 else None)  # fmt: skip
         legend_outside(ax1, size=7)
     ax2.axhline(0.0, color="0.5", lw=0.6)

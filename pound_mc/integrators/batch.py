@@ -342,7 +342,7 @@ def run_kernel(
     q0, v0 : array_like, optional
         Initial modal state (default at rest).
     history : bool
-        Also return histories at the record's samples.
+        Also return histories at the record's samples (NaN after a run that stopped).
     storeys : tuple (drift rows, storey table), optional
         Yielding storeys (:meth:`pound_mc.scene.Scene.storey_arrays`): run the inelastic
         kernel (``newmark``, ``newmark-explicit``, or ``adaptive`` for an SDOF pair).
@@ -364,8 +364,8 @@ def run_kernel(
     v = np.zeros(n) if v0 is None else np.array(v0, dtype=float)
     out = np.empty(N_OUT)
     cout = np.empty((nc, N_COUT))
-    if history:
-        hx, hd, hf = np.zeros((ag.size, nf)), np.zeros((ag.size, nc)), np.zeros((ag.size, nc))
+    if history:  # NaN where a run that stopped (unstable, not converged) did not reach
+        hx, hd, hf = (np.full((ag.size, k), np.nan) for k in (nf, nc, nc))
     else:
         hx, hd, hf = _no_histories(nf, nc)
     f8 = np.float64

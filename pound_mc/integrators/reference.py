@@ -408,7 +408,11 @@ def reference_solution(
         tt = np.asarray(sol_t)
         if tt.size < 2:
             return
-        k = np.arange(math.ceil(tt[0] / dt_rec), min(math.floor(tt[-1] / dt_rec), npts - 1) + 1)
+        # samples in the segment, to round-off of the times ((npts - 1) dt / dt may fall short)
+        k = np.arange(
+            max(math.ceil(tt[0] / dt_rec - 1e-9), 0),
+            min(math.floor(tt[-1] / dt_rec + 1e-9), npts - 1) + 1,
+        )
         y_k = dense(k * dt_rec) if k.size else None
         if k.size:
             x_samples[k] = y_k[:n].T

@@ -298,6 +298,7 @@ class SimulationResult:
     time_s, disp_left_m, disp_right_m, penetration_m, force_N : numpy.ndarray or None
         Histories at the record's samples (only with ``history=True``); with yielding
         buildings they go on over the free-vibration tail (``integrator.tail_s``) after it.
+        NaN from where a run that stopped (unstable, not converged) stopped.
     storeys : dict or None
         With yielding buildings, per storey (left building's first, bottom to top):
         ``building`` ("left" / "right"), ``storey`` (1-based within it), ``peak_drift_ratio``
@@ -578,6 +579,13 @@ def scene_from_dict(data: dict, *, file: str | Path | None = None) -> Scene:
     if is_row:
         row = [_building(b, f"{ROW_TABLE}[{k}]", file_s, errors, wall_ok=k == len(row_specs) - 1)
                for k, b in enumerate(row_specs)]  # fmt: skip
+        for k, b in enumerate(row):
+            if b is not None and b.inelastic:  # the inelastic kernel takes two buildings
+                errors.append(InputError(
+                    f"a row of buildings ([[{ROW_TABLE}]]) runs elastic buildings only; "
+                    f"hysteresis = {b.hysteresis!r} runs in a pair ([left] and [right])",
+                    file=file_s, key=f"{ROW_TABLE}[{k}].hysteresis",
+                ))  # fmt: skip
         left, right = row[0], row[-1]
     else:
         left = _building(data["left"], "left", file_s, errors)

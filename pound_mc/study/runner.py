@@ -361,20 +361,22 @@ def _check_manifest(work: Path, study, fresh: bool) -> None:
         )
 
 
-def _discard_unstarted(work: Path) -> None:
-    """Remove the manifest and folder of a run refused before its first chunk file.
+def _discard_unstarted(work: Path, existed: bool) -> None:
+    """Remove the manifest (and the folder) of a run refused before its first chunk file.
 
     Bad input found only once the kernels start (a hysteresis ``adaptive`` cannot step, say)
-    would otherwise leave ``<out>/<name>/manifest.json`` of a run that never ran.  A folder
-    that holds anything else is left as it is.
+    would otherwise leave ``<out>/<name>/manifest.json`` of a run that never ran.  The folder
+    goes too where the run made it (``existed`` false) and it is left empty; a link to a
+    folder stays.
     """
-    if not work.is_dir() or work.is_symlink() or any(work.glob("chunk_*.npz")):
+    if not work.is_dir() or any(work.glob("chunk_*.npz")):
         return
     (work / _MANIFEST).unlink(missing_ok=True)
-    try:
-        work.rmdir()
-    except OSError:  # not empty: not ours to remove
-        pass
+    if not existed and not work.is_symlink():
+        try:
+            work.rmdir()
+        except OSError:  # not empty: not ours to remove
+            pass
 
 
 def _remove_tree(work: Path) -> None:
@@ -526,6 +528,7 @@ def run_study(
         _remove_parts(out_dir, study.name)
         work = out_dir / study.name
         started = not fresh and (work / _MANIFEST).exists()
+        existed = work.exists() and not fresh
         try:
             return _run_locked(
                 study, out_dir, engine, layout, fresh, chunk_size, progress, max_chunks,
@@ -533,7 +536,7 @@ def run_study(
             )  # fmt: skip
         except InputError:
             if not started:  # refused before its first chunk: leave nothing behind
-                _discard_unstarted(work)
+                _discard_unstarted(work, existed)
             raise
 
 
