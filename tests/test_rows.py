@@ -88,3 +88,31 @@ def test_history_chart_draws_each_contacts_neighbours(tmp_path):
     ]  # fmt: skip
     for ln, k in zip(lines, (0, 1, 1, 2), strict=True):
         np.testing.assert_allclose(ln.get_ydata(), floors[:, k] * 1e3)
+
+
+@pytest.mark.parametrize(
+    "contact",
+    [
+        {"model": "hertzdamp", "e": 0.6},
+        {"restitution": "velocity", "material": "concrete", "e_quantile": 1.0},
+    ],
+    ids=["hertzdamp", "e_quantile"],
+)
+def test_row_contact_damping_reaches_the_kernel(contact):
+    """A row ran hertzdamp with no force at all (xi NaN: buildings passed through each other)
+    and per-impact restitution at quantile 0 whatever e_quantile: the pair's damping parameter
+    now.  Reference: the SciPy solution of the same row."""
+    data = {
+        "record": RECORD,
+        "buildings": [{**SDOF, "period_s": 0.5}, {**SDOF, "period_s": 1.0}],
+        "contact": {"gap_m": 0.003, **contact},
+    }
+    if "model" not in contact:
+        data["contact"].update(model="jankowski", beta=2.75e9)
+    s = scene_from_dict(data)
+    record = s.record_arrays()
+    ref = reference_solution(s, record)
+    res = simulate(s, record=record)
+    assert res.status == "ok" and ref["peak_force"] > 1e6
+    assert res.outputs["peak_force"] == pytest.approx(ref["peak_force"], rel=1e-4)
+    assert res.outputs["max_penetration"] == pytest.approx(ref["max_penetration"], rel=1e-4)

@@ -10,7 +10,7 @@ import pytest
 
 from pound_mc.errors import InputError, InputErrors
 from pound_mc.physics.relations import xi_from_e
-from pound_mc.scene import scene_from_dict, schema
+from pound_mc.scene import scene_from_dict, schema, simulate
 from pound_mc.study.definition import NUMERIC_SCENE_KEYS, study_from_text
 from pound_mc.study.engine import StudyEngine
 from pound_mc.study.schema import json_schema, reference_markdown, write_reference
@@ -174,3 +174,33 @@ def test_scene_of_is_what_the_kernels_get():
         assert scene.stiffness == p["contact.beta"][i]
         assert scene.xi == p["contact.xi"][i] == xi_from_e(scene.e, "jankowski2008")
         assert scene.dt_s == p["integrator.dt_s"][i] == 0.01
+
+
+@pytest.mark.parametrize("shear", [False, True], ids=["sdof", "shear"])
+@pytest.mark.parametrize("law", ["jankowski", "hertzdamp"])
+def test_batch_runs_are_the_scenes_they_describe(law, shear, tmp_path):
+    """A hertzdamp study ran every batch simulation with the kernels' damping parameter NaN
+    (the dataset's reported xi, not e): no contact force at all, status ok.  Each batch run
+    now equals its scene run alone (:meth:`StudyEngine.scene_of`, :func:`simulate`)."""
+    text = STUDY.replace("[contact]\n", f'[contact]\nmodel = "{law}"\n')
+    if shear:  # the scene-batch path: 2 + 3 storeys, a contact at each of the 2 shared floors
+        shear_text = (
+            '\nmodel = "shear"\nstorey_mass_kg = [1.0e6, 1.0e6{more}]\n'
+            "storey_stiffness_N_per_m = [1.0e9, 0.8e9{stiff}]\nstorey_height_m = [3.0, 3.0{h}]\n"
+        )
+        text = text.replace(
+            "[left]\nperiod_s = 0.5\nmass_kg = 1.0e6\n",
+            "[left]" + shear_text.format(more="", stiff="", h=""),
+        )
+        text = text.replace("[right]\nperiod_s = 1.0\nmass_kg = 1.0e6\n",
+                            "[right]" + shear_text.format(more=", 1.0e6", stiff=", 0.6e9",
+                                                          h=", 3.0"))  # fmt: skip
+        text = text.replace('"left.period_s" = [0.3, 0.6]\n', "")
+    engine = StudyEngine(study_from_text(text, file=tmp_path / "probe.toml"))
+    indices = np.arange(engine.study.n_simulations)
+    out = engine.run_indices(indices)
+    assert (out["peak_force"][out["impacts"] > 0] > 0).all() and out["impacts"].max() > 0
+    for i in indices[:: max(1, indices.size // 6)]:
+        alone = simulate(engine.scene_of(int(i))).outputs
+        for name in ("peak_force", "impacts", "max_penetration", "peak_disp_left"):
+            assert out[name][i] == pytest.approx(alone[name], rel=1e-12), (i, name)

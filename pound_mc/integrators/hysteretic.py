@@ -263,7 +263,8 @@ def newmark_hysteretic(
             z = drift[s] - up[s]
             if store[s, S_BW] > 0.0:  # z varies over the step: trapezoid in the plastic drift
                 z = 0.5 * (z + drift_n[s] - up_n[s])
-            e_h += (1.0 - store[s, S_ALPHA]) * store[s, S_K] * z * (up[s] - up_n[s])
+            if up[s] != up_n[s]:  # a wall's storey (k infinite) never yields: no inf * 0
+                e_h += (1.0 - store[s, S_ALPHA]) * store[s, S_K] * z * (up[s] - up_n[s])
             up_n[s] = up[s]
             drift_n[s] = drift[s]
             if abs(drift[s]) > peak_u[s]:

@@ -341,6 +341,17 @@ def reference_solution(
             dy = np.r_[dy, zd, power]
         return dy
 
+    def unload(st, yy):
+        """Storey ``st`` leaves its yielding branch at state ``yy`` (its new plastic drift).
+
+        Returns the hysteretic energy of the plastic drift's change.
+        """
+        up_new = drifts(yy[:n])[st] - s_mode[st] * s_uy[st]
+        energy = (1.0 - s_alpha[st]) * s_k[st] * s_uy[st] * abs(up_new - s_up[st])
+        s_up[st] = up_new
+        s_mode[st] = 0
+        return energy
+
     def make_storey_event(st, which, direction):
         bot = s_bot[st]
 
@@ -523,10 +534,7 @@ def reference_solution(
                     u = drifts(y[:n])[j]
                     s_mode[j] = 1 if u - s_up[j] > 0.0 else -1
                 elif kind == "unload":
-                    up_new = drifts(y[:n])[j] - s_mode[j] * s_uy[j]
-                    e_hyst += (1.0 - s_alpha[j]) * s_k[j] * s_uy[j] * abs(up_new - s_up[j])
-                    s_up[j] = up_new
-                    s_mode[j] = 0
+                    e_hyst += unload(j, y)
                 elif kind == "onset":
                     phase[j] = _APPROACH
                     pending[j] = True  # an impact once the penetration is deep enough
@@ -545,6 +553,13 @@ def reference_solution(
                     phase[j] = _OPEN
                 else:
                     phase[j] = _APPROACH
+                # a yielding storey already unloading: its event fell at this event's instant
+                # and the solver reports one (a storey against a wall turns with the contact,
+                # the same velocity vanishing); from the next segment's start, where it is past
+                # zero, it would never be found and the storey would go on yielding
+                rates = drifts(y[n : 2 * n])
+                for st in np.flatnonzero(s_mode * rates < 0.0):
+                    e_hyst += unload(st, y)
 
     x_left = peak_x[:nl]
     x_right = peak_x[nl:]

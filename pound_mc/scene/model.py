@@ -159,12 +159,6 @@ class Scene:
             for c in self.contacts
         ])  # fmt: skip
         nc = len(self.contacts)
-        # the kernels' damping parameter: xi, or the restitution e for laws whose damping is set
-        # per impact from e and the impact velocity (hertzdamp)
-        per_impact = CONTACT_MODELS[self.contact_model].damping == "zeta"
-        xi = self.e if per_impact else self.xi
-        if self.restitution == "velocity":
-            xi = self.e_quantile  # the kernels set e and the damping at every impact
         return {
             "omega": np.r_[self.left.omega, self.right.omega],
             "zeta": np.r_[
@@ -177,8 +171,21 @@ class Scene:
             "gap": np.asarray(self.gap_m, dtype=float),
             "meff": np.array([c.m_eff for c in self.contacts]),
             "beta": np.full(nc, float(self.stiffness)),
-            "xi": np.full(nc, float(xi if xi is not None else 0.0)),
+            "xi": np.full(nc, self._kernel_xi()),
         }
+
+    def _kernel_xi(self) -> float:
+        """The kernels' damping parameter of every contact (the ``xi`` array's value).
+
+        ``xi``, or the restitution ``e`` for laws whose damping is set per impact from ``e``
+        and the impact velocity (hertzdamp), or with restitution set per impact the quantile
+        ``e_quantile`` of the material's ``e`` (the kernels set ``e`` at every impact).
+        """
+        per_impact = CONTACT_MODELS[self.contact_model].damping == "zeta"
+        xi = self.e if per_impact else self.xi
+        if self.restitution == "velocity":
+            xi = self.e_quantile
+        return float(xi if xi is not None else 0.0)
 
     @property
     def inelastic(self) -> bool:
@@ -241,7 +248,7 @@ class Scene:
             "gap": np.asarray(self.gap_m, dtype=float),
             "meff": np.array([c.m_eff for c in self.contacts]),
             "beta": np.full(nc, float(self.stiffness)),
-            "xi": np.full(nc, float(self.xi if self.xi is not None else 0.0)),
+            "xi": np.full(nc, self._kernel_xi()),
         }  # fmt: skip
 
     def contact_lines(self) -> list[str]:

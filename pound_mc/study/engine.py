@@ -31,7 +31,7 @@ from pound_mc.errors import InputError, InputErrors, named_by
 from pound_mc.integrators.threads import numba_threads
 from pound_mc.motions import G, load_record, record_arrays
 from pound_mc.motions.intensity import sa_g
-from pound_mc.physics.contact import default_relation, reported_xi
+from pound_mc.physics.contact import CONTACT_MODELS, default_relation, reported_xi
 from pound_mc.physics.relations import restitution_of_xi
 from pound_mc.scene import Scene, scene_from_dict, simulate
 from pound_mc.scene.model import storey_results
@@ -352,6 +352,8 @@ class StudyEngine:
         if "contact.restitution" in self._base:
             return self._values("contact.e_quantile", varied, size), None
         e = None if "contact.xi" in varied else self._values("contact.e", varied, size)
+        if e is not None and CONTACT_MODELS[self._base["contact.model"]].damping == "zeta":
+            return np.asarray(e, float), e  # hertzdamp: the kernels take e (its xi is NaN)
         if e is not None:
             return np.asarray(self._reported_xi(e), float), e
         xi = self._values("contact.xi", varied, size)
