@@ -179,6 +179,9 @@ def test_study_samples_the_quantile(tmp_path):
         )
     }
     assert (flat["impacts"] > 0).any()
+    # no one xi or e: set at every impact (they read 0 and 1.0, an elastic contact)
+    assert np.isnan(ds["xi"]).all() and np.isnan(ds["e_effective"]).all()
+    assert "e_quantile" in ds.variables or "contact_e_quantile" in ds.variables
     for i in range(flat["impacts"].size):
         res = simulate(engine.scene_of(i))
         for key, values in flat.items():

@@ -46,6 +46,7 @@ from pound_mc.analysis.style import value_text
 from pound_mc.errors import InputError
 from pound_mc.scene import Scene, SimulationResult
 from pound_mc.scene import simulate as simulate_scene
+from pound_mc.study.dataset import pounding_counted
 from pound_mc.study.definition import grid_dim_name, study_from_text
 from pound_mc.study.engine import StudyEngine
 
@@ -342,7 +343,7 @@ class PoundAccessor:
         return q.rename(f"{variable}_quantile")
 
     def probability(self, threshold: float | None = None, **sel: Any) -> xr.DataArray:
-        """Fraction of the samples (status ok) that pounded.
+        """Fraction of the samples (status ok or inaccurate) that pounded.
 
         Parameters
         ----------
@@ -360,7 +361,10 @@ class PoundAccessor:
         pounded = ds["impacts"] > 0
         if threshold is not None:
             pounded = pounded & (ds["peak_force"] > threshold)
-        p = _select(pounded.where(self.ok), ds, sel).mean("sample")
+        # any impact: the runs flagged inaccurate count too (their impacts stand); above a
+        # force: status ok only
+        counted = pounding_counted(ds["status"]) if threshold is None else self.ok
+        p = _select(pounded.where(counted), ds, sel).mean("sample")
         more = "" if threshold is None else f" and a peak force above {threshold:g} N"
         p.attrs = {"units": "1", "long_name": f"fraction of samples with an impact{more}"}
         return p.rename("pounding_probability")

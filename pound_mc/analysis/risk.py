@@ -1,7 +1,8 @@
 """Fragility curves and the required gap of a study dataset (``ds.pound.fragility``, ...).
 
 A study with an intensity axis (``sa_g`` or ``pga_g``: a multiple-stripe analysis) gives at
-each intensity the number of simulations (records x samples, status ok) and how many of them
+each intensity the number of simulations (records x samples, status ok; for pounding also
+``inaccurate``, :func:`~pound_mc.study.dataset.pounding_counted`) and how many of them
 had an event; :func:`fragility` fits the lognormal fragility of
 :func:`pound_mc.analysis.fragility.fit_fragility` to these stripes for every combination of
 the other grid axes (e.g. per gap).  :func:`required_gap` reads, per combination of the grid
@@ -27,6 +28,7 @@ from pound_mc.analysis.fragility import fit_fragility
 from pound_mc.analysis.gap_probability import required_gap as _required_gap
 from pound_mc.analysis.gaps import RulesDoNotApply, study_gaps
 from pound_mc.errors import InputError
+from pound_mc.study.dataset import pounding_counted
 
 __all__ = ["INTENSITY_DIMS", "GAP_DIM", "event_mask", "fragility", "required_gap"]
 
@@ -90,9 +92,18 @@ def _intensity_dim(ds: xr.Dataset, im: str | None) -> str:
     return im
 
 
+#: ``n_total``'s long name (:func:`_counts`).
+_COUNTED = "simulations counted (status ok; for pounding also inaccurate)"
+
+
 def _counts(ds: xr.Dataset, event: str, over=("record", "sample")):
-    """Simulations with status ok, and those among them with the event, summed over ``over``."""
-    ok = ds["status"] == 0
+    """Simulations counted, and those among them with the event, summed over ``over``.
+
+    Counted: status ok; for ``pounding`` also ``inaccurate``
+    (:func:`~pound_mc.study.dataset.pounding_counted`: the flag doubts the peak force, and
+    only pounding runs carry it).
+    """
+    ok = pounding_counted(ds["status"]) if event == "pounding" else ds["status"] == 0
     hit = event_mask(ds, event) & ok
     return hit.sum(over), ok.sum(over)
 
@@ -170,7 +181,7 @@ def fragility(
             "n_event": (n_event.dims, n_event.values.astype(np.int64),
                         {"units": "1", "long_name": f"simulations with {event}"}),
             "n_total": (n_total.dims, n_total.values.astype(np.int64),
-                        {"units": "1", "long_name": "simulations with status ok"}),
+                        {"units": "1", "long_name": _COUNTED}),
             "fit_message": (rest, message, {"long_name": "why there is no fit"}),
             "n_boot_discarded": (rest, discarded, {"units": "1", "long_name":
                                  "bootstrap resamples without a fit, left out"}),
@@ -193,7 +204,7 @@ def required_gap(
     """Smallest gap with pounding probability at or below ``probability``, per other grid axis.
 
     The probability at each gap is the fraction of the simulations (records x samples, status
-    ok) with an impact; the gap and its Wilson interval are
+    ok or inaccurate) with an impact; the gap and its Wilson interval are
     :func:`pound_mc.analysis.gap_probability.required_gap`'s.
 
     Parameters
@@ -253,7 +264,7 @@ def required_gap(
             "pounding_probability": (p.dims, p.values, {"units": "1", "long_name":
                                      "fraction of the simulations with an impact"}),
             "n_total": (n_total.dims, n_total.values.astype(np.int64),
-                        {"units": "1", "long_name": "simulations with status ok"}),
+                        {"units": "1", "long_name": _COUNTED}),
         },
         coords={**{d: ds[d] for d in (*rest, GAP_DIM)}, "bound": ["lower", "upper"]},
         attrs={"target": float(probability), "ci": float(ci)},

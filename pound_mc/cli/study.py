@@ -20,6 +20,7 @@ from pound_mc.analysis.risk_chart import fragility_panels, required_gap_chart
 from pound_mc.errors import InputError
 from pound_mc.integrators import METHODS
 from pound_mc.physics.contact import CONTACT_MODELS
+from pound_mc.study.dataset import STATUS_FLAGS
 from pound_mc.study.definition import load_study
 from pound_mc.study.distributed import _import_distributed, run_study_distributed
 from pound_mc.study.engine import StudyEngine
@@ -101,10 +102,34 @@ def run_command(args) -> int:
         + f"; {time.perf_counter() - t0:.1f} s with the dataset"
     )
     print(f"wrote {report.path}")
+    for line in status_warnings(report.path):
+        print(line, file=sys.stderr)
     if not args.no_plot:
         for png in _charts(study, report.path, Path(args.out)):
             print(f"wrote {png}")
     return 0
+
+
+def status_warnings(path: Path) -> list[str]:
+    """Lines for the simulations of a dataset that did not end ``ok``, with what that means."""
+    with xr.open_dataset(path) as ds:
+        status = ds["status"].values.ravel()
+    n = status.size
+    count = {name: int((status == code).sum()) for code, name in STATUS_FLAGS.items()}
+    lines = []
+    if count["inaccurate"]:
+        lines.append(
+            f"warning: {count['inaccurate']:,} of {n:,} simulations flagged inaccurate (their "
+            "peak force is in doubt: left out of the force spectrum, counted for the pounding "
+            "probability); refine integrator.dt_s (substeps with adaptive)"
+        )
+    failed = count["unstable"] + count["not_converged"]
+    if failed:
+        lines.append(
+            f"warning: {failed:,} of {n:,} simulations unstable or not converged (left out of "
+            "every summary); refine integrator.dt_s"
+        )
+    return lines
 
 
 def _charts(study, path: Path, out: Path) -> list[Path]:

@@ -27,6 +27,8 @@ import numpy as np
 import xarray as xr
 
 from pound_mc.errors import OutputError
+from pound_mc.integrators.accuracy import STATUS_INACCURATE
+from pound_mc.integrators.outputs import STATUS_OK
 from pound_mc.study.definition import grid_dim_name
 
 __all__ = [
@@ -39,6 +41,7 @@ __all__ = [
     "QUANTILES",
     "build_dataset",
     "write_netcdf",
+    "pounding_counted",
 ]
 
 #: Per-simulation outputs: name -> (units, long_name, dtype).
@@ -141,8 +144,11 @@ _PARAMETER_ATTRS = {
     "e": ("1", "coefficient of restitution (target)"),
     "beta": ("N m-1.5", "impact stiffness parameter"),
     "k_N_per_m": ("N m-1", "linear impact stiffness"),
-    "xi": ("1", "impact damping ratio"),
-    "e_effective": ("1", "coefficient of restitution the contact law really produces"),
+    "xi": ("1", "impact damping ratio (NaN: set at every impact)"),
+    "e_effective": (
+        "1",
+        "coefficient of restitution the contact law really produces (NaN: set at every impact)",
+    ),
     "gap_m": ("m", "initial separation gap"),
     "period_s": ("s", "natural period"),
     "damping_ratio": ("1", "structural damping ratio"),
@@ -164,6 +170,17 @@ def _param_attrs(key: str) -> dict:
     units, long_name = _PARAMETER_ATTRS.get(name, ("1", name))
     prefix = f"{table} " if table in ("left", "right", "record") else ""
     return {"units": units, "long_name": prefix + long_name, "scene_key": key}
+
+
+def pounding_counted(status: xr.DataArray) -> xr.DataArray:
+    """Where a simulation counts for the pounding probability: status ok or inaccurate.
+
+    ``inaccurate`` doubts a run's peak force (:mod:`pound_mc.integrators.accuracy`), not
+    whether it pounded; and only a run with a contact can be flagged, so leaving those runs
+    out would lower the probability (a newmark study at 5 ms with 94 % of its runs flagged
+    read 0 where 94 % pounded).  Unstable and not converged runs are left out.
+    """
+    return (status == STATUS_OK) | (status == STATUS_INACCURATE)
 
 
 def build_dataset(
@@ -262,11 +279,11 @@ def build_dataset(
         "long_name": "quantiles of peak impact force over samples (impact force spectrum)",
     }
     ds["quantile"].attrs = {"long_name": "quantile level", "units": "1"}
-    pounding = (ds["impacts"] > 0).where(ok)
+    pounding = (ds["impacts"] > 0).where(pounding_counted(ds["status"]))
     ds["pounding_probability"] = pounding.mean("sample")
     ds["pounding_probability"].attrs = {
         "units": "1",
-        "long_name": "fraction of samples with at least one impact",
+        "long_name": "fraction of samples with at least one impact (status ok or inaccurate)",
     }
     for var in ds.variables.values():  # CF: units on every variable (text labels: "1")
         var.attrs.setdefault("units", "1")

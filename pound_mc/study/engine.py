@@ -13,6 +13,10 @@ also gives the per-contact outputs of :data:`~pound_mc.study.dataset.CONTACT_VAR
 A study that varies a shear building's keys, or whose buildings can yield, runs each
 simulation as its own scene (:meth:`StudyEngine.scene_of`, modes computed for it); the
 results are still a function of the study and the index only.
+
+Longer than 600 lines because one engine maps the study's drawn samples to every path (SDOF
+batch, shear batch, scene by scene) and to the dataset's parameters, so that they cannot
+disagree.
 """
 
 from __future__ import annotations
@@ -352,10 +356,9 @@ class StudyEngine:
         if "contact.restitution" in self._base:
             return self._values("contact.e_quantile", varied, size), None
         e = None if "contact.xi" in varied else self._values("contact.e", varied, size)
-        if e is not None and CONTACT_MODELS[self._base["contact.model"]].damping == "zeta":
-            return np.asarray(e, float), e  # hertzdamp: the kernels take e (its xi is NaN)
-        if e is not None:
-            return np.asarray(self._reported_xi(e), float), e
+        if e is not None:  # hertzdamp: the kernels take e itself (its reported xi is NaN)
+            zeta = CONTACT_MODELS[self._base["contact.model"]].damping == "zeta"
+            return np.asarray(e if zeta else self._reported_xi(e), float), e
         xi = self._values("contact.xi", varied, size)
         if xi is None:
             xi = np.zeros(size)  # laws without damping (linear, hertz)
@@ -540,7 +543,10 @@ class StudyEngine:
         out = {}
         e_dims = _dims_of(study, "contact.e")
         xi_dims = _dims_of(study, "contact.xi")
-        if ("contact.e" in self._base and not xi_dims) or e_dims:
+        per_impact = "contact.restitution" in self._base
+        if per_impact:  # e and xi set at every impact from its velocity: no one value
+            dims, xi = (), np.asarray(np.nan)
+        elif ("contact.e" in self._base and not xi_dims) or e_dims:
             dims = e_dims
             e = (
                 study.grid["contact.e"]
@@ -560,7 +566,8 @@ class StudyEngine:
             xi = np.asarray(xi, float)
         out["xi"] = (dims, xi)
         if self._base["contact.model"] == "jankowski":
-            out["e_effective"] = (dims, np.asarray(restitution_of_xi(xi), float))
+            e_eff = np.asarray(np.nan) if per_impact else restitution_of_xi(xi)
+            out["e_effective"] = (dims, np.asarray(e_eff, float))
         skey = self.stiffness_key
         name = "beta" if skey == "contact.beta" else "k_N_per_m"
         bdims = _dims_of(study, skey)

@@ -83,8 +83,9 @@ GRID_AXIS = Table(
     f"within 8 units in the last place of a {GRID_DIGITS}-significant-digit number is that "
     "number, so that 1.0 is exactly 1.0).  One "
     f"non-numeric axis: `\"{MATERIAL_KEY}\" = [\"steel\", \"concrete\", ...]` (names of "
-    "`pound_mc.physics.materials.MATERIALS`).  With a shear building only `contact.*` keys "
-    "and `integrator.dt_s` may vary.  Intensity axes `record.pga_g` and `record.sa_g` [g] scale "
+    "`pound_mc.physics.materials.MATERIALS`).  A shear building's keys (storey masses, "
+    "stiffnesses, damping) may vary too: each simulation then computes its own modes, at the "
+    "cost of one scene a simulation.  Intensity axes `record.pga_g` and `record.sa_g` [g] scale "
     "every record to each value (a multiple-stripe analysis; one of them per study).",
     (
         Field("start", "number", "First value.", unit="as the key", required=True),
