@@ -32,6 +32,8 @@ import xarray as xr
 import pound_mc.integrators as integrators
 from pound_mc._version import __version__
 from pound_mc.errors import InputError, InputErrors, named_by
+from pound_mc.integrators.accuracy import ADAPTIVE_SUBSTEPS_FACTOR, flag_inaccurate
+from pound_mc.integrators.outputs import STATUS_OK
 from pound_mc.integrators.threads import numba_threads
 from pound_mc.motions import G, load_record, record_arrays
 from pound_mc.motions.intensity import sa_g
@@ -76,6 +78,29 @@ _STOREY_KEYS = {
 }
 # Keys the batch of a pair with a shear building takes per simulation (its modes are fixed).
 _SCENE_KERNEL_KEYS = ("contact.gap_m", "contact.beta", "integrator.dt_s")
+
+
+def _checked_status(scene, record, outputs: dict) -> int:
+    """The status of a run of its own scene, after the accuracy check a batch run gets.
+
+    As :func:`~pound_mc.integrators.simulate_sdof_pairs`: a fixed-step run is run again at
+    ``dt_s / 2``, an ``adaptive`` run that had a contact with
+    :data:`~pound_mc.integrators.accuracy.ADAPTIVE_SUBSTEPS_FACTOR` times the sub-steps; an
+    ``ok`` run whose peak force changes by more than
+    :data:`~pound_mc.integrators.accuracy.PEAK_FORCE_TOLERANCE` is ``inaccurate``.
+    """
+    status = int(outputs["status"])
+    if not scene.accuracy_check or status != STATUS_OK:
+        return status
+    if scene.method == "adaptive":
+        if not outputs["max_penetration"] > 0.0:  # no contact: sub-steps never taken
+            return status
+        finer = {"substeps": scene.substeps * ADAPTIVE_SUBSTEPS_FACTOR}
+    else:
+        finer = {"dt_s": scene.dt_s / 2}
+    fine = simulate(scene, record=record, **finer).outputs
+    return int(flag_inaccurate([status], [outputs["impacts"]], np.inf, 0.0,
+                               [outputs["peak_force"]], [fine["peak_force"]])[0])  # fmt: skip
 
 
 def _dims_of(study, key: str) -> tuple[str, ...]:
@@ -435,9 +460,11 @@ class StudyEngine:
         names = (*RESULT_VARIABLES, *(INELASTIC_VARIABLES if self.inelastic else ()))
         try:
             for k, index in enumerate(indices):
-                res = simulate(self.scene_of(int(index)), record=self.record_of(int(index)))
+                scene, record = self.scene_of(int(index)), self.record_of(int(index))
+                res = simulate(scene, record=record)
                 for name in names:
                     out[name][k] = res.outputs[name]
+                out["status"][k] = _checked_status(scene, record, res.outputs)
                 if self.mdof:
                     for name in CONTACT_VARIABLES:
                         out[name][k] = res.contacts[name.removeprefix("contact_")]
