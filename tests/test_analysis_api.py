@@ -20,6 +20,7 @@ from test_analysis_matrix import small_study
 import pound_mc  # noqa: F401  (registers ds.pound)
 from pound_mc.analysis.style import write_atomically
 from pound_mc.cli import main
+from pound_mc.scene import simulate
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -167,3 +168,21 @@ def test_sel_of_a_dimension_off_the_grid_and_a_failed_write_leave_nothing(small,
     with pytest.raises(ValueError, match="not a PNG"):
         write_atomically(tmp_path / "x.png", fail)
     assert list(tmp_path.iterdir()) == []
+
+
+def test_the_scene_of_a_simulation_on_an_intensity_axis_reproduces_it(small):
+    """``simulate(ds.pound.scene(...))`` ran the record unscaled on a study with an intensity
+    axis (peak force 37.1 MN for the dataset's 35.4 MN): the scene now holds the record as the
+    study ran it, and drops it only when the record table changes."""
+    ds = _open(small("quickstart"))
+    top = float(ds["pga_g"].values[-1])
+    point = {"pga_g": top, "contact_gap_m": float(ds["contact_gap_m"].values[0])}
+    scene = ds.pound.scene(record=0, sample=0, **point)
+    stored = float(ds["peak_force"].sel(point).isel(record=0, sample=0))
+    assert stored > 0 and simulate(scene).outputs["peak_force"] == stored
+    scene.gap_m = scene.gap_m * 1.0  # another field: the held record stays
+    assert simulate(scene).outputs["peak_force"] == stored
+    scene.record = {**scene.record}  # the same table: still held
+    assert simulate(scene).outputs["peak_force"] == stored
+    scene.record["duration_s"] = 5.0  # another record: read again (unscaled, cut)
+    assert simulate(scene).outputs["peak_force"] != stored

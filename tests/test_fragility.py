@@ -110,7 +110,10 @@ def test_bootstrap_is_seeded():
     [
         ([0, 0, 0, 0, 0, 0, 0], "no simulation has the event"),
         ([10] * 7, "every simulation has the event"),
-        ([0, 0, 0, 4, 10, 10, 10], "separated"),
+        # events only from one stripe on, that one mixed (quasi-separation): it said "only
+        # events above it" of a stripe with non-events
+        ([0, 0, 0, 4, 10, 10, 10], "separated .no event below one intensity, no non-event"),
+        ([0, 0, 0, 0, 0, 0, 2], "separated .no event below one intensity, no non-event above"),
         ([0, 0, 0, 10, 10, 10, 10], "separated"),
         ([10, 10, 10, 4, 0, 0, 0], "does not increase"),
         ([10, 8, 7, 6, 4, 2, 1], "does not increase"),

@@ -90,8 +90,10 @@ def scene_at(
 
     The study is rebuilt from the dataset's ``study_text`` (its records read again) and the
     scene is :meth:`~pound_mc.study.engine.StudyEngine.scene_of` the simulation at the given
-    coordinates (nearest) and ``sample`` (the study's sampling is deterministic), so
-    :func:`pound_mc.scene.simulate` reproduces the dataset's numbers for that simulation.
+    coordinates (nearest) and ``sample`` (the study's sampling is deterministic), holding the
+    record as the study ran it (:meth:`~pound_mc.scene.Scene.hold_record`: scaled to the
+    intensity where the study has an intensity axis), so :func:`pound_mc.scene.simulate`
+    reproduces the dataset's numbers for that simulation.
 
     Parameters
     ----------
@@ -137,7 +139,9 @@ def scene_at(
     index["sample"] = int(sample)
     engine = StudyEngine(study)
     flat = int(np.ravel_multi_index(tuple(index.values()), study.shape))
-    return engine.scene_of(flat), engine.record_of(flat), index
+    scene, rec = engine.scene_of(flat), engine.record_of(flat)
+    scene.hold_record(rec)
+    return scene, rec, index
 
 
 def _axes_of(fig, ax):

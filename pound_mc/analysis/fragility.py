@@ -18,9 +18,9 @@ as a probit regression ``p_j = Phi(a + b ln x_j)`` with ``b = 1/beta`` and
 ``a = -ln(theta)/beta``, ``ln L`` is concave in ``(a, b)``, so Newton's method with step halving
 finds the unique maximum whenever it exists.  It exists (finite ``theta``, ``beta > 0``) unless
 the stripes are *separated*: every stripe below some intensity has no event and every stripe
-above it has all events (then ``beta -> 0``), or the event fraction does not rise with the
-intensity (then ``beta -> infinity``), or no stripe (or every stripe) has the event.  Such data
-are refused with an :class:`~pound_mc.errors.InputError`.
+above it has all events, the stripe at it either or both (then ``beta -> 0``), or the event
+fraction does not rise with the intensity (then ``beta -> infinity``), or no stripe (or every
+stripe) has the event.  Such data are refused with an :class:`~pound_mc.errors.InputError`.
 
 Confidence intervals come from a nonparametric bootstrap that resamples the simulations within
 each stripe (``z*_j ~ Binomial(n_j, z_j / n_j)``, the same as drawing ``n_j`` of the stripe's
@@ -450,7 +450,7 @@ def fit_fragility(
         "add stronger stripes",
         "all": "every simulation has the event: the median lies below the lowest intensity; "
         "add weaker stripes",
-        "separated": "the stripes are separated (no event below one intensity, only events "
+        "separated": "the stripes are separated (no event below one intensity, no non-event "
         "above it): the dispersion tends to 0; add stripes near it",
         "decreasing": "the event fraction does not increase with the intensity, so no "
         "lognormal fragility fits (the dispersion tends to infinity)",

@@ -52,7 +52,8 @@ def preprocess(
     pga_g : float, optional
         Scale so that max |a| of the kept samples is ``pga_g * G`` [g].
     resample_hz : float, optional
-        Off by default.  New sampling rate [Hz] (obspy's Fourier resampling), applied after
+        Off by default.  New sampling rate [Hz] (obspy's Fourier resampling, without a taper:
+        the spectrum below the lower Nyquist frequency is kept as it is), applied after
         demeaning and filtering, before truncation.
     filter : dict, optional
         Off by default.  Arguments of :meth:`obspy.Trace.filter`, e.g.
@@ -103,7 +104,9 @@ def preprocess(
         steps.append(f"filter: {dict(filter)!r}")
     if resample_hz is not None:
         rate = _positive(resample_hz, name="record.resample_hz", file=where)
-        out.resample(rate)
+        # no window: obspy's default Hann taper scales a frequency f by (1 + cos(pi f / f_N)) / 2
+        # (f_N the record's Nyquist frequency; a 10-Hz sine at 100 Hz lost 10 % of its peak)
+        out.resample(rate, window=None)
         steps.append(f"resample: {rate:g} Hz")
     data = np.asarray(out.data, dtype=np.float64)
     dt = float(out.stats.delta)

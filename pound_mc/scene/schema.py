@@ -358,8 +358,8 @@ RECORD = Table(
               "`synthetic:`).", minimum=0),
         Field("params", "table", "Parameters of a synthetic motion "
               "(`pound_mc.motions.synthetic`)."),
-        Field("resample_hz", "number", "New sampling rate (Fourier resampling), before "
-              "truncation.", unit="Hz", minimum=0.0, exclusive_minimum=True, maximum=1.0e4),
+        Field("resample_hz", "number", "New sampling rate (Fourier resampling, no taper), "
+              "before truncation.", unit="Hz", minimum=0.0, exclusive_minimum=True, maximum=1.0e4),
         Field("filter", "table", "Arguments of obspy's `Trace.filter`, e.g. "
               "`{ type = \"bandpass\", freqmin = 0.1, freqmax = 25.0 }`."),
     ),
