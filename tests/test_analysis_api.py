@@ -5,8 +5,11 @@ studies whose datasets it meets (the quickstart's intensity and gap axes, yieldi
 The datasets are the cut-down shipped studies of ``test_analysis_matrix`` (a few seconds each).
 """
 
+import copy as copy_module
+import pickle
 import re
 import tomllib
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -184,5 +187,8 @@ def test_the_scene_of_a_simulation_on_an_intensity_axis_reproduces_it(small):
     assert simulate(scene).outputs["peak_force"] == stored
     scene.record = {**scene.record}  # the same table: still held
     assert simulate(scene).outputs["peak_force"] == stored
+    for copy in (replace(scene, gap_m=scene.gap_m), copy_module.deepcopy(scene),
+                 pickle.loads(pickle.dumps(scene))):  # fmt: skip
+        assert simulate(copy).outputs["peak_force"] == stored  # copies keep it
     scene.record["duration_s"] = 5.0  # another record: read again (unscaled, cut)
     assert simulate(scene).outputs["peak_force"] != stored

@@ -289,4 +289,6 @@ def test_runs_flagged_inaccurate_count_for_the_pounding_probability(make_study, 
     np.testing.assert_allclose(ds.pound.probability().values.ravel(), by_hand.values.ravel())
     gap = ds.pound.required_gap(probability=0.5, rules=False)
     assert (gap["n_total"] == counted.sum(("record", "sample"))).all()
+    ax = ds.pound.plot.probability(rules=None)  # the chart counted ok runs only
+    np.testing.assert_allclose(ax.lines[0].get_ydata(), by_hand.values.ravel())
     assert float(by_hand.min()) > 0.5  # pounded at both gaps, flagged or not

@@ -35,6 +35,7 @@ from pound_mc.analysis.style import (
     scale_of,
     value_text,
 )
+from pound_mc.study.dataset import pounding_counted
 
 __all__ = [
     "restitution_chart",
@@ -368,7 +369,8 @@ def probability_chart(
 ) -> Figure:
     """Pounding probability against the initial gap, with the separation rules marked.
 
-    The probability is the fraction of the samples (status ok) with at least one impact:
+    The probability is the fraction of the samples (status ok or inaccurate,
+    :func:`~pound_mc.study.dataset.pounding_counted`) with at least one impact:
     ``pounding_probability`` of the dataset.  A study without the gap on its grid draws the
     probability against its first grid axis instead (no rules then).
 
@@ -412,7 +414,8 @@ def probability_chart(
     wanted = sel.pop(line, None) if line is not None else None
     hold = _hold(ds, [d for d in rest if d != line], sel)
     if record is None:
-        prob = (ds["impacts"] > 0).where(ds["status"] == 0).isel(hold).mean(("record", "sample"))
+        counted = pounding_counted(ds["status"])
+        prob = (ds["impacts"] > 0).where(counted).isel(hold).mean(("record", "sample"))
         rec_text = f"all {ds.sizes['record']} records" if ds.sizes["record"] > 1 else "record "
         rec_text += "" if ds.sizes["record"] > 1 else str(ds["record"].values[0])
     else:

@@ -20,6 +20,7 @@ from pound_mc.analysis.risk import fragility
 from pound_mc.analysis.style import output_path, require_simulations
 from pound_mc.errors import InputError, OutputError
 from pound_mc.scene import load_scene, simulate
+from pound_mc.study.dataset import pounding_counted
 from pound_mc.study.definition import grid_dim_name
 
 
@@ -164,7 +165,8 @@ def draw(path: str | Path, kind: str, *, out=None, sel=None, record=None, sample
         if line is not None and line not in ds.pound.grid_dims:
             raise InputError(f"{line!r} is not a grid dimension; the grid has "
                              f"{ds.pound.grid_dims}", key="--line")  # fmt: skip
-        if kind not in ("history", "restitution") and not bool(ds.pound.ok.any()):
+        counted = pounding_counted(ds["status"]) if kind == "probability" else ds.pound.ok
+        if kind not in ("history", "restitution") and not bool(counted.any()):
             counts = ", ".join(f"{n} {s}" for s, n in ds.pound.status_counts().items() if n)
             raise InputError(f"nothing to draw: no simulation ended with status ok ({counts})")
         if kind == "spectrum":

@@ -92,30 +92,26 @@ class Scene:
     base_dir: Path | None = None
     tail_s: float = 5.0
     accuracy_check: bool = True
+    #: ``(record table, folder, (dt, acceleration))`` of :meth:`hold_record` (copies keep it)
+    held_record: tuple | None = field(default=None, repr=False, compare=False)
     _cache: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     def __setattr__(self, name, value):
-        """Set a field; any field but the cache itself drops the cached record and arrays.
-
-        A record held with :meth:`hold_record` stays: :meth:`record_arrays` drops it once the
-        record table or its folder differs from the one it was held for.
-        """
+        """Set a field; any field but the cache itself drops the cached record and arrays."""
         if name != "_cache" and "_cache" in self.__dict__:
-            held = self._cache.get("held")
             self._cache.clear()
-            if held is not None:
-                self._cache["held"] = held
         object.__setattr__(self, name, value)
 
     def hold_record(self, record: tuple[float, np.ndarray]) -> None:
         """Run with ``record`` = ``(dt [s], acceleration [m/s^2])`` in place of reading it.
 
         For a study's simulation whose record the study scaled (an intensity axis): the
-        scene's record table names the record, not its scaling.  Held until the record table
-        or the folder changes.
+        scene's record table names the record, not its scaling.  :meth:`record_arrays` uses
+        it while the record table and the folder are those it was held with; copies of the
+        scene (``dataclasses.replace``, ``copy``, pickling) keep it.
         """
-        self._cache["held"] = (copy.deepcopy(self.record), self.base_dir,
-                               (float(record[0]), np.asarray(record[1], dtype=float)))  # fmt: skip
+        self.held_record = (copy.deepcopy(self.record), self.base_dir,
+                            (float(record[0]), np.asarray(record[1], dtype=float)))  # fmt: skip
 
     def __getstate__(self):
         """Pickle and copy without the cache (a worker reads its own record)."""
@@ -151,7 +147,7 @@ class Scene:
 
         Read it, do not modify it: the array is shared by every later call.
         """
-        held = self._cache.get("held")
+        held = self.held_record
         if held is not None and _same_record(held[0], self.record) and held[1] == self.base_dir:
             return held[2]
         hit = self._cache.get("record")
