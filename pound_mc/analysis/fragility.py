@@ -451,7 +451,7 @@ def fit_fragility(
         "all": "every simulation has the event: the median lies below the lowest intensity; "
         "add weaker stripes",
         "separated": "the stripes are separated (no event below one intensity, no non-event "
-        "above it): the dispersion tends to 0; add stripes near it",
+        "above): the dispersion tends to 0; add stripes near it",
         "decreasing": "the event fraction does not increase with the intensity, so no "
         "lognormal fragility fits (the dispersion tends to infinity)",
         "not converged": "the likelihood maximisation did not converge",
