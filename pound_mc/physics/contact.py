@@ -51,6 +51,7 @@ __all__ = [
     "contact_law",
     "check_relation",
     "reported_xi",
+    "kernel_damping",
     "effective_mass",
     "jankowski_force",
     "jankowski_damping",
@@ -566,6 +567,16 @@ def check_relation(law: str, relation: str | None, *, file: str | None = None) -
             key="contact.relation",
         )
     return relation
+
+
+def kernel_damping(law: str, e, xi):
+    """The damping parameter the kernels take per contact for restitution ``e`` or ratio ``xi``.
+
+    ``e`` itself for a law whose damping is set at every impact from ``e`` and the impact
+    velocity (hertzdamp: its ``xi`` is NaN, :func:`reported_xi`), else the ratio ``xi``.
+    Scenes (pairs and rows) and the study engine's batches take it from here.
+    """
+    return e if contact_law(law).damping == "zeta" else xi
 
 
 def reported_xi(law: str, e, relation: str | None):

@@ -24,7 +24,7 @@ from pound_mc.errors import InputError
 from pound_mc.integrators import run_kernel
 from pound_mc.integrators.outputs import INELASTIC_OUTPUTS
 from pound_mc.motions import load_record, record_arrays
-from pound_mc.physics.contact import CONTACT_MODELS, reported_xi
+from pound_mc.physics.contact import CONTACT_MODELS, kernel_damping, reported_xi
 from pound_mc.physics.structures import (
     Building,
     Contact,
@@ -197,10 +197,10 @@ class Scene:
         and the impact velocity (hertzdamp), or with restitution set per impact the quantile
         ``e_quantile`` of the material's ``e`` (the kernels set ``e`` at every impact).
         """
-        per_impact = CONTACT_MODELS[self.contact_model].damping == "zeta"
-        xi = self.e if per_impact else self.xi
         if self.restitution == "velocity":
             xi = self.e_quantile
+        else:
+            xi = kernel_damping(self.contact_model, self.e, self.xi)
         return float(xi if xi is not None else 0.0)
 
     @property

@@ -37,7 +37,7 @@ from pound_mc.integrators.outputs import STATUS_OK
 from pound_mc.integrators.threads import numba_threads
 from pound_mc.motions import G, load_record, record_arrays
 from pound_mc.motions.intensity import sa_g
-from pound_mc.physics.contact import CONTACT_MODELS, default_relation, reported_xi
+from pound_mc.physics.contact import default_relation, kernel_damping, reported_xi
 from pound_mc.physics.relations import restitution_of_xi
 from pound_mc.scene import Scene, scene_from_dict, simulate
 from pound_mc.scene.model import storey_results
@@ -381,9 +381,9 @@ class StudyEngine:
         if "contact.restitution" in self._base:
             return self._values("contact.e_quantile", varied, size), None
         e = None if "contact.xi" in varied else self._values("contact.e", varied, size)
-        if e is not None:  # hertzdamp: the kernels take e itself (its reported xi is NaN)
-            zeta = CONTACT_MODELS[self._base["contact.model"]].damping == "zeta"
-            return np.asarray(e if zeta else self._reported_xi(e), float), e
+        if e is not None:
+            law = self._base["contact.model"]
+            return np.asarray(kernel_damping(law, e, self._reported_xi(e)), float), e
         xi = self._values("contact.xi", varied, size)
         if xi is None:
             xi = np.zeros(size)  # laws without damping (linear, hertz)
