@@ -50,6 +50,7 @@ __all__ = [
     "ADAPTIVE_SUBSTEPS_FACTOR",
     "shortest_contact_s",
     "flag_inaccurate",
+    "substep_check_due",
 ]
 
 #: Status of a fixed-step run whose contact phases are under-resolved.
@@ -100,6 +101,15 @@ def shortest_contact_s(contact_model: str, max_penetration, beta, m_eff) -> np.n
         v0 = np.sqrt(2.0 * stored(d[hit], beta[hit]) / m_eff[hit])
         out[hit] = duration(v0, beta[hit], m_eff[hit])
     return out
+
+
+def substep_check_due(peak_force, status):
+    """Which ``adaptive`` runs the check runs again with more sub-steps.
+
+    Those that ended ``ok`` with a contact (a peak force above 0), whether run in a batch or
+    one scene at a time.
+    """
+    return (np.asarray(peak_force) > 0.0) & (np.asarray(status) == STATUS_OK)
 
 
 def flag_inaccurate(status, impacts, contact_s, dt_s, peak=None, peak_half=None) -> np.ndarray:

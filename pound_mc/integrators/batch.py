@@ -41,6 +41,7 @@ from pound_mc.integrators.accuracy import (
     ADAPTIVE_SUBSTEPS_FACTOR,
     flag_inaccurate,
     shortest_contact_s,
+    substep_check_due,
 )
 from pound_mc.integrators.adaptive import adaptive
 from pound_mc.integrators.adaptive_bilinear import adaptive_bilinear, refuse_unsupported
@@ -64,7 +65,6 @@ from pound_mc.integrators.outputs import (
     PRE_RUN_TO_CONTACT,
     STATUS,
     STATUS_NOT_CONVERGED,
-    STATUS_OK,
     UNSTABLE_ENERGY_FRACTION,
     fail,
     pre_size,
@@ -592,7 +592,7 @@ def _check_substeps(out, settings, rerun, same=None) -> None:
     the finer run would take with the same sub-steps (every sub-step bound set by ``substeps``
     slack even at the finer setting): its peak force would be theirs, bit for bit.
     """
-    check = (out[:, PEAK_FORCE] > 0.0) & (out[:, STATUS] == STATUS_OK)
+    check = substep_check_due(out[:, PEAK_FORCE], out[:, STATUS])
     if same is not None:
         check &= ~same
     hit = np.flatnonzero(check)

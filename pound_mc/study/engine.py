@@ -32,7 +32,11 @@ import xarray as xr
 import pound_mc.integrators as integrators
 from pound_mc._version import __version__
 from pound_mc.errors import InputError, InputErrors, named_by
-from pound_mc.integrators.accuracy import ADAPTIVE_SUBSTEPS_FACTOR, flag_inaccurate
+from pound_mc.integrators.accuracy import (
+    ADAPTIVE_SUBSTEPS_FACTOR,
+    flag_inaccurate,
+    substep_check_due,
+)
 from pound_mc.integrators.outputs import STATUS_OK
 from pound_mc.integrators.threads import numba_threads
 from pound_mc.motions import G, load_record, record_arrays
@@ -93,7 +97,7 @@ def _checked_status(scene, record, outputs: dict) -> int:
     if not scene.accuracy_check or status != STATUS_OK:
         return status
     if scene.method == "adaptive":
-        if not outputs["max_penetration"] > 0.0:  # no contact: sub-steps never taken
+        if not substep_check_due(outputs["peak_force"], status):  # no contact, no sub-steps
             return status
         finer = {"substeps": scene.substeps * ADAPTIVE_SUBSTEPS_FACTOR}
     else:
