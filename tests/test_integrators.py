@@ -376,6 +376,25 @@ def test_b1_adaptive_default_settings(b1):
     assert rel(o["peak_disp_right"], ref["peak_disp_right"]) < 1e-4
 
 
+@pytest.mark.slow
+def test_record_ending_inside_an_episode_counts_it(b1):
+    # B1 cut 10-20 ms after its first onset (14.405 s in the reference): the record ends in
+    # the approach phase, 0.7-1.0 mm deep.  That episode is an impact (deeper than
+    # IMPACT_MIN_PENETRATION_M) in the kernel and in the SciPy reference alike, and its
+    # penetration so far is the deepest (the reference used to count impacts at the turn only:
+    # 0 impacts and max_penetration 0 beside a peak force of 208 kN)
+    scene, (dt, acc), ref = b1
+    onset = ref["impact_times"][0]
+    for extra in (0.005, 0.02):
+        record = (dt, acc[: int(np.ceil((onset + extra) / dt)) + 1])
+        cut = reference_solution(scene, record)
+        o = simulate(scene, record=record).outputs
+        assert cut["impacts"] == o["impacts"] == 1
+        assert cut["max_penetration"] > 5e-4
+        assert rel(o["max_penetration"], cut["max_penetration"]) < 1e-4
+        assert rel(o["peak_force"], cut["peak_force"]) < 1e-4
+
+
 # --------------------------------------------------------------------------- d) other scenes
 
 ELCENTRO = {"source": "builtin:elcentro", "duration_s": 12.0, "pga_g": 0.4}

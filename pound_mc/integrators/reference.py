@@ -561,6 +561,15 @@ def reference_solution(
                 for st in np.flatnonzero(s_mode * rates < 0.0):
                     e_hyst += unload(st, y)
 
+    # a record that ends inside an episode: its penetration so far counts (an impact once it
+    # is deep enough, as the turn above would count it), as it does in the kernels
+    for j in np.flatnonzero(phase != _OPEN):
+        pen = w[j] @ y[:n] - gap[j]
+        max_pen[j] = max(max_pen[j], pen)
+        if pending[j] and pen > IMPACT_MIN_PENETRATION_M:
+            impacts[j] += 1
+            pending[j] = False
+            impact_velocities.append(float(v_episode[j]))
     x_left = peak_x[:nl]
     x_right = peak_x[nl:]
     u_end = drifts(y[:n])
