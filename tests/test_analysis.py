@@ -238,6 +238,20 @@ def test_plot_errors_are_input_errors(tiny, tmp_path, capsys):
     assert "no such file" in capsys.readouterr().err
     assert main(["plot", str(tiny), "--kind", "history", "--sel", "colour=3"]) == 2
     assert "colour" in capsys.readouterr().err
+    for option, kind in (("--line", "probability"), ("--by", "distribution")):
+        assert main(["plot", str(tiny), "--kind", kind, option, "colour"]) == 2
+        assert f"{option}: no grid dimension 'colour'" in capsys.readouterr().err
+
+
+def test_line_and_by_take_the_study_files_keys(tiny, tmp_path):
+    # --line and --by name a grid dimension as --sel does: by its name or its study key
+    for option, kind in (("--line", "probability"), ("--by", "distribution")):
+        pngs = []
+        for name in ("left_period_s", "left.period_s"):
+            out = tmp_path / f"{kind}-{name}.png"
+            assert main(["plot", str(tiny), "--kind", kind, option, name, "--out", str(out)]) == 0
+            pngs.append(out.read_bytes())
+        assert pngs[0] == pngs[1]
 
 
 # -- notebook ----------------------------------------------------------------------------------

@@ -35,6 +35,20 @@ def _parse_sel(items) -> dict:
     return out
 
 
+def _grid_dim(ds, name: str, key: str) -> str:
+    """The grid dimension ``name`` given to option ``key``, or the study file's key of one.
+
+    ``left.period_s`` names ``left_period_s``; anything else that is not a grid dimension is
+    refused, naming the option and the grid.
+    """
+    grid = ds.pound.grid_dims
+    if name not in grid and grid_dim_name(name) in grid:  # the study file's key
+        name = grid_dim_name(name)
+    if name not in grid:
+        raise InputError(f"no grid dimension {name!r}; the grid has {grid}", key=key)
+    return name
+
+
 def _typed_sel(ds, sel: dict) -> dict:
     """``sel``'s text values as the dimension's coordinate holds them: numbers, or names.
 
@@ -43,14 +57,10 @@ def _typed_sel(ds, sel: dict) -> dict:
     ``sample`` are ``--record`` and ``--sample``: they are refused here.
     """
     out = {}
-    grid = ds.pound.grid_dims
     for dim, value in sel.items():
         if dim in ("record", "sample"):
             raise InputError(f"{dim} is not held with --sel; use --{dim}", key="--sel")
-        if dim not in grid and grid_dim_name(dim) in grid:  # the study file's key
-            dim = grid_dim_name(dim)
-        if dim not in grid:
-            raise InputError(f"no grid dimension {dim!r}; the grid has {grid}", key="--sel")
+        dim = _grid_dim(ds, dim, "--sel")
         if not isinstance(value, str):
             out[dim] = value
             continue
@@ -161,10 +171,9 @@ def draw(path: str | Path, kind: str, *, out=None, sel=None, record=None, sample
     with ds:
         ds.load()
         sel = _typed_sel(ds, sel)
-        line = kwargs.get("line")
-        if line is not None and line not in ds.pound.grid_dims:
-            raise InputError(f"{line!r} is not a grid dimension; the grid has "
-                             f"{ds.pound.grid_dims}", key="--line")  # fmt: skip
+        for option in ("line", "by"):  # a grid dimension, or the study file's key of one
+            if kwargs.get(option) is not None:
+                kwargs[option] = _grid_dim(ds, kwargs[option], f"--{option}")
         counted = pounding_counted(ds["status"]) if kind == "probability" else ds.pound.ok
         if kind not in ("history", "restitution") and not bool(counted.any()):
             counts = ", ".join(f"{n} {s}" for s, n in ds.pound.status_counts().items() if n)

@@ -343,8 +343,14 @@ def _analysis(sub: argparse._SubParsersAction) -> None:
         help="record index or name; spectrum: also 'each' (default: all records pooled)",
     )
     p.add_argument("--sample", type=int, default=0, metavar="N", help="sample index (history)")
-    p.add_argument("--line", metavar="DIM", help="dimension drawn as one line per value")
-    p.add_argument("--by", metavar="DIM", help="dimension of the distribution chart's groups")
+    p.add_argument(
+        "--line",
+        metavar="DIM",
+        help="grid dimension (or its study key) drawn as one line per value",
+    )
+    p.add_argument(
+        "--by", metavar="DIM", help="grid dimension (or its study key) of the distribution's groups"
+    )
     _shared(p, "im", "event")
     p.add_argument(
         "--probability", type=float, default=0.1, help="target probability (required-gap)"
