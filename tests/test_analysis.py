@@ -238,9 +238,6 @@ def test_plot_errors_are_input_errors(tiny, tmp_path, capsys):
     assert "no such file" in capsys.readouterr().err
     assert main(["plot", str(tiny), "--kind", "history", "--sel", "colour=3"]) == 2
     assert "colour" in capsys.readouterr().err
-    for option, kind in (("--line", "probability"), ("--by", "distribution")):
-        assert main(["plot", str(tiny), "--kind", kind, option, "colour"]) == 2
-        assert f"{option}: no grid dimension 'colour'" in capsys.readouterr().err
 
 
 def test_line_and_by_take_the_study_files_keys(tiny, tmp_path):
@@ -527,9 +524,10 @@ def test_analysis_options_out_of_range_are_input_errors(tiny, ds, tmp_path, caps
     out = tmp_path / "x.png"
     _fails(capsys, "plot", tiny, "--kind", "history", "--record", "5", "--out", out,
            names=(tiny, "record must be in 0..0, got 5"))  # fmt: skip
-    for line in ("foo", "sample"):
-        _fails(capsys, "plot", tiny, "--kind", "spectrum", "--line", line, "--out", out,
-               names=(tiny, "--line", f"'{line}' is not a grid dimension"))  # fmt: skip
+    for option, kind in (("--line", "spectrum"), ("--by", "distribution")):
+        for name in ("foo", "sample"):
+            _fails(capsys, "plot", tiny, "--kind", kind, option, name, "--out", out,
+                   names=(tiny, option, f"no grid dimension '{name}'"))  # fmt: skip
     _fails(capsys, "plot", tmp_path, "--kind", "spectrum", "--out", out,
            names=(tmp_path, "is a folder"))  # fmt: skip
     # every simulation unstable (numbers NaN): no blank chart; the report still says so
@@ -551,7 +549,17 @@ def test_analysis_options_out_of_range_are_input_errors(tiny, ds, tmp_path, caps
         )
         == 0
     )
-    assert "No charts: no simulation ended with status ok" in page.read_text()
+    assert "No charts: no simulation ended with status ok or inaccurate" in page.read_text()
+    # every run flagged inaccurate: the pounding probability counts them (as plot draws it),
+    # the charts of peak forces are left out, and the page says so
+    flagged = tmp_path / "flagged.nc"
+    ds.assign(status=ds["status"] * 0 + 3).to_netcdf(flagged)
+    page = tmp_path / "flagged.html"
+    assert main(["report", str(flagged), "--out", str(page)]) == 0
+    text = page.read_text()
+    assert "the charts of peak forces are left out" in text
+    assert '<figure id="probability">' in text and '<figure id="spectrum">' not in text
+    assert main(["plot", str(flagged), "--kind", "probability", "--out", str(out)]) == 0
 
 
 def test_separation_rule_of_infinite_peaks_is_nan_without_warning():

@@ -26,6 +26,7 @@ from pound_mc.analysis import (
 )
 from pound_mc.analysis.inelastic_chart import inelastic_chart, yielding_sides
 from pound_mc.analysis.style import output_path, require_simulations, write_atomically
+from pound_mc.study.dataset import pounding_counted
 
 __all__ = ["chart_png", "report_html", "write_report"]
 
@@ -136,8 +137,16 @@ def report_html(ds: xr.Dataset, *, base_dir: str | Path | None = None, history: 
     description = ""
     if bool(ds.pound.ok.any()):
         figures = _figures(ds, base_dir, history)
+    elif bool(pounding_counted(ds["status"]).any()):
+        # runs flagged inaccurate count for the pounding probability (as in ``pound-mc plot``),
+        # not for their peak forces: the charts of forces would be blank
+        figures = [
+            "<p>(No simulation ended with status ok: the charts of peak forces are left out; "
+            "the pounding probability counts the runs flagged inaccurate.)</p>",
+            *_figures(ds, base_dir, False, forces=False),
+        ]
     else:  # every chart would be blank: the summary below says what happened
-        figures = ["<p>(No charts: no simulation ended with status ok.)</p>"]
+        figures = ["<p>(No charts: no simulation ended with status ok or inaccurate.)</p>"]
     for line in str(ds.attrs.get("study_text", "")).splitlines():
         if line.strip().startswith("description"):
             description = line.split("=", 1)[1].strip().strip('"')
@@ -160,10 +169,14 @@ def report_html(ds: xr.Dataset, *, base_dir: str | Path | None = None, history: 
     )
 
 
-def _figures(ds: xr.Dataset, base_dir, history: bool) -> list[str]:
-    """The charts of the page that apply to ``ds``, as HTML."""
+def _figures(ds: xr.Dataset, base_dir, history: bool, forces: bool = True) -> list[str]:
+    """The charts of the page that apply to ``ds``, as HTML.
+
+    ``forces``: also the charts of peak forces, drifts and the time history (False: only the
+    pounding probability, the required gap and the fragility).
+    """
     figures = []
-    if plot._grid_dims(ds):
+    if forces and plot._grid_dims(ds):
         figures.append(
             _figure_html(
                 "spectrum",
@@ -173,7 +186,7 @@ def _figures(ds: xr.Dataset, base_dir, history: bool) -> list[str]:
                 "second; the median over the records of each record's values.",
             )
         )
-    sides = yielding_sides(ds) if plot._grid_dims(ds) else []
+    sides = yielding_sides(ds) if forces and plot._grid_dims(ds) else []
     if sides:
         figures.append(
             _figure_html(
@@ -227,6 +240,8 @@ def _figures(ds: xr.Dataset, base_dir, history: bool) -> list[str]:
                 "the lognormal fit by maximum likelihood and its 95 % bootstrap band.",
             )
         )
+    if not forces:
+        return figures
     if int(((ds["impacts"] > 0) & ds.pound.ok).sum()):
         figures.append(
             _figure_html(
