@@ -134,3 +134,25 @@ def test_droptest_elastic_law_takes_no_restitution(capsys):
     out = json.loads(capsys.readouterr().out)
     assert out["e_target"] is None
     assert out["restitution"] == pytest.approx(1.0, abs=1e-8)  # elastic: no energy lost
+
+
+@pytest.mark.parametrize(
+    ("model", "relation"),
+    [
+        ("jankowski", "jankowski2008"),
+        ("kelvin", "kelvin"),
+        ("hertzdamp", "ye2009"),
+        ("hertz", None),
+    ],
+)
+def test_droptest_names_the_relation_it_used(capsys, model, relation):
+    """Each law's default xi-e relation (the droptest docstring; Ye et al. 2009 for
+    Hertz-damp): ``--json`` gave ``"relation": null`` and the text said ``jankowski2008``
+    whatever the law."""
+    assert main(["droptest", "--model", model, "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["relation"] == relation
+    assert main(["droptest", "--model", model]) == 0
+    text = capsys.readouterr().out
+    assert (f"({relation})" in text) if relation else ("target e" not in text)
+    assert ("jankowski2008" in text) == (relation == "jankowski2008")

@@ -318,6 +318,10 @@ def test_dataset_cli_and_chart_say_what_was_discarded(tmp_path, capsys):
     data = json.loads(capsys.readouterr().out)
     assert data["n_boot_discarded"] == [f.n_boot_discarded for f in fits]
     assert data["beta_ci"][1] == [None, None]
+    # the stripes the fits are made from: per gap, one count per intensity
+    assert data["intensities"] == QS_PGA.tolist()
+    assert data["n_event"] == [QS_100MM.tolist(), HALF_SEPARATED.tolist()]
+    assert data["n_total"] == [[88] * 3] * 2
     fig = fragility_panels(ds, n_boot=200)
     for ax, f in zip(fig.axes[:2], fits, strict=True):
         assert ax.get_title().replace("\n", " ").endswith(f.bootstrap_note)

@@ -318,6 +318,10 @@ def fragility_command(args) -> int:
         "message": np.asarray(fit["fit_message"].values, dtype=object).tolist(),
         "n_boot_discarded": np.asarray(fit["n_boot_discarded"].values).tolist(),
         "bootstrap_note": np.asarray(fit["bootstrap_note"].values, dtype=object).tolist(),
+        # the stripes fitted: per combination of ``dims``, one count per intensity
+        "intensities": np.asarray(fit[fit.attrs["im"]].values).tolist(),
+        "n_event": fit["n_event"].transpose(*rest, fit.attrs["im"]).values.tolist(),
+        "n_total": fit["n_total"].transpose(*rest, fit.attrs["im"]).values.tolist(),
     }
     if args.json:
         print(json.dumps(out, indent=1))

@@ -15,7 +15,7 @@ from pound_mc.analysis.plot import droptest_chart, restitution_chart, restitutio
 from pound_mc.analysis.style import output_path
 from pound_mc.errors import InputError
 from pound_mc.physics import materials
-from pound_mc.physics.contact import CONTACT_MODELS
+from pound_mc.physics.contact import CONTACT_MODELS, default_relation
 from pound_mc.physics.droptest import drop_test
 from pound_mc.physics.relations import (
     RELATIONS,
@@ -134,14 +134,16 @@ def droptest_command(args) -> int:
         mass, args.velocity, beta, xi=xi, e=e, relation=args.relation, model=args.model
     )
     out = result.as_dict()
-    out.update(material=args.material, e_target=e, relation=args.relation)
+    # the relation that turned e into xi (none where xi was given or the law is elastic)
+    relation = (args.relation or default_relation(args.model)) if e is not None else None
+    out.update(material=args.material, e_target=e, relation=relation)
     if args.json:
         print(json.dumps(out))
     else:
         print(f"virtual drop test: {args.material} ball on a rigid {args.material} surface")
         print(f"  mass {mass:.4g} kg, impact velocity {args.velocity:g} m/s, beta {beta:.4g}")
         if e is not None:
-            print(f"  target e {e:.4f} -> xi {result.xi:.5f} ({args.relation or 'jankowski2008'})")
+            print(f"  target e {e:.4f} -> xi {result.xi:.5f} ({relation})")
         print(f"  restitution achieved  {result.restitution:.6f}")
         print(f"  peak penetration      {result.max_penetration_m * 1e6:.4f} um")
         print(f"  peak force            {result.peak_force_N:.6g} N")
