@@ -206,30 +206,36 @@ class Scene:
     @property
     def inelastic(self) -> bool:
         """Whether a building's storeys can yield (the inelastic kernel runs it)."""
-        return self.left.inelastic or self.right.inelastic
+        return any(b.inelastic for b in self._buildings())
+
+    def _buildings(self) -> list:
+        """The buildings from left to right: the row's, or ``[left, right]``."""
+        return list(self.row) if self.row is not None else [self.left, self.right]
 
     def storey_arrays(self) -> tuple[np.ndarray, np.ndarray] | None:
-        """Storeys of both buildings for the inelastic kernel; None when both are elastic.
+        """Storeys of every building for the inelastic kernel; None when all are elastic.
 
         Returns the drift rows in modal coordinates (storeys x modes, ``u = D q``) and the
         storey table (stiffness [N/m], yield drift [m] (inf where elastic), post-yield ratio,
         storey height [m] (NaN: none), building 0 left / 1 right, Bouc-Wen exponent (0: not
-        Bouc-Wen)), left storeys first.
+        Bouc-Wen)), left storeys first.  In a row (``[[buildings]]``) the first building is
+        0 and every other 1, as the row's floors are (:meth:`_row_arrays`).
         """
         if not self.inelastic:
             return None
-        nl, nr = self.left.omega.size, self.right.omega.size
-        dmat = np.zeros((self.left.n_floors + self.right.n_floors, nl + nr))
+        buildings = self._buildings()
+        modes = np.cumsum([0] + [b.omega.size for b in buildings])
+        dmat = np.zeros((sum(b.n_floors for b in buildings), modes[-1]))
         rows = []
         start = 0
-        for b, (bld, cols) in enumerate(((self.left, slice(0, nl)), (self.right, slice(nl, None)))):
+        for b, bld in enumerate(buildings):
             ns = bld.n_floors
-            dmat[start : start + ns, cols] = bld.drift_matrix() @ bld.phi
+            dmat[start : start + ns, modes[b] : modes[b + 1]] = bld.drift_matrix() @ bld.phi
             uy = bld.yield_disp_m if bld.inelastic else np.full(ns, np.inf)
             n_bw = bld.bw_exponent if bld.hysteresis == "bouc-wen" else 0.0
             for s in range(ns):
                 rows.append([bld.storey_stiffness_N_per_m[s], uy[s], bld.post_yield_ratio,
-                             bld.storey_height_m[s], b, n_bw])  # fmt: skip
+                             bld.storey_height_m[s], min(b, 1), n_bw])  # fmt: skip
             start += ns
         return dmat, np.array(rows, dtype=float)
 
@@ -324,7 +330,8 @@ class SimulationResult:
         NaN from where a run that stopped (unstable, not converged) stopped.
     storeys : dict or None
         With yielding buildings, per storey (left building's first, bottom to top):
-        ``building`` ("left" / "right"), ``storey`` (1-based within it), ``peak_drift_ratio``
+        ``building`` ("left" / "right"; in a row "building 1", "building 2", ... or "wall"),
+        ``storey`` (1-based within it), ``peak_drift_ratio``
         and ``residual_drift_ratio`` (``|drift|`` over storey height, NaN without heights),
         ``peak_ductility`` (peak ``|drift|`` over yield drift, NaN for a storey that cannot yield);
         the scalar outputs ``peak_drift_left`` ... are their maxima over a building's storeys.
@@ -602,13 +609,6 @@ def scene_from_dict(data: dict, *, file: str | Path | None = None) -> Scene:
     if is_row:
         row = [_building(b, f"{ROW_TABLE}[{k}]", file_s, errors, wall_ok=k == len(row_specs) - 1)
                for k, b in enumerate(row_specs)]  # fmt: skip
-        for k, b in enumerate(row):
-            if b is not None and b.inelastic:  # the inelastic kernel takes two buildings
-                errors.append(InputError(
-                    f"a row of buildings ([[{ROW_TABLE}]]) runs elastic buildings only; "
-                    f"hysteresis = {b.hysteresis!r} runs in a pair ([left] and [right])",
-                    file=file_s, key=f"{ROW_TABLE}[{k}].hysteresis",
-                ))  # fmt: skip
         left, right = row[0], row[-1]
     else:
         left = _building(data["left"], "left", file_s, errors)
@@ -671,21 +671,24 @@ def with_tail(acc, dt_rec: float, tail_s: float) -> np.ndarray:
 STOREY_KEYS = ("building", "storey", "peak_drift_ratio", "peak_ductility", "residual_drift_ratio")
 
 
-def storey_results(table: np.ndarray, storey_out: np.ndarray) -> dict[str, np.ndarray]:
+def storey_results(table: np.ndarray, storey_out: np.ndarray, owner=None) -> dict[str, np.ndarray]:
     """Per-storey outputs (:attr:`SimulationResult.storeys`) from the storey table.
 
     ``table``: :meth:`Scene.storey_arrays`'s (stiffness, yield drift, post-yield ratio,
     height, building 0/1 per row); ``storey_out``: the kernel's peak and final drifts [m].
+    ``owner``: each storey's building by name (default ``left`` / ``right`` from the table;
+    a row's are ``building 1``, ``building 2``, ...); storeys are numbered within it.
     """
     side = table[:, 4].astype(int)
+    owner = np.where(side == 0, "left", "right") if owner is None else np.asarray(owner)
     number = np.empty(side.size, dtype=np.int32)
-    for b in (0, 1):
-        number[side == b] = np.arange(1, np.count_nonzero(side == b) + 1)
+    for name in dict.fromkeys(owner.tolist()):
+        number[owner == name] = np.arange(1, np.count_nonzero(owner == name) + 1)
     uy = table[:, 1]
     with np.errstate(invalid="ignore"):
         ductility = np.where(np.isfinite(uy), storey_out[:, 0] / uy, np.nan)
     return {
-        "building": np.where(side == 0, "left", "right"),
+        "building": owner,
         "storey": number,
         "peak_drift_ratio": storey_out[:, 0] / table[:, 3],
         "peak_ductility": ductility,
@@ -777,7 +780,12 @@ def simulate(
         )
     res = SimulationResult(outputs, contacts, scene)
     if storey_out is not None:
-        res.storeys = storey_results(np.asarray(storeys[1], dtype=float), storey_out)
+        owner = None
+        if scene.row is not None:  # a row's buildings by their place in it
+            names = ["wall" if b.model == "wall" else f"building {k + 1}"
+                     for k, b in enumerate(scene.row)]  # fmt: skip
+            owner = np.repeat(names, [b.n_floors for b in scene.row])
+        res.storeys = storey_results(np.asarray(storeys[1], dtype=float), storey_out, owner)
     if hist is not None:
         hx, hd, hf = hist
         fl = scene.left.n_floors
