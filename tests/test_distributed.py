@@ -13,6 +13,7 @@ from pound_mc.cli import main
 from pound_mc.study.definition import load_study
 from pound_mc.study.engine import StudyEngine
 from pound_mc.study.runner import chunk_ranges, run_study
+from studies import study_text
 
 distributed = pytest.importorskip("distributed")
 
@@ -180,6 +181,25 @@ def test_bad_cluster_options(study_file, tmp_path, capsys, extra, message):
     assert main(["run", str(study_file), "--out", str(out), "--no-plot", *extra]) == 2
     assert message in capsys.readouterr().err
     assert not out.exists()
+
+
+def test_refused_input_reads_as_in_a_local_run(tmp_path, capfd):
+    """A study the kernels refuse at its first simulation (an elastic-perfectly plastic SDOF
+    with ``adaptive``) failed on the workers: the worker's traceback, then a ClusterError
+    naming ``--scheduler``.  Now the refusal comes back as the result, raised as a local run
+    raises it: the same one line naming the file and the key, exit status 2, no retries."""
+    path = tmp_path / "epp.toml"
+    path.write_text(study_text(left={"hysteresis": "bilinear", "yield_disp_m": 0.01,
+                                     "post_yield_ratio": 0.0}))  # fmt: skip
+    argv = ["run", str(path), "--no-plot", "--no-progress"]
+    errors = []
+    for extra in (["--out", str(tmp_path / "local")], ["--out", str(tmp_path / "dask"),
+                                                       "--workers", "1"]):  # fmt: skip
+        assert main([*argv, *extra]) == 2
+        errors.append(capfd.readouterr().err)
+    assert errors[0] == errors[1], errors
+    assert "left.post_yield_ratio" in errors[1] and errors[1].count("\n") == 1
+    assert not list(tmp_path.glob("*/*.nc")) and not list(tmp_path.glob("*/*/chunk_*"))
 
 
 def test_missing_dask_names_the_extra(study_file, tmp_path, capsys, monkeypatch):

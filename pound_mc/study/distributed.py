@@ -93,6 +93,11 @@ def run_chunk(engine, start: int, stop: int) -> dict:
     numba.set_num_threads(1)
     try:
         return engine.run_range(start, stop)
+    except InputError as exc:
+        # refused input (a scene the kernels do not run) fails the same on every try: it
+        # comes back as the result, raised by the client as a local run raises it, without
+        # retries or the worker's log of a failed task
+        return exc
     finally:
         numba.set_num_threads(old)
 
@@ -104,8 +109,8 @@ def warm_up_worker(engine, index: int) -> float:
     (:func:`pound_mc.study.warmup.warm_up` on a worker).
     """
     t0 = time.perf_counter()
-    run_chunk(engine, index, index + 1)
-    return time.perf_counter() - t0
+    refused = run_chunk(engine, index, index + 1)
+    return refused if isinstance(refused, InputError) else time.perf_counter() - t0
 
 
 def _fault(exc: BaseException) -> str:
@@ -176,13 +181,15 @@ def dask_executor(client, *, retries: int = 3, timeout_s: float = TIMEOUT_S):
             where = f"on {len(workers)} Dask worker{'s' * (len(workers) != 1)}"
             _, compiled = noticed(lambda: distributed.wait(futures, timeout=timeout_s),
                                   stream=stream, quiet=quiet, where=where)  # fmt: skip
-            for future in futures:
-                future.result(timeout=timeout_s)
+            results = [future.result(timeout=timeout_s) for future in futures]
         except Exception as exc:  # every failure of the cluster, whatever its class
             raise ClusterError(
                 f"the Dask cluster failed while its workers loaded the kernels: {_fault(exc)}",
                 key="--scheduler",
             ) from None
+        for result in results:
+            if isinstance(result, InputError):
+                raise result
         return time.perf_counter() - t0, compiled
 
     def run(engine, chunks: Iterable[Chunk]):
@@ -222,8 +229,10 @@ def dask_executor(client, *, retries: int = 3, timeout_s: float = TIMEOUT_S):
                     chunk = futures.pop(future)
                     result = future.result(timeout=timeout_s)
                     future.release()
+                    if isinstance(result, InputError):  # the cluster is sound: cancel the rest
+                        raise result
                     yield chunk, result
-        except ClusterError:
+        except InputError:  # a refused input (ClusterError too): as it is
             raise
         except GeneratorExit:
             raise
