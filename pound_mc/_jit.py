@@ -7,7 +7,9 @@ unstable simulations.
 
 Compiled machine code is cached on disk in a user cache directory shared by every checkout and
 installation of the same source: ``$POUND_MC_CACHE_DIR``, else ``$XDG_CACHE_HOME/pound-mc``,
-else ``~/.cache/pound-mc`` (numba's own ``NUMBA_CACHE_DIR``, when set, takes precedence).
+else ``~/.cache/pound-mc``; numba's own ``NUMBA_CACHE_DIR``, when set and no
+``$POUND_MC_CACHE_DIR`` is, moves it to ``$NUMBA_CACHE_DIR/pound-mc`` (numba's own keys there,
+each function's own file, would keep a kernel whose inlined helpers changed in another file).
 Entries are keyed by a hash of the package's compiled sources, so a fresh clone, a reinstall or
 a new Dask worker of the same version finds the kernels already compiled, while any edit of a
 kernel source compiles afresh.  Where that directory cannot be written, numba's default (a
@@ -54,6 +56,8 @@ def cache_root() -> Path:
     explicit = os.environ.get("POUND_MC_CACHE_DIR")
     if explicit:
         return Path(explicit)
+    if config.CACHE_DIR:  # the user gave numba a place: ours is in it, keyed our way
+        return Path(config.CACHE_DIR) / "pound-mc"
     base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
     return Path(base) / "pound-mc"
 
@@ -96,8 +100,6 @@ class _SharedCacheLocator(caching._SourceFileBackedLocatorMixin, caching._CacheL
 
     @classmethod
     def from_function(cls, py_func, py_file):
-        if config.CACHE_DIR:  # the user asked numba for a place of their own
-            return None
         try:
             Path(py_file).resolve().relative_to(_PACKAGE)
         except ValueError:

@@ -194,3 +194,22 @@ def test_bench_json(capsys):
     assert rows["newmark dt=1e-3"]["err_peak_force"] < 1e-3
     assert info["reference_peak_force"] == pytest.approx(B1_PEAK_FORCE, rel=1e-5)
     assert len(info["load_before"]) == 3 and "newmark dt=1e-4 / adaptive" in info["ratios"]
+
+
+def test_numba_cache_dir_keeps_the_source_key(tmp_path, monkeypatch):
+    """With ``NUMBA_CACHE_DIR`` set the kernels went to numba's own cache, keyed on each
+    function's own file: a batch kernel kept an old copy of a helper it inlines from another
+    file after that file was edited (stale results).  Now the cache moves into that folder
+    and keeps the key of every compiled source (``_jit.source_key``)."""
+    from numba.core import config
+
+    from pound_mc import _jit
+    from pound_mc.integrators import batch
+
+    monkeypatch.delenv("POUND_MC_CACHE_DIR", raising=False)
+    monkeypatch.setattr(config, "CACHE_DIR", str(tmp_path))
+    func = batch._sdof_adaptive.py_func
+    locator = _jit._SharedCacheLocator.from_function(func, func.__code__.co_filename)
+    expected = tmp_path / "pound-mc" / "numba" / _jit.source_key() / "integrators"
+    assert Path(locator.get_cache_path()) == expected
+    assert locator.get_source_stamp() == _jit.source_key()

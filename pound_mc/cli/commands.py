@@ -75,8 +75,9 @@ A kind that does not apply to the file says so in one line (exit status 2).
 COMPILE_DESCRIPTION = (
     "Compile the numba kernels of the given methods and contact laws, for SDOF pairs "
     "and shear buildings, into the user cache (POUND_MC_CACHE_DIR, else "
-    "XDG_CACHE_HOME/pound-mc, else ~/.cache/pound-mc). Later runs of the same source "
-    "load them instead of compiling; any edit of the compiled sources compiles again."
+    "NUMBA_CACHE_DIR/pound-mc, else XDG_CACHE_HOME/pound-mc, else ~/.cache/pound-mc). "
+    "Later runs of the same source load them instead of compiling; any edit of the "
+    "compiled sources compiles again."
 )
 
 INIT_DESCRIPTION = (
