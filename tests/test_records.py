@@ -506,10 +506,34 @@ def test_record_file_line_is_the_record_files_not_the_studys(tmp_path, capsys, m
 
 
 def test_record_key_error_names_the_record_once(tmp_path, capsys, make_study):
-    err = _study_error(tmp_path, capsys, make_study, record={"component": "XYZ"})
+    record = {"source": "builtin:knet-akt013", "component": "XYZ"}
+    err = _study_error(tmp_path, capsys, make_study, record=record)
     # was "small.toml: record.component: builtin:knet-akt013 (test.knet): builtin:knet-akt013
     # (test.knet): record.component: no component ..."
     assert err == (
         "DIR/small.toml: record.component: builtin:knet-akt013 (test.knet): no component 'XYZ' "
         "in the file; choose one of ('EW')"
     )
+
+
+def test_a_window_that_misses_the_strong_motion_is_named(make_study, capsys):
+    """``duration_s`` cut the FEMA P695 Chi-Chi components of the quickstart to their
+    pre-event noise (0.04 % of the peak), which ``pga_g`` then scaled by up to 2,600 without a
+    word.  The fraction of the peak a window keeps is recorded, and ``check`` and ``run`` name
+    the records that keep less than half.  Reference: the maxima of the demeaned record by hand
+    (K-NET AKT013: its first 4 s hold the P-wave onset only)."""
+    whole = load_record("builtin:knet-akt013")
+    cut = load_record("builtin:knet-akt013", duration_s=4.0)
+    kept = np.max(np.abs(cut.data)) / np.max(np.abs(whole.data))
+    assert cut.stats.pound.window_peak_fraction == pytest.approx(kept, rel=1e-12)
+    assert kept < 0.02
+    assert load_record("builtin:knet-akt013", duration_s=30.0).stats.pound.window_peak_fraction == 1
+    study = make_study(record={"source": "builtin:knet-akt013"})  # its first 4 s
+    assert main(["check", str(study)]) == 0
+    out = capsys.readouterr().out
+    assert f"warning: {study}: the duration_s window of 1 of 1 records keeps less than " in out
+    assert "50 % of their peak acceleration, which comes later: builtin:knet-akt013 " in out
+    assert f"({100 * kept:.2g} %); scaled" in out
+    whole_record = make_study(record={"duration_s": None})
+    assert main(["check", str(whole_record)]) == 0
+    assert "peak acceleration" not in capsys.readouterr().out

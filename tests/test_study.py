@@ -10,7 +10,7 @@ from studies import study_text
 
 GOOD = study_text(
     study={"name": "tiny", "seed": 7},
-    record={"duration_s": 5.0},
+    record={"source": "builtin:knet-akt013", "duration_s": 5.0},
     grid={"left.period_s": {"start": 0.3, "stop": 0.6, "num": 2}},
     sampling={"n": 4},
 )

@@ -22,30 +22,29 @@ above it has all events, the stripe at it either or both (then ``beta -> 0``), o
 fraction does not rise with the intensity (then ``beta -> infinity``), or no stripe (or every
 stripe) has the event.  Such data are refused with an :class:`~pound_mc.errors.InputError`.
 
-Confidence intervals come from a nonparametric bootstrap that resamples the simulations within
-each stripe (``z*_j ~ Binomial(n_j, z_j / n_j)``, the same as drawing ``n_j`` of the stripe's
-simulations with replacement), refitting each replicate, and taking percentiles (Efron &
-Tibshirani 1993, ch. 13).  With few stripes a resample can lose the few events (or non-events)
-that make the stripes overlap: at the quickstart's 100 mm gap (0/88, 2/88 and 48/88 pound at
-PGA 0.1, 0.2 and 0.4 g) the 0.2 g stripe draws no event in ``(86/88)^88 = 13 %`` of the
-resamples, which are then separated.  Such a resample has no maximum-likelihood fit, the data
-the point fit refuses: its likelihood grows without bound towards a step (``beta -> 0``).  That
-limit is not a value the data allow: while the observed stripes overlap, their likelihood tends
-to 0 as ``beta -> 0``, so a replicate kept at the limit only drags the percentiles to ``beta = 0``
-and the band to a 0-to-1 step.  A replicate with no fit (separated, no event, only events, a
-falling fraction, not converged) is therefore not a valid replicate of the estimator: it is
-discarded and counted (:attr:`FragilityFit.n_boot_discarded`, by kind in
-:attr:`FragilityFit.discarded`), and resamples are drawn on from the same generator (a second
-batch of ``n_boot``) until ``n_boot`` replicates have a fit.  The intervals then describe the
-estimator where it exists; the discarded resamples are the steep end, so the larger their share
-the more the lower bound of ``beta`` is too high (with 0/88, 1/88 and 43/88 events, 36 %
-discarded, it is 0.28 where the likelihood-ratio interval has 0.22).  When more than half of the
-resamples have no fit (fewer than ``n_boot`` fits in ``2 n_boot`` draws) the percentiles
-describe the conditioning more than the data, and the intervals are NaN
-(:attr:`FragilityFit.bootstrap_note` says why: add stripes near ``theta``).  Resampling from
+Confidence intervals come from a nonparametric bootstrap that resamples the simulations within each
+stripe (``z*_j ~ Binomial(n_j, z_j / n_j)``, the same as drawing ``n_j`` of the stripe's
+simulations with replacement), refitting each replicate, and taking percentiles (Efron & Tibshirani
+1993, ch. 13).  With few stripes a resample can lose the few events (or non-events) that make the
+stripes overlap: with 0/88, 2/88 and 48/88 events at PGA 0.1, 0.2 and 0.4 g (the quickstart's 100
+mm gap on 15-s record windows) the 0.2 g stripe draws no event in ``(86/88)^88 = 13 %`` of the
+resamples, which are then separated.  Such a resample has no maximum-likelihood fit, the data the
+point fit refuses: its likelihood grows without bound towards a step (``beta -> 0``).  That limit is
+not a value the data allow: while the observed stripes overlap, their likelihood tends to 0 as
+``beta -> 0``, so a replicate kept at the limit only drags the percentiles to ``beta = 0`` and the
+band to a 0-to-1 step.  A replicate with no fit (separated, no event, only events, a falling
+fraction, not converged) is therefore not a valid replicate of the estimator: it is discarded and
+counted (:attr:`FragilityFit.n_boot_discarded`, by kind in :attr:`FragilityFit.discarded`), and
+resamples are drawn on from the same generator (a second batch of ``n_boot``) until ``n_boot``
+replicates have a fit.  The intervals then describe the estimator where it exists; the discarded
+resamples are the steep end, so the larger their share the more the lower bound of ``beta`` is too
+high (with 0/88, 1/88 and 43/88 events, 36 % discarded, it is 0.28 where the likelihood-ratio
+interval has 0.22).  When more than half of the resamples have no fit (fewer than ``n_boot`` fits in
+``2 n_boot`` draws) the percentiles describe the conditioning more than the data, and the intervals
+are NaN (:attr:`FragilityFit.bootstrap_note` says why: add stripes near ``theta``).  Resampling from
 the fitted curve instead (a parametric bootstrap, ``z*_j ~ Binomial(n_j, p_j)``) would not avoid
-this: the fitted probability at 0.2 g (0.023) is the observed 2/88.  When no replicate is
-discarded the intervals are those of the plain percentile bootstrap.
+this: the fitted probability at 0.2 g (0.023) is the observed 2/88.  When no replicate is discarded
+the intervals are those of the plain percentile bootstrap.
 
 The required gap (:func:`required_gap`) reads the smallest gap from which on the pounding
 probability stays at or below a target, interpolating linearly between the gaps studied; its

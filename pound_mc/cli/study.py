@@ -58,9 +58,12 @@ def run_command(args) -> int:
     if not args.dask_timeout > 0:
         raise InputError(f"must be > 0, got {args.dask_timeout}", key="--dask-timeout")
     if dask:
-        _import_distributed()  # a missing optional dependency is reported before any work
+        # a missing optional dependency is reported before any work, naming the option
+        _import_distributed("--workers" if args.workers is not None else "--scheduler")
     study = load_study(args.study)
     engine = StudyEngine(study)
+    for line in engine.record_warnings:
+        print(line, file=sys.stderr)
     t0 = time.perf_counter()
     common = dict(
         fresh=args.fresh,
@@ -196,6 +199,8 @@ def check_command(args) -> int:
             f"  warning   : one simulation takes {seconds:.0f} s (more than "
             f"{SLOW_SIMULATION_S:.0f} s): lengthen integrator.dt_s or shorten the record",
         )
+    for line in engine.record_warnings:
+        print(f"  {line}")
     for line in engine.scene.contact_lines():
         print(f"  {line}")
     if did_compile:

@@ -121,8 +121,13 @@ def preprocess(
                 key="record.duration_s",
             )
         keep = min(data.size, int(math.floor(duration / dt + 1e-9)) + 1)
+        whole = float(np.max(np.abs(data)))
         data = data[:keep]
         steps.append(f"truncate: kept {keep} samples, t - t0 <= {duration:g} s")
+        # how much of the record's peak the window keeps (a window of pre-event noise: ~0)
+        out.stats.pound.window_peak_fraction = (
+            float(np.max(np.abs(data))) / whole if whole > 0.0 else 1.0
+        )
     if pga_g is not None:
         target = _positive(pga_g, name="record.pga_g", file=where)
         peak = float(np.max(np.abs(data)))

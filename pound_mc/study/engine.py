@@ -160,6 +160,10 @@ def load_traces(study) -> list:
     return out
 
 
+#: A record whose ``duration_s`` window keeps less than this fraction of its peak acceleration
+#: is named in :attr:`StudyEngine.record_warnings`.
+WINDOW_PEAK_WARN = 0.5
+
 #: :meth:`StudyEngine.calibrate` times at least this many simulations, and for at least
 #: this long [s], unless told a number.
 CALIBRATION_SIZE, CALIBRATION_MIN_S = 64, 1.0
@@ -197,6 +201,8 @@ class StudyEngine:
             for what in ("event", "station")
         }
         self._intensities()
+        #: Warnings on the records as kept (a window that misses the strong motion).
+        self.record_warnings = self._window_warnings(traces)
         self._base = self._base_values(study.scene, self.scene)
         self._check_steps()
         #: Whether a building is a shear building: then every simulation runs the modes of
@@ -249,6 +255,29 @@ class StudyEngine:
                 )
             self.scale_factors = targets[None, :] / own[:, None]
             self._intensity_axis = list(study.grid).index(self.intensity_key) + 1
+
+    def _window_warnings(self, traces) -> list[str]:
+        """A warning naming the records whose window misses their strong motion.
+
+        Those whose ``duration_s`` window keeps less than :data:`WINDOW_PEAK_WARN` of their
+        peak acceleration: scaled to an intensity, such a window scales what precedes the
+        strong motion (pre-event noise of a record that starts early: thousands of times).
+        """
+        short = []
+        for r, trace in enumerate(traces):
+            kept = trace.stats.pound.get("window_peak_fraction", 1.0)
+            if kept < WINDOW_PEAK_WARN:
+                short.append(f"{self.study.record_names[r]} ({100 * kept:.2g} %)")
+        if not short:
+            return []
+        listed = ", ".join(short[:5]) + (f" and {len(short) - 5} more" if len(short) > 5 else "")
+        return [
+            f"warning: {self.study.path or 'the study'}: the duration_s window of "
+            f"{len(short)} of {len(traces)} records keeps less than "
+            f"{100 * WINDOW_PEAK_WARN:g} % of their peak acceleration, which comes later: "
+            f"{listed}; scaled to an intensity, that window is not the earthquake (give a "
+            "longer duration_s, or none)"
+        ]
 
     def _check_steps(self) -> None:
         """Refuse steps the kernels would not take as written, and endless simulations.
