@@ -524,6 +524,9 @@ def test_analysis_options_out_of_range_are_input_errors(tiny, ds, tmp_path, caps
     out = tmp_path / "x.png"
     _fails(capsys, "plot", tiny, "--kind", "history", "--record", "5", "--out", out,
            names=(tiny, "record must be in 0..0, got 5"))  # fmt: skip
+    # a record name the dataset lacks: its names as text (they were np.str_ reprs)
+    _fails(capsys, "plot", tiny, "--kind", "history", "--record", "each", "--out", out,
+           names=(tiny, "record has no value 'each'; it has builtin:"))  # fmt: skip
     for option, kind in (("--line", "spectrum"), ("--by", "distribution")):
         for name in ("foo", "sample"):
             _fails(capsys, "plot", tiny, "--kind", kind, option, name, "--out", out,

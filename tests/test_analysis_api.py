@@ -118,6 +118,32 @@ def test_spectrum_sel_picks_lines_and_refuses_what_it_cannot_hold(small):
         ds.pound.plot.spectrum(sel={ds.pound.grid_dims[0]: 0.2})
 
 
+def test_python_sel_takes_study_keys_and_material_names(small):
+    """``sel=`` and the coordinates of ``simulate`` / ``history`` take what ``--sel`` takes: a
+    study key for its dimension, a material by name.  ``sel={"right.period_s": 1.0}`` said "no
+    dimension", a material name failed to convert to float, and ``simulate(...,
+    contact_material="steel")`` raised a pandas TypeError."""
+    ds = _open(small("jankowski_spectrum"))
+    names = [str(n) for n in ds["material"].values]
+    periods = ds["right_period_s"].values
+    by_key = ds.pound.plot.spectrum(sel={"right.period_s": periods[-1]})
+    by_dim = ds.pound.plot.spectrum(sel={"right_period_s": periods[-1]})
+    for a, b in zip(by_key.lines, by_dim.lines, strict=True):
+        np.testing.assert_array_equal(a.get_ydata(), b.get_ydata())
+    k = len(names) - 1  # the last material, by name and by its coordinate value
+    by_name = ds.pound.spectrum(contact_material=names[k])
+    by_value = ds.pound.spectrum(contact_material=ds["contact_material"].values[k])
+    np.testing.assert_array_equal(by_name.values, by_value.values)
+    result, index = ds.pound.simulate(contact_material=names[k], sample=0)
+    assert index["contact_material"] == k
+    assert result.outputs["peak_force"] == pytest.approx(
+        float(ds["peak_force"][tuple(index.values())]), rel=1e-12
+    )
+    ds.pound.plot.history(contact_material=names[k], sample=0)
+    with pytest.raises(ValueError, match="material has no value 'glass'"):
+        ds.pound.spectrum(contact_material="glass")
+
+
 def test_history_title_names_the_record(small):
     path = small("quickstart")
     ds = _open(path)

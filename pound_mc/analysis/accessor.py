@@ -32,9 +32,11 @@ from matplotlib.axes import Axes
 
 from pound_mc.analysis.plot import (
     distribution_chart,
+    no_value_message,
     probability_chart,
     restitution_chart,
     save,
+    selection,
     spectrum_chart,
 )
 from pound_mc.analysis.plot_numerics import time_history_chart
@@ -56,7 +58,12 @@ _OK = 0
 
 
 def _select(obj, ds: xr.Dataset, sel: dict):
-    """``obj.sel(sel)``, nearest for numeric coordinates, exact otherwise."""
+    """``obj.sel(sel)``, nearest for numeric coordinates, exact otherwise.
+
+    ``sel`` may name a dimension by its study key and a material by name
+    (:func:`~pound_mc.analysis.plot.selection`).
+    """
+    sel = selection(ds, sel)
     unknown = sorted(set(sel) - set(ds.dims))
     if unknown:
         raise ValueError(f"no dimension {unknown[0]!r}; the dataset has {list(ds.dims)}")
@@ -74,7 +81,7 @@ def _position(ds: xr.Dataset, dim: str, value) -> int:
     method = "nearest" if ds[dim].dtype.kind in "fiu" else None
     i = int(ds.indexes[dim].get_indexer([value], method=method)[0])
     if i < 0:
-        raise ValueError(f"{dim} has no value {value!r}; it has {list(ds[dim].values)}")
+        raise ValueError(no_value_message(dim, value, ds[dim].values))
     return i
 
 
@@ -124,6 +131,7 @@ def scene_at(
     study = study_from_text(text, file=study_path)
     if study.hash != ds.attrs.get("study_hash", study.hash):
         raise InputError("the dataset's study_text does not match its study_hash")
+    coords = selection(ds, coords)
     unknown = sorted(set(coords) - {grid_dim_name(k) for k in study.grid})
     if unknown:
         raise ValueError(f"{unknown[0]!r} is not a grid dimension of this study")
@@ -162,7 +170,13 @@ def _chart_method(name: str, chart: Callable, returns: str, doc: str, **fixed: A
     """
 
     def method(self, path: str | Path | None = None, *, ax: Axes | None = None, **kwargs: Any):
-        return _axes_of(chart(self._ds, path, ax=ax, **fixed, **kwargs), ax)
+        ds = self._ds
+        if kwargs.get("sel"):  # study keys and material names, as --sel takes them
+            kwargs["sel"] = selection(ds, kwargs["sel"])
+        for option in ("line", "by", "x"):  # a dimension, or its study key
+            if isinstance(kwargs.get(option), str):
+                kwargs[option] = next(iter(selection(ds, {kwargs[option]: None})))
+        return _axes_of(chart(ds, path, ax=ax, **fixed, **kwargs), ax)
 
     method.__name__ = name
     method.__qualname__ = f"PoundPlot.{name}"

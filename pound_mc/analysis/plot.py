@@ -36,6 +36,7 @@ from pound_mc.analysis.style import (
     value_text,
 )
 from pound_mc.study.dataset import pounding_counted
+from pound_mc.study.definition import grid_dim_name
 
 __all__ = [
     "restitution_chart",
@@ -290,6 +291,25 @@ def _line_label(ds, dim, i) -> str:
     return f"{ds[dim].attrs.get('long_name', dim)} = {value_text(ds, dim, i)}"
 
 
+def selection(ds, sel: dict | None) -> dict:
+    """``sel`` with the study file's keys named as dimensions and materials by name.
+
+    ``{"left.period_s": 0.6}`` holds ``left_period_s``; on the material axis
+    (:data:`MATERIAL_DIM`) a name (``"steel"``) stands for its coordinate value.  Anything
+    else is passed on as given.
+    """
+    out = {}
+    for key, value in (sel or {}).items():
+        dim = key if key in ds.dims or grid_dim_name(key) not in ds.dims else grid_dim_name(key)
+        if dim == MATERIAL_DIM and isinstance(value, str) and "material" in ds:
+            names = [str(n) for n in np.atleast_1d(ds["material"].values)]
+            if value not in names:
+                raise ValueError(no_value_message("material", value, names))
+            value = ds[dim].values[names.index(value)]
+        out[dim] = value
+    return out
+
+
 def _hold(ds, dims, sel):
     """Index of every dim in ``dims``: the value nearest ``sel[dim]``, else the first."""
     sel = sel or {}
@@ -328,15 +348,20 @@ def _checked_sel(ds, sel, x) -> dict:
     return sel
 
 
+def no_value_message(dim: str, value, coord) -> str:
+    """``dim has no value ...; it has`` its first six values as text, and how many in all."""
+    names = [str(c) for c in coord]
+    more = f", ... ({len(names)} in all)" if len(names) > 6 else ""
+    return f"{dim} has no value {value!r}; it has {', '.join(names[:6])}{more}"
+
+
 def _nearest_index(ds, dim, value) -> int:
     coord = ds[dim].values
     if coord.dtype.kind in "fiu":
         return int(np.argmin(np.abs(coord.astype(float) - float(value))))
     hits = np.flatnonzero(coord == value)
     if not hits.size:
-        names = [str(c) for c in coord]
-        more = f", ... ({len(names)} in all)" if len(names) > 6 else ""
-        raise ValueError(f"{dim} has no value {value!r}; it has {', '.join(names[:6])}{more}")
+        raise ValueError(no_value_message(dim, value, coord))
     return int(hits[0])
 
 

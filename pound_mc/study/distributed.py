@@ -63,13 +63,16 @@ TIMEOUT_S = 600.0
 SCHEMES = ("tcp",)
 
 
-def _import_distributed():
-    """The ``distributed`` module, or an :class:`InputError` saying how to install it."""
+def _import_distributed(key: str = "--scheduler"):
+    """The ``distributed`` module, or an :class:`InputError` saying how to install it.
+
+    ``key``: the option that asked for a cluster (``--scheduler`` or ``--workers``).
+    """
     try:
         import distributed
     except ImportError:
         raise InputError(
-            f"running on a Dask cluster needs dask.distributed: {_INSTALL}", key="--scheduler"
+            f"running on a Dask cluster needs dask.distributed: {_INSTALL}", key=key
         ) from None
     return distributed
 
