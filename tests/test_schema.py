@@ -33,7 +33,8 @@ def test_checked_in_reference_is_up_to_date():
 
 def test_reference_lists_every_declared_key():
     page = reference_markdown()
-    for table in (schema.RECORD, schema.SDOF, schema.SHEAR, schema.CONTACT, schema.INTEGRATOR):
+    for table in (schema.RECORD, schema.SDOF, schema.SHEAR, schema.WALL, schema.CONTACT,
+                  schema.INTEGRATOR):  # fmt: skip
         for f in table.fields:
             assert f"| `{f.name}` |" in page, (table.name, f.name)
 
@@ -43,6 +44,22 @@ def test_shipped_files_match_the_json_schema(path):
     assert len(SHIPPED) >= 8  # six studies and two scenes ship today
     jsonschema.Draft202012Validator.check_schema(json_schema())
     jsonschema.validate(tomllib.loads(path.read_text()), json_schema())
+
+
+def test_json_schema_takes_walls_and_rows():
+    """A wall on the right and a row (``[[buildings]]``) run (``scene_from_dict`` takes them)
+    but the JSON Schema refused both; it now refuses a file with a row and a pair at once."""
+    sdof = {"model": "sdof", "period_s": 0.5, "damping_ratio": 0.05, "mass_kg": 1.0e6}
+    wall = {**SCENE, "right": {"model": "wall"}}
+    row = {k: v for k, v in SCENE.items() if k not in ("left", "right")}
+    row["buildings"] = [sdof, {**sdof, "period_s": 1.0}, {"model": "wall", "height_m": 3.0}]
+    for data in (wall, row):
+        scene_from_dict(data, file="s.toml")
+        jsonschema.validate(data, json_schema())
+    with pytest.raises(jsonschema.ValidationError):
+        jsonschema.validate({**row, "left": sdof, "right": sdof}, json_schema())
+    with pytest.raises(jsonschema.ValidationError):
+        jsonschema.validate({**row, "buildings": [sdof]}, json_schema())
 
 
 @pytest.mark.parametrize(

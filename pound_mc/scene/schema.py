@@ -374,12 +374,14 @@ _HYSTERESIS = Field(
     "hysteresis", "string", "Storey law: `elastic`, `bilinear` (kinematic hardening: storey "
     "force alpha k u + (1 - alpha) k z, z elastic-perfectly-plastic with |z| <= yield drift) "
     "or `bouc-wen` (same force, z smooth: z' = u' (1 - |z/u_y|^n (0.5 sign(u' z) + 0.5)), no "
-    "degradation or pinching; runs with `newmark`); damping from the initial elastic modes.",
+    "degradation or pinching; runs with `newmark` or `newmark-explicit`); damping from the "
+    "initial elastic modes.",
     default="elastic", choices=HYSTERESIS,
 )  # fmt: skip
 _POST_YIELD = Field(
     "post_yield_ratio", "number", "Post-yield over elastic storey stiffness alpha (bilinear; "
-    "default 0, elastic-perfectly-plastic).", minimum=0.0, maximum=1.0, exclusive_maximum=True,
+    "default 0, elastic-perfectly-plastic; `adaptive` needs it above damping_ratio^2, "
+    "`newmark` takes 0).", minimum=0.0, maximum=1.0, exclusive_maximum=True,
     varied=True,
 )  # fmt: skip
 _BW_EXPONENT = Field(

@@ -185,6 +185,13 @@ def reference_markdown() -> str:
     out += _table_markdown("[record] / [[records]]", scene_schema.RECORD)
     out += _table_markdown('[left] / [right], model = "sdof"', scene_schema.SDOF)
     out += _table_markdown('[left] / [right], model = "shear"', scene_schema.SHEAR)
+    out += _table_markdown('[right], model = "wall"', scene_schema.WALL)
+    out += [
+        "A scene file may give a row of buildings instead of `[left]` and `[right]`: "
+        "`[[buildings]]`, two or more tables of the forms above from left to right (a wall "
+        "only last), with a contact between neighbours (studies take `[left]` and `[right]`).",
+        "",
+    ]
     out += _table_markdown("[contact]", scene_schema.CONTACT)
     out += _table_markdown("[integrator]", scene_schema.INTEGRATOR)
     out += ["## Study tables", ""]
@@ -256,6 +263,13 @@ def _building_schema() -> dict:
     return {"anyOf": [shear, sdof]}
 
 
+def _wall_schema() -> dict:
+    wall = _table_schema(scene_schema.WALL)
+    wall["properties"]["model"]["enum"] = ["wall"]
+    wall["required"] = ["model"]
+    return wall
+
+
 def _contact_schema() -> dict:
     out = _table_schema(scene_schema.CONTACT)
     out["allOf"] = [
@@ -313,6 +327,7 @@ def json_schema() -> dict:
     contact = _contact_schema()
     integrator = _table_schema(scene_schema.INTEGRATOR)
     building = _building_schema()
+    wall = _wall_schema()
     return {
         "$schema": "https://json-schema.org/draft/2020-12/schema",
         "$id": "https://pound-mc.invalid/pound-mc.schema.json",
@@ -324,13 +339,19 @@ def json_schema() -> dict:
             "record": record,
             "records": {"type": "array", "items": record, "minItems": 1},
             "left": building,
-            "right": building,
+            "right": {"anyOf": [*building["anyOf"], wall]},
+            "buildings": {
+                "type": "array",
+                "description": "A row of buildings, left to right (scene files; a wall only last).",
+                "items": {"anyOf": [*building["anyOf"], wall]},
+                "minItems": 2,
+            },
             "contact": contact,
             "integrator": integrator,
             "grid": grid,
             "sampling": samp,
         },
-        "required": ["left", "right"],
+        "oneOf": [{"required": ["left", "right"]}, {"required": ["buildings"]}],
         "additionalProperties": False,
         "not": {"required": ["record", "records"]},
     }
