@@ -149,10 +149,22 @@ def test_droptest_names_the_relation_it_used(capsys, model, relation):
     """Each law's default xi-e relation (the droptest docstring; Ye et al. 2009 for
     Hertz-damp): ``--json`` gave ``"relation": null`` and the text said ``jankowski2008``
     whatever the law."""
-    assert main(["droptest", "--model", model, "--json"]) == 0
+    # the linear laws take their stiffness [N/m] given: Table 3's beta is N/m^1.5
+    args = ["droptest", "--model", model, *(["--beta", "1e8"] if model == "kelvin" else [])]
+    assert main([*args, "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
     assert out["relation"] == relation
-    assert main(["droptest", "--model", model]) == 0
+    assert main(args) == 0
     text = capsys.readouterr().out
     assert (f"({relation})" in text) if relation else ("target e" not in text)
     assert ("jankowski2008" in text) == (relation == "jankowski2008")
+
+
+@pytest.mark.parametrize("model", ["linear", "kelvin"])
+def test_droptest_linear_laws_need_their_stiffness(capsys, model):
+    """Table 3's beta [N/m^1.5] was taken as the linear law's stiffness [N/m] without a word."""
+    assert main(["droptest", "--model", model]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--beta: " in err and "stiffness is in N/m;" in err
+    assert main(["droptest", "--model", model, "--beta", "1e8", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["beta"] == 1e8

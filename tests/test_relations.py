@@ -82,3 +82,28 @@ def test_hertzdamp_zeta_closed_forms():
     # Muthukumar & DesRoches (2006): 3(1-e^2)/(4 v0); Ye et al. (2009): 8(1-e)/(5 e v0).
     assert relations.hertzdamp_zeta(0.6, 0.5, "muthukumar2006") == pytest.approx(0.96)
     assert relations.hertzdamp_zeta(0.6, 0.5, "ye2009") == pytest.approx(8 * 0.4 / (5 * 0.6 * 0.5))
+
+
+def test_a_restitution_beyond_the_table_is_refused_in_a_scene():
+    """``contact.xi`` stops at 71.17 (the end of the exact table, e = 0.00785), but ``e = 0.001``
+    ran with xi = 356 from Jankowski (2008) eq. 2.9.  Reference: eq. 2.9,
+    xi = sqrt(5) (1 - e^2) / (2 pi e), at e = 0.001."""
+    from pound_mc.scene import scene_from_dict
+
+    def eq_2_9(e):
+        return math.sqrt(5) * (1 - e * e) / (2 * math.pi * e)
+
+    scene = {
+        "record": {"source": "builtin:elcentro", "duration_s": 4.0},
+        "left": {"model": "sdof", "period_s": 0.5, "mass_kg": 1e6},
+        "right": {"model": "sdof", "period_s": 1.0, "mass_kg": 1e6},
+        "contact": {"model": "jankowski", "gap_m": 0.01, "e": 0.001},
+    }
+    with pytest.raises(InputError) as info:
+        scene_from_dict(scene, file="s.toml")
+    assert str(info.value).startswith("s.toml: contact.e: e = 0.001 gives xi = ")
+    assert f"xi = {eq_2_9(0.001):.4g} under jankowski2008" in str(info.value)
+    low = relations.lowest_e("jankowski2008")
+    assert eq_2_9(low) == pytest.approx(relations.largest_xi(), rel=1e-9)
+    scene["contact"]["e"] = 1.01 * low
+    assert scene_from_dict(scene).xi == pytest.approx(eq_2_9(1.01 * low), rel=1e-12)

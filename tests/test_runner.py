@@ -6,6 +6,7 @@ import subprocess
 import sys
 import textwrap
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -16,7 +17,7 @@ from pound_mc.errors import InputError, InputErrors
 from pound_mc.study.dataset import RESULT_VARIABLES
 from pound_mc.study.definition import load_study, study_from_text
 from pound_mc.study.engine import StudyEngine
-from pound_mc.study.runner import chunk_ranges, default_chunk_size, run_study
+from pound_mc.study.runner import chunk_ranges, default_chunk_size, plan_text, run_study
 from studies import study_text
 
 # studies.SMALL_SDOF: T = 0.3, 0.5, 0.7 s x gap 0, 2 mm x 8 concrete samples
@@ -203,7 +204,9 @@ def test_check_prints_plan_and_writes_nothing(study_file, tmp_path, capsys, monk
     before = sorted(p.name for p in tmp_path.iterdir())
     assert main(["check", str(study_file), "--calibrate", "8"]) == 0
     text = capsys.readouterr().out
-    assert f"simulations: {N}" in text and "chunks of" in text and "estimated" in text
+    # one chunk holds the 48 simulations: "1 chunk of 48" (it read "1 chunks of 256")
+    assert f"simulations: {N} in 1 chunk of {N}\n" in text and "estimated" in text
+    assert "grid      : left.period_s = 3 values 0.3 .. 0.7" in text
     assert sorted(p.name for p in tmp_path.iterdir()) == before
 
 
@@ -263,3 +266,10 @@ def test_linear_law_study(tmp_path):
     with xr.open_dataset(report.path) as ds:
         assert float(ds["k_N_per_m"]) == 1.0e9
         assert np.all(ds["status"].values == 0)
+
+
+def test_plan_names_the_materials_of_a_material_axis():
+    """``check`` listed the material axis by its indices ("4 values 0 .. 3")."""
+    study = load_study(Path(__file__).resolve().parents[1] / "studies" / "jankowski_spectrum.toml")
+    text = plan_text(study)
+    assert "  grid      : contact.material = 4 values steel, concrete, timber, ceramics\n" in text

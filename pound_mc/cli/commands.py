@@ -168,7 +168,13 @@ def _physics(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--plot", metavar="FILE.png", help="chart of Table 2 against impact velocity")
 
     p = _command(sub, "calibrate", help="impact damping ratio xi for a restitution e")
-    p.add_argument("--e", type=float, required=True, help="coefficient of restitution (0, 1]")
+    p.add_argument(
+        "--e",
+        type=float,
+        required=True,
+        help="coefficient of restitution, 0.00878 to 1 (below it a relation's xi leaves the "
+        "Jankowski law's restitution table)",
+    )
     p.add_argument(
         "--relation",
         default="jankowski2008",

@@ -121,6 +121,13 @@ def droptest_command(args) -> int:
         output_path(args.plot, key="--plot", suffix=".png")
     beta = args.beta
     if beta is None:
+        units = CONTACT_MODELS[args.model].stiffness_units if args.model in CONTACT_MODELS else ""
+        if units != "N m-1.5":  # Table 3's beta is the Hertz-type laws' N/m^1.5
+            raise InputError(
+                f"the {args.model!r} law's stiffness is in {units.replace(' m-1', '/m')}; "
+                "Table 3 gives beta in N/m^1.5 (Hertz-type laws): give the stiffness with --beta",
+                key="--beta",
+            )
         beta = materials.stiffness_range(args.material, mass)[2]
     xi, e = args.xi, args.e
     elastic = args.model in CONTACT_MODELS and CONTACT_MODELS[args.model].damping is None

@@ -71,8 +71,8 @@ def bench_command(args) -> int:
     ``--json`` prints one object: ``head_to_head`` (rows), ``ratios``, ``overheads``,
     ``load_before`` / ``load_after`` (``os.getloadavg()``), ``repeats``, and ``sweep`` (the
     work-precision rows, also written to ``bench.csv``) and ``shear_scaling`` (``adaptive`` on
-    shear pairs of 3+5, 10+10 and 20+20 storeys); the last two absent with
-    ``--head-to-head-only``.
+    shear pairs of 3+5, 10+10 and 20+20 storeys, with a shear scene in ``--scenes``); both
+    absent with ``--head-to-head-only``.
     """
     for m in args.methods or []:
         if m not in METHODS:
@@ -92,23 +92,26 @@ def bench_command(args) -> int:
             print(json.dumps({"head_to_head": duel.to_dict(orient="records"), **info}, indent=1))
         return 0
     table = benchmark(args.scenes, args.methods, repeats=args.repeats, progress=not args.json)
-    scaling = shear_scaling(repeats=args.repeats)
+    # the shear pairs of growing size, with a shear scene asked for
+    shear = any(name.startswith("shear") for name in args.scenes)
+    scaling = shear_scaling(repeats=args.repeats) if shear else None
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     table.to_csv(out / "bench.csv", index=False)
     work_precision_chart(table, out / "work_precision.png")
     if args.json:
         sweep = json.loads(table.to_json(orient="records"))
-        scaling_rows = scaling.to_dict(orient="records")
+        extra = {} if scaling is None else {"shear_scaling": scaling.to_dict(orient="records")}
         print(json.dumps({"head_to_head": duel.to_dict(orient="records"), **info,
-                          "sweep": sweep, "shear_scaling": scaling_rows}, indent=1))  # fmt: skip
+                          "sweep": sweep, **extra}, indent=1))  # fmt: skip
         return 0
     cols = ["scene", "method", "dt_s", "substeps", "seconds", "impacts", "err_peak_force",
             "err_peak_disp_left", "err_peak_disp_right", "status"]  # fmt: skip
     print("\nwork-precision sweep (median of each point after compilation, one thread):")
     print(table[cols].to_string(index=False, float_format=lambda x: f"{x:.3g}"))
-    print("\nadaptive on shear pairs of growing size (median, one thread, interleaved):")
-    print(scaling.to_string(index=False, float_format=lambda x: f"{x:.3g}"))
+    if scaling is not None:
+        print("\nadaptive on shear pairs of growing size (median, one thread, interleaved):")
+        print(scaling.to_string(index=False, float_format=lambda x: f"{x:.3g}"))
     print(f"wrote {out / 'bench.csv'} and {out / 'work_precision.png'}")
     return 0
 
@@ -128,7 +131,7 @@ def _print_head_to_head(duel, info) -> None:
         print(f"  {name:42s} {value:8.2f}")
     print("set-up of the public call (median over the rounds of simulate() minus the kernel):")
     for name, value in info["overheads"].items():
-        print(f"  {name:42s} {value:8.3f}")
+        print(f"  {name:42s} {value:8.3f}" + ("  (below the timing noise)" if value < 0 else ""))
     load = " / ".join(f"{x:.2f}" for x in info["load_after"])
     print(f"load average after: {load}")
 

@@ -39,7 +39,7 @@ from numpy.typing import ArrayLike
 from pound_mc._docstring import fill
 from pound_mc._jit import jit
 from pound_mc.errors import InputError
-from pound_mc.physics.relations import HERTZDAMP_RELATIONS, RELATIONS
+from pound_mc.physics.relations import HERTZDAMP_RELATIONS, RELATIONS, largest_xi, lowest_e
 
 __all__ = [
     "CONTACT_MODELS",
@@ -590,7 +590,15 @@ def reported_xi(law: str, e, relation: str | None):
     spec = contact_law(law)
     e = np.asarray(e, dtype=float)
     if spec.damping == "xi":
-        xi = np.asarray(RELATIONS[check_relation(law, relation)](e), dtype=float)
+        relation = check_relation(law, relation)
+        xi = np.asarray(RELATIONS[relation](e), dtype=float)
+        if law != "kelvin" and np.any(xi > largest_xi()):  # beyond the law's table (as xi is)
+            raise InputError(
+                f"e = {float(np.min(e)):.4g} gives xi = {float(np.max(xi)):.4g} under "
+                f"{relation}, beyond {largest_xi():.4g}, the end of the Jankowski law's "
+                f"restitution table: e must be >= {lowest_e(relation):.4g} with this relation",
+                key="contact.e",
+            )
     else:
         check_relation(law, relation)
         xi = np.full(e.shape, 0.0 if spec.damping is None else np.nan)

@@ -221,21 +221,27 @@ def _atomic_write_text(path: Path, text: str, stage: str = "text") -> None:
     _atomic_write_bytes(path, text.encode(), stage)
 
 
+def _count(n: int, noun: str) -> str:
+    """``1 chunk``, ``3 chunks``."""
+    return f"{n:,} {noun}{'s' * (n != 1)}"
+
+
 def plan_text(study, chunk_size: int | None = None, seconds_per_simulation: float | None = None):
     """A human-readable plan: axes, counts, chunks and (optionally) the estimated time."""
     chunk_size = chunk_size or study.chunk_size or default_chunk_size(study.n_simulations)
     lines = [f"study {study.name!r} (seed {study.seed}, hash {study.hash[:12]})"]
     lines.append(f"  records   : {len(study.records)} ({', '.join(study.record_names)})")
     for key, values in study.grid.items():
-        lines.append(
-            f"  grid      : {key} = {values.size} values {values.min():g} .. {values.max():g}"
-        )
+        names = study.grid_labels.get(key)
+        span = ", ".join(names) if names else f"{values.min():g} .. {values.max():g}"
+        lines.append(f"  grid      : {key} = {values.size} value{'s' * (values.size != 1)} {span}")
     lines.append(f"  sampling  : n = {study.n}, method {study.method}, seed {study.sampling_seed}")
     for v in study.variables:
         lines.append(f"    {v.key}: {v.source}")
     n = study.n_simulations
     lines.append(
-        f"  simulations: {n:,} in {len(chunk_ranges(n, chunk_size))} chunks of {chunk_size}"
+        f"  simulations: {n:,} in {_count(len(chunk_ranges(n, chunk_size)), 'chunk')} of "
+        f"{min(chunk_size, n):,}"
     )
     if seconds_per_simulation is not None:
         total = n * seconds_per_simulation
