@@ -513,7 +513,7 @@ CONTACT = Table(
 
 INTEGRATOR = Table(
     "integrator",
-    "The time integration (DESIGN.md section 4).",
+    "The time integration (README, \"Integrators\").",
     (
         Field("method", "string", "Integration method.", default="adaptive",
               choices=tuple(METHODS)),
