@@ -112,8 +112,14 @@ def test_bootstrap_is_seeded():
         ([10] * 7, "every simulation has the event"),
         # events only from one stripe on, that one mixed (quasi-separation): it said "only
         # events above it" of a stripe with non-events
-        ([0, 0, 0, 4, 10, 10, 10], "separated .no event below one intensity, no non-event"),
-        ([0, 0, 0, 0, 0, 0, 2], "separated .no event below one intensity, no non-event above"),
+        (
+            [0, 0, 0, 4, 10, 10, 10],
+            "separated .events only from one intensity up, non-events only up",
+        ),
+        (
+            [0, 0, 0, 0, 0, 0, 2],
+            "separated .events only from one intensity up, non-events only up to it",
+        ),
         ([0, 0, 0, 10, 10, 10, 10], "separated"),
         ([10, 10, 10, 4, 0, 0, 0], "does not increase"),
         ([10, 8, 7, 6, 4, 2, 1], "does not increase"),
@@ -281,10 +287,10 @@ def test_intervals_without_discarded_resamples_are_unchanged():
     assert upper.tolist() == [0.1301267210115875, 0.6134600750611734, 0.9804727358478391]
 
 
-def _stripe_dataset():
+def _stripe_dataset(*columns):
     # a study dataset as pound-mc run writes it, reduced to what the fragility reads: 88
     # records x 1 sample at PGA 0.1, 0.2, 0.4 g and two gaps with the counts above
-    counts = np.stack([QS_100MM, HALF_SEPARATED], axis=1)  # (pga_g, contact_gap_m)
+    counts = np.stack(columns or [QS_100MM, HALF_SEPARATED], axis=1)  # (pga_g, contact_gap_m)
     impacts = (np.arange(88)[:, None, None, None] < counts[None, :, :, None]).astype(np.int64)
     dims = ("record", "pga_g", "contact_gap_m", "sample")
     return xr.Dataset(
@@ -327,3 +333,14 @@ def test_dataset_cli_and_chart_say_what_was_discarded(tmp_path, capsys):
     for ax, f in zip(fig.axes[:2], fits, strict=True):
         assert ax.get_title().replace("\n", " ").endswith(f.bootstrap_note)
     assert fig.axes[0].collections and not fig.axes[1].collections  # the band only with a CI
+
+
+def test_no_fit_panels_label_their_stripes():
+    """A panel without a fit (separated stripes: 0/88, 0/88, 4/88, as the quickstart's 200 mm
+    gap) drew its points without their counts, and cut its reason short; the counts are those
+    of the dataset, and the reason is whole."""
+    ds = _stripe_dataset(QS_100MM, np.array([0, 0, 4]))
+    fig = fragility_panels(ds, n_boot=50)
+    labels = [[t.get_text() for t in ax.texts] for ax in fig.axes[:2]]
+    assert labels[0] == ["0/88", "2/88", "48/88"] and labels[1] == ["0/88", "0/88", "4/88"]
+    assert fig.axes[1].get_title().replace("\n", " ").endswith("add stripes near it")

@@ -449,8 +449,8 @@ def fit_fragility(
         "add stronger stripes",
         "all": "every simulation has the event: the median lies below the lowest intensity; "
         "add weaker stripes",
-        "separated": "the stripes are separated (no event below one intensity, no non-event "
-        "above): the dispersion tends to 0; add stripes near it",
+        "separated": "the stripes are separated (events only from one intensity up, "
+        "non-events only up to it): the dispersion tends to 0; add stripes near it",
         "decreasing": "the event fraction does not increase with the intensity, so no "
         "lognormal fragility fits (the dispersion tends to infinity)",
         "not converged": "the likelihood maximisation did not converge",

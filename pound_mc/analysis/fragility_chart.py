@@ -77,18 +77,10 @@ def fragility_chart(
         label=f"lognormal fit: theta = {fit.theta:.3g}, beta = {fit.beta:.3g}",
     )
     ax.plot(im, fraction, "o", color="black", ms=5, label="stripes (fraction of simulations)")
-    if counts:
-        for xi, fi, zi, ni in zip(im, fraction, fit.n_event, fit.n_total, strict=True):
-            if np.isfinite(fi):
-                ax.annotate(
-                    f"{zi}/{ni}",
-                    (xi, fi),
-                    textcoords="offset points",
-                    xytext=(4, -11 if fi > 0.9 else 5),
-                    fontsize=7,
-                )
     ax.axvline(fit.theta, color=PALETTE[0], lw=0.8, ls=":")
     ax.set_xlim(0.0, x[-1])
+    if counts:
+        stripe_counts(ax, im, fit.n_event, fit.n_total)
     ax.set_ylim(-0.02, 1.02)
     ax.set_xlabel(im_label)
     ax.set_ylabel(f"P({event_label} | IM)")
@@ -96,3 +88,23 @@ def fragility_chart(
     if legend:
         legend_outside(ax)
     return ax
+
+
+def stripe_counts(ax: Axes, im, n_event, n_total) -> None:
+    """Label each stripe's point with its count, ``z/n``, inside the axes' horizontal range."""
+    im = np.asarray(im, dtype=float)
+    n_event, n_total = np.asarray(n_event), np.asarray(n_total)
+    left, right = ax.get_xlim()
+    for xi, zi, ni in zip(im, n_event, n_total, strict=True):
+        if ni <= 0:
+            continue
+        fi = zi / ni
+        at_right = xi >= left + 0.9 * (right - left)  # the label goes left of the point
+        ax.annotate(
+            f"{int(zi)}/{int(ni)}",
+            (xi, fi),
+            textcoords="offset points",
+            xytext=(-4 if at_right else 4, -11 if fi > 0.9 else 5),
+            ha="right" if at_right else "left",
+            fontsize=7,
+        )

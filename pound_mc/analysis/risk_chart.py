@@ -21,7 +21,7 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from pound_mc.analysis.fragility import fit_fragility
-from pound_mc.analysis.fragility_chart import fragility_chart
+from pound_mc.analysis.fragility_chart import fragility_chart, stripe_counts
 from pound_mc.analysis.plot import _hold, _line_label, probability_chart, save
 from pound_mc.analysis.risk import GAP_DIM, _counts, _intensity_dim, required_gap
 from pound_mc.analysis.style import axis_label, chart_doc, legend_outside, new_axes, value_text
@@ -90,11 +90,12 @@ def fragility_panels(
             fit = fit_fragility(x, z, n, n_boot=n_boot, seed=seed)
         except InputError as exc:
             ax.plot(x, np.divide(z, n, out=np.full(x.shape, np.nan), where=n > 0), "o", c="k")
-            why = textwrap.shorten(exc.message, 150, placeholder=" ...")
+            why = textwrap.shorten(exc.message, 180, placeholder=" ...")
             ax.set_title(f"{title}\n" + textwrap.fill(f"no fit: {why}", 60), fontsize=7)
             ax.set_xlabel(im_label)
             ax.set_ylabel(f"P({event} | IM)")
             ax.set_ylim(-0.02, 1.02)
+            stripe_counts(ax, x, z, n)
             continue
         fragility_chart(fit, ax=ax, im_label=im_label, event_label=event, legend=False)
         head = f"{title}\ntheta = {fit.theta:.3g}, beta = {fit.beta:.3g}"
