@@ -100,6 +100,9 @@ MALFORMED = [
      "sampling.vary.contact.e.distribution"),
     ("grid-e-above-one", GOOD.replace("[grid]", '[grid]\n"contact.e" = [0.5, 1.2]').replace(
         '"contact.e" = { material = "concrete" }', ""), "grid.contact.e"),
+    # below the Jankowski law's restitution table (jankowski2008: xi = 356 at e = 0.001)
+    ("grid-e-below-table", GOOD.replace("[grid]", '[grid]\n"contact.e" = [0.001, 0.5]').replace(
+        '"contact.e" = { material = "concrete" }', ""), "grid.contact.e"),
     ("grid-spec-extra-key", _replace("num = 2", "num = 2, step = 0.1"), "grid.left.period_s"),
     ("grid-not-table", _replace("[grid]\n", 'grid = 3\n[nogrid]\n'), "grid"),
     ("record-and-records", GOOD + '\n[[records]]\nsource = "builtin:elcentro"\n', "records"),
