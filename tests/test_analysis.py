@@ -240,6 +240,15 @@ def test_plot_errors_are_input_errors(tiny, tmp_path, capsys):
     assert "colour" in capsys.readouterr().err
 
 
+def test_distribution_by_record(tiny, tmp_path):
+    """``--by record`` (one group per record) was refused when --by learnt the study keys."""
+    out = tmp_path / "by-record.png"
+    assert (
+        main(["plot", str(tiny), "--kind", "distribution", "--by", "record", "--out", str(out)])
+        == 0
+    )
+
+
 def test_line_and_by_take_the_study_files_keys(tiny, tmp_path):
     # --line and --by name a grid dimension as --sel does: by its name or its study key
     for option, kind in (("--line", "probability"), ("--by", "distribution")):
@@ -562,7 +571,9 @@ def test_analysis_options_out_of_range_are_input_errors(tiny, ds, tmp_path, caps
     text = page.read_text()
     assert "the charts of peak forces are left out" in text
     assert '<figure id="probability">' in text and '<figure id="spectrum">' not in text
-    assert main(["plot", str(flagged), "--kind", "probability", "--out", str(out)]) == 0
+    for kind in ("probability", "required-gap"):  # plot counts them as the report does
+        assert main(["plot", str(flagged), "--kind", kind, "--out", str(out)]) == 0
+    assert main(["plot", str(flagged), "--kind", "spectrum", "--out", str(out)]) == 2
 
 
 def test_separation_rule_of_infinite_peaks_is_nan_without_warning():

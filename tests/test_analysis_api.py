@@ -144,6 +144,36 @@ def test_python_sel_takes_study_keys_and_material_names(small):
         ds.pound.spectrum(contact_material="glass")
 
 
+def test_a_material_axis_out_of_table_order(tmp_path, capsys):
+    """A material grid not in the tables' order (timber, ceramics, steel: coordinate 2, 3, 0)
+    failed with "index must be monotonic" in simulate, spectrum and history, and a material
+    number off the axis (concrete, 1) drew the nearest one (timber) without a word."""
+    from studies import SMALL_SDOF, write_study
+
+    by_grid = {"contact.e": {"material": "grid"}, "contact.beta": {"material": "grid"}}
+    grid = {"contact.material": ["timber", "ceramics", "steel"], "contact.gap_m": [0.0, 0.002],
+            "left.period_s": None}  # fmt: skip
+    study = write_study(tmp_path, SMALL_SDOF, study={"name": "mat", "seed": 3}, grid=grid,
+                        sampling={"n": 4, "vary": by_grid})  # fmt: skip
+    assert main(["run", str(study), "--out", str(tmp_path), "--no-progress", "--no-plot"]) == 0
+    ds = _open(tmp_path / "mat.nc")
+    assert ds["contact_material"].values.tolist() == [2.0, 3.0, 0.0]
+    result, index = ds.pound.simulate(sample=1, contact_material="steel")
+    assert index["contact_material"] == 2
+    assert result.outputs["peak_force"] == pytest.approx(
+        float(ds["peak_force"][tuple(index.values())]), rel=1e-12
+    )
+    steel = ds.pound.spectrum(**{"contact.material": "steel"})
+    np.testing.assert_array_equal(steel.values, ds.pound.spectrum(contact_material=0).values)
+    ds.pound.plot.history(sample=1, contact_material="steel")
+    for value in (1, 1.0):  # concrete is not on this axis
+        with pytest.raises(ValueError, match="has no value 1.*; it has timber, ceramics, steel"):
+            ds.pound.plot.probability(sel={"contact.material": value})
+    args = ["plot", str(tmp_path / "mat.nc"), "--out", str(tmp_path / "x.png")]
+    assert main([*args, "--kind", "probability", "--sel", "contact.material=1"]) == 2
+    assert "contact_material has no value 1.0; it has timber" in capsys.readouterr().err
+
+
 def test_history_title_names_the_record(small):
     path = small("quickstart")
     ds = _open(path)

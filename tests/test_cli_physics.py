@@ -168,3 +168,15 @@ def test_droptest_linear_laws_need_their_stiffness(capsys, model):
     assert err.count("\n") == 1 and "--beta: " in err and "stiffness is in N/m;" in err
     assert main(["droptest", "--model", model, "--beta", "1e8", "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["beta"] == 1e8
+
+
+def test_droptest_refuses_what_a_scene_refuses(capsys):
+    """An unknown law was blamed on ``--beta``; a target e below the Jankowski law's table
+    (jankowski2008, eq. 2.9: xi = sqrt(5) (1 - e^2) / (2 pi e) = 88.97 at e = 0.004, beyond
+    71.17) ran where a scene refuses it."""
+    assert main(["droptest", "--model", "bogus"]) == 2
+    assert "--model: unknown contact law 'bogus'" in capsys.readouterr().err
+    assert main(["droptest", "--e", "0.004"]) == 2
+    err = capsys.readouterr().err
+    xi = math.sqrt(5) * (1 - 0.004**2) / (2 * math.pi * 0.004)
+    assert err.count("\n") == 1 and f"--e: e = 0.004 gives xi = {xi:.4g} under jankowski2008" in err

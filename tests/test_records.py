@@ -534,6 +534,14 @@ def test_a_window_that_misses_the_strong_motion_is_named(make_study, capsys):
     assert f"warning: {study}: the duration_s window of 1 of 1 records keeps less than " in out
     assert "50 % of their peak acceleration, which comes later: builtin:knet-akt013 " in out
     assert f"({100 * kept:.2g} %); scaled" in out
+    # a scene file with that window: simulate says so too (on standard error)
+    scene = study.with_name("scene.toml")
+    text = study.read_text()
+    scene.write_text(text[text.index("[record]") : text.index("[grid]")])
+    assert main(["simulate", str(scene)]) == 0
+    assert f"warning: {scene}: the record.duration_s window keeps {100 * kept:.2g} %" in (
+        capsys.readouterr().err
+    )
     whole_record = make_study(record={"duration_s": None})
     assert main(["check", str(whole_record)]) == 0
     assert "peak acceleration" not in capsys.readouterr().out

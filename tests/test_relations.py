@@ -107,3 +107,18 @@ def test_a_restitution_beyond_the_table_is_refused_in_a_scene():
     assert eq_2_9(low) == pytest.approx(relations.largest_xi(), rel=1e-9)
     scene["contact"]["e"] = 1.01 * low
     assert scene_from_dict(scene).xi == pytest.approx(eq_2_9(1.01 * low), rel=1e-12)
+
+
+def test_the_exact_relations_refusal_names_contact_e():
+    """``relation = "exact"`` below its table (e = 0.00785) named the key ``e``, not in the file."""
+    from pound_mc.scene import scene_from_dict
+
+    scene = {
+        "record": {"source": "builtin:elcentro", "duration_s": 4.0},
+        "left": {"model": "sdof", "period_s": 0.5, "mass_kg": 1e6},
+        "right": {"model": "sdof", "period_s": 1.0, "mass_kg": 1e6},
+        "contact": {"model": "jankowski", "gap_m": 0.01, "e": 0.004, "relation": "exact"},
+    }
+    with pytest.raises(InputError) as info:
+        scene_from_dict(scene, file="s.toml")
+    assert str(info.value).startswith("s.toml: contact.e: relation 'exact' is tabulated for e >= ")

@@ -14,7 +14,7 @@ from pound_mc.integrators.reference import reference_solution
 from pound_mc.scene import scene_from_dict, simulate
 
 SDOF = {"model": "sdof", "damping_ratio": 0.05, "mass_kg": 1.0e6}
-RECORD = {"source": "builtin:knet-akt013", "duration_s": 6.0, "pga_g": 0.5}
+RECORD = {"source": "builtin:elcentro", "duration_s": 6.0, "pga_g": 0.2}
 BILINEAR = {"hysteresis": "bilinear", "yield_disp_m": 0.01}
 
 
@@ -117,10 +117,10 @@ def test_row_contact_damping_reaches_the_kernel(contact):
 
 BOUC_WEN = {"hysteresis": "bouc-wen", "yield_disp_m": 0.01, "post_yield_ratio": 0.1}
 YIELDING_ROWS = {
-    # the middle building yields (ductility 2.3) between two elastic ones
+    # the middle building yields (ductility 5.1) between two elastic ones
     "bilinear-middle": [{**SDOF, "period_s": 0.5}, {**SDOF, "period_s": 1.0, **BILINEAR},
                         {**SDOF, "period_s": 0.7}],
-    # the first and the last yield (ductility 1.6 and 6.1), elastic-perfectly plastic
+    # the first and the last yield (ductility 4.5 and 19), elastic-perfectly plastic
     "bilinear-ends": [{**SDOF, "period_s": 0.5, **BILINEAR}, {**SDOF, "period_s": 1.0},
                       {**SDOF, "period_s": 0.7, "hysteresis": "bilinear", "yield_disp_m": 0.005}],
     # Bouc-Wen in the middle of a row closed by a wall
@@ -134,7 +134,8 @@ def test_rows_of_yielding_buildings_match_the_reference(name):
     """Each building's storeys in its own modes, wherever it stands in the row (they were
     taken from the first and last buildings only, then refused).  Reference: the SciPy solution
     of the row in physical coordinates with located yield and unload events (Bouc-Wen: its
-    ODE), on the same samples; newmark at 1e-4 s is within 2e-5 of it here."""
+    ODE), on the same samples; newmark at 1e-4 s is within 1.1e-4 of it here (its error on a
+    peak force, read at the steps: about 1e-4, as in test_inelastic's bilinear B1)."""
     s = row(*YIELDING_ROWS[name])
     s = replace(s, tail_s=0.0)  # the reference runs the record alone
     record = s.record_arrays()
@@ -148,7 +149,7 @@ def test_rows_of_yielding_buildings_match_the_reference(name):
         if np.isnan(ref[key]):  # the first building is elastic: no ductility
             assert np.isnan(out[key]), key
         else:
-            assert out[key] == pytest.approx(ref[key], rel=1e-4), key
+            assert out[key] == pytest.approx(ref[key], rel=3e-4), key
     # each storey named by its building's place in the row (a wall: "wall")
     res = simulate(s, record=record, method="newmark", dt_s=1e-4)
     names = [b.get("model") == "wall" and "wall" or f"building {k + 1}"

@@ -58,8 +58,14 @@ def test_json_schema_takes_walls_and_rows():
         jsonschema.validate(data, json_schema())
     with pytest.raises(jsonschema.ValidationError):
         jsonschema.validate({**row, "left": sdof, "right": sdof}, json_schema())
-    with pytest.raises(jsonschema.ValidationError):
-        jsonschema.validate({**row, "buildings": [sdof]}, json_schema())
+    for bad in (
+        {**row, "buildings": [sdof]},  # one building
+        {**row, "left": sdof},  # a row and half a pair
+        {**row, "buildings": [{"model": "wall"}, sdof]},  # a wall first
+        {**row, "study": {"name": "s", "seed": 1}},  # a row in a study file
+    ):
+        with pytest.raises(jsonschema.ValidationError):
+            jsonschema.validate(bad, json_schema())
 
 
 @pytest.mark.parametrize(

@@ -31,6 +31,7 @@ import xarray as xr
 from matplotlib.axes import Axes
 
 from pound_mc.analysis.plot import (
+    MATERIAL_DIM,
     distribution_chart,
     no_value_message,
     probability_chart,
@@ -67,7 +68,8 @@ def _select(obj, ds: xr.Dataset, sel: dict):
     unknown = sorted(set(sel) - set(ds.dims))
     if unknown:
         raise ValueError(f"no dimension {unknown[0]!r}; the dataset has {list(ds.dims)}")
-    numeric = {k: v for k, v in sel.items() if ds[k].dtype.kind in "fiu"}
+    # nearest for numeric axes; the material axis (numbers standing for names) exactly
+    numeric = {k: v for k, v in sel.items() if ds[k].dtype.kind in "fiu" and k != MATERIAL_DIM}
     other = {k: v for k, v in sel.items() if k not in numeric}
     if numeric:
         obj = obj.sel(numeric, method="nearest")
@@ -78,7 +80,7 @@ def _select(obj, ds: xr.Dataset, sel: dict):
 
 def _position(ds: xr.Dataset, dim: str, value) -> int:
     """Position along ``dim`` of ``value``: the nearest for numbers, the equal one otherwise."""
-    method = "nearest" if ds[dim].dtype.kind in "fiu" else None
+    method = "nearest" if ds[dim].dtype.kind in "fiu" and dim != MATERIAL_DIM else None
     i = int(ds.indexes[dim].get_indexer([value], method=method)[0])
     if i < 0:
         raise ValueError(no_value_message(dim, value, ds[dim].values))

@@ -302,12 +302,19 @@ def selection(ds, sel: dict | None) -> dict:
     for key, value in (sel or {}).items():
         dim = key if key in ds.dims or grid_dim_name(key) not in ds.dims else grid_dim_name(key)
         if dim == MATERIAL_DIM and isinstance(value, str) and "material" in ds:
-            names = [str(n) for n in np.atleast_1d(ds["material"].values)]
+            names = _material_names(ds)
             if value not in names:
                 raise ValueError(no_value_message("material", value, names))
             value = ds[dim].values[names.index(value)]
+        elif dim == MATERIAL_DIM and np.ndim(value) == 0:  # a material's number: one on the axis
+            _nearest_index(ds, dim, value)
         out[dim] = value
     return out
+
+
+def _material_names(ds) -> list[str]:
+    """Names of the materials along :data:`MATERIAL_DIM`, in its order."""
+    return [str(n) for n in np.atleast_1d(ds["material"].values)]
 
 
 def _hold(ds, dims, sel):
@@ -352,16 +359,18 @@ def no_value_message(dim: str, value, coord) -> str:
     """``dim has no value ...; it has`` its first six values as text, and how many in all."""
     names = [str(c) for c in coord]
     more = f", ... ({len(names)} in all)" if len(names) > 6 else ""
-    return f"{dim} has no value {value!r}; it has {', '.join(names[:6])}{more}"
+    shown = value.item() if isinstance(value, np.generic) else value  # 1.0, not np.float64(1.0)
+    return f"{dim} has no value {shown!r}; it has {', '.join(names[:6])}{more}"
 
 
 def _nearest_index(ds, dim, value) -> int:
     coord = ds[dim].values
-    if coord.dtype.kind in "fiu":
+    if coord.dtype.kind in "fiu" and dim != MATERIAL_DIM:  # materials: exactly, as names are
         return int(np.argmin(np.abs(coord.astype(float) - float(value))))
     hits = np.flatnonzero(coord == value)
     if not hits.size:
-        raise ValueError(no_value_message(dim, value, coord))
+        names = _material_names(ds) if dim == MATERIAL_DIM else coord
+        raise ValueError(no_value_message(dim, value, names))
     return int(hits[0])
 
 

@@ -172,9 +172,15 @@ def draw(path: str | Path, kind: str, *, out=None, sel=None, record=None, sample
         ds.load()
         sel = _typed_sel(ds, sel)
         for option in ("line", "by"):  # a grid dimension, or the study file's key of one
-            if kwargs.get(option) is not None:
-                kwargs[option] = _grid_dim(ds, kwargs[option], f"--{option}")
-        counted = pounding_counted(ds["status"]) if kind == "probability" else ds.pound.ok
+            value = kwargs.get(option)
+            if value is not None and not (option == "by" and value == "record"):
+                kwargs[option] = _grid_dim(ds, value, f"--{option}")
+        # the charts of the pounding probability count runs flagged inaccurate too (as the
+        # dataset and the report do); the others, status ok only
+        pounding = kind in ("probability", "required-gap") or (
+            kind == "fragility" and (kwargs.get("event") or "pounding") == "pounding"
+        )
+        counted = pounding_counted(ds["status"]) if pounding else ds.pound.ok
         if kind not in ("history", "restitution") and not bool(counted.any()):
             counts = ", ".join(f"{n} {s}" for s, n in ds.pound.status_counts().items() if n)
             raise InputError(f"nothing to draw: no simulation ended with status ok ({counts})")

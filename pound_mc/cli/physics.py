@@ -15,7 +15,7 @@ from pound_mc.analysis.plot import droptest_chart, restitution_chart, restitutio
 from pound_mc.analysis.style import output_path
 from pound_mc.errors import InputError
 from pound_mc.physics import materials
-from pound_mc.physics.contact import CONTACT_MODELS, default_relation
+from pound_mc.physics.contact import CONTACT_MODELS, default_relation, reported_xi
 from pound_mc.physics.droptest import drop_test
 from pound_mc.physics.relations import (
     RELATIONS,
@@ -119,9 +119,12 @@ def droptest_command(args) -> int:
         raise InputError(f"must be > 0, got {mass}", key="--mass")
     if args.plot:
         output_path(args.plot, key="--plot", suffix=".png")
+    if args.model not in CONTACT_MODELS:
+        raise InputError(f"unknown contact law {args.model!r}; choose one of "
+                         f"{', '.join(CONTACT_MODELS)}", key="--model")  # fmt: skip
     beta = args.beta
     if beta is None:
-        units = CONTACT_MODELS[args.model].stiffness_units if args.model in CONTACT_MODELS else ""
+        units = CONTACT_MODELS[args.model].stiffness_units
         if units != "N m-1.5":  # Table 3's beta is the Hertz-type laws' N/m^1.5
             raise InputError(
                 f"the {args.model!r} law's stiffness is in {units.replace(' m-1', '/m')}; "
@@ -137,6 +140,12 @@ def droptest_command(args) -> int:
                          key="--e" if e is not None else "--xi")  # fmt: skip
     if xi is None and e is None and not elastic:
         e = float(np.mean(materials.restitution_range(args.material, args.velocity)))
+    if e is not None and CONTACT_MODELS[args.model].damping == "xi":
+        try:  # the bound a scene's contact.e has (the Jankowski law's restitution table)
+            reported_xi(args.model, e, args.relation)
+        except InputError as exc:
+            key = "--relation" if "relation" in (exc.key or "") else "--e"
+            raise InputError(exc.message, key=key) from None
     result = drop_test(
         mass, args.velocity, beta, xi=xi, e=e, relation=args.relation, model=args.model
     )

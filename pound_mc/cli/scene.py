@@ -6,6 +6,7 @@ Their arguments are declared in :mod:`pound_mc.cli.commands`.
 from __future__ import annotations
 
 import json
+import sys
 from pathlib import Path
 
 from pound_mc.analysis.plot_numerics import (
@@ -16,6 +17,7 @@ from pound_mc.analysis.plot_numerics import (
 from pound_mc.analysis.style import output_path
 from pound_mc.errors import InputError
 from pound_mc.integrators import METHODS
+from pound_mc.motions.preprocessing import WINDOW_PEAK_WARN
 from pound_mc.numerics.bench import SCENES, benchmark, head_to_head, shear_scaling
 from pound_mc.numerics.stability import stability_map
 from pound_mc.scene import load_scene, schema, simulate
@@ -31,6 +33,11 @@ def simulate_command(args) -> int:
         raise InputError(problem, key="--dt")  # the bounds of the file's integrator.dt_s
     if args.plot:
         output_path(args.plot, key="--plot", suffix=".png")
+    kept = scene.load_record().stats.pound.get("window_peak_fraction", 1.0)
+    if kept < WINDOW_PEAK_WARN:  # as check and run say of a study's records
+        print(f"warning: {args.scene}: the record.duration_s window keeps {100 * kept:.2g} % of "
+              "the record's peak acceleration, which comes later; scaled, that window is not "
+              "the earthquake (give a longer duration_s, or none)", file=sys.stderr)  # fmt: skip
     res = simulate(scene, history=args.plot is not None, method=args.method, dt_s=args.dt)
     if args.plot:
         time_history_chart(res, args.plot)

@@ -20,6 +20,12 @@ from pound_mc.motions.traces import AttribDict, G, _check_samples, _where, obspy
 __all__ = ["preprocess"]
 
 
+#: A ``duration_s`` window that keeps less than this fraction of a record's peak acceleration
+#: is named by ``check``, ``run`` and ``simulate`` (``stats.pound.window_peak_fraction``): scaled
+#: to an intensity, it scales what precedes the strong motion.
+WINDOW_PEAK_WARN = 0.5
+
+
 def _positive(value, *, name: str, file) -> float:
     try:
         x = float(value)

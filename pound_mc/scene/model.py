@@ -533,7 +533,9 @@ def _contact(ct: dict, n_contacts: int | None, file, errors: list) -> dict:
         try:
             v["xi"] = float(reported_xi(model, v["e"], v["relation"]))
         except InputError as exc:
-            errors.append(InputError(exc.message, file=file, key=exc.key or "contact.relation"))
+            key = exc.key or "relation"  # relations name their own argument ("e", "relation")
+            key = key if key.startswith("contact.") else f"contact.{key}"
+            errors.append(InputError(exc.message, file=file, key=key))
     elif "relation" in ct:
         v.pop("relation", None)  # without e the relation says nothing
     return _contact_gaps(v, n_contacts, file, errors)

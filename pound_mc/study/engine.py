@@ -41,6 +41,7 @@ from pound_mc.integrators.outputs import STATUS_OK
 from pound_mc.integrators.threads import numba_threads
 from pound_mc.motions import G, load_record, record_arrays
 from pound_mc.motions.intensity import sa_g
+from pound_mc.motions.preprocessing import WINDOW_PEAK_WARN
 from pound_mc.physics.contact import default_relation, kernel_damping, reported_xi
 from pound_mc.physics.relations import restitution_of_xi
 from pound_mc.scene import Scene, scene_from_dict, simulate
@@ -160,10 +161,6 @@ def load_traces(study) -> list:
     return out
 
 
-#: A record whose ``duration_s`` window keeps less than this fraction of its peak acceleration
-#: is named in :attr:`StudyEngine.record_warnings`.
-WINDOW_PEAK_WARN = 0.5
-
 #: :meth:`StudyEngine.calibrate` times at least this many simulations, and for at least
 #: this long [s], unless told a number.
 CALIBRATION_SIZE, CALIBRATION_MIN_S = 64, 1.0
@@ -259,7 +256,8 @@ class StudyEngine:
     def _window_warnings(self, traces) -> list[str]:
         """A warning naming the records whose window misses their strong motion.
 
-        Those whose ``duration_s`` window keeps less than :data:`WINDOW_PEAK_WARN` of their
+        Those whose ``duration_s`` window keeps less than
+        :data:`~pound_mc.motions.preprocessing.WINDOW_PEAK_WARN` of their
         peak acceleration: scaled to an intensity, such a window scales what precedes the
         strong motion (pre-event noise of a record that starts early: thousands of times).
         """

@@ -343,6 +343,7 @@ def json_schema() -> dict:
             "buildings": {
                 "type": "array",
                 "description": "A row of buildings, left to right (scene files; a wall only last).",
+                "prefixItems": [building],  # the first is no wall
                 "items": {"anyOf": [*building["anyOf"], wall]},
                 "minItems": 2,
             },
@@ -351,7 +352,14 @@ def json_schema() -> dict:
             "grid": grid,
             "sampling": samp,
         },
-        "oneOf": [{"required": ["left", "right"]}, {"required": ["buildings"]}],
+        # a pair or a row, not both; a row in scene files only (no [study])
+        "oneOf": [
+            {"required": ["left", "right"], "not": {"required": ["buildings"]}},
+            {
+                "required": ["buildings"],
+                "not": {"anyOf": [{"required": [k]} for k in ("left", "right", "study")]},
+            },
+        ],
         "additionalProperties": False,
         "not": {"required": ["record", "records"]},
     }
