@@ -65,6 +65,11 @@ def test_row_validation():
           "left": {**SDOF, "period_s": 0.5}}, "left"),
         ({"buildings": [{**SDOF, "period_s": 0.5}, {"model": "wall"},
                         {**SDOF, "period_s": 1.0}]}, "buildings[1].model"),
+        # the SDOF beside a shear building lacks its height: its own key (was buildings[1])
+        ({"buildings": [{**SDOF, "period_s": 0.5},
+                        {"model": "shear", "storey_mass_kg": [1e6, 1e6],
+                         "storey_stiffness_N_per_m": [1e8, 1e8], "storey_height_m": [3.0, 3.0]}]},
+         "buildings[0].height_m"),
     ):  # fmt: skip
         with pytest.raises(InputError) as info:
             scene_from_dict({**base, **data})

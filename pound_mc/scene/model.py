@@ -622,8 +622,11 @@ def scene_from_dict(data: dict, *, file: str | Path | None = None) -> Scene:
             try:
                 pair = contacts_between(row[k], row[k + 1], file=file_s, level_tolerance_m=level)
                 contacts += [replace(c, pair=k) for c in pair]
-            except InputError as exc:
-                errors.append(InputError(exc.message, file=file_s, key=f"{ROW_TABLE}[{k + 1}]"))
+            except InputError as exc:  # "left.height_m" is building k's, "right..." k + 1's
+                side, _, rest = (exc.key or "").partition(".")
+                at = {"left": k, "right": k + 1}.get(side)
+                key = f"{ROW_TABLE}[{k + 1}]" if at is None else f"{ROW_TABLE}[{at}].{rest}"
+                errors.append(InputError(exc.message, file=file_s, key=key))
     elif row is None and left is not None and right is not None:
         try:
             contacts = contacts_between(left, right, file=file_s, level_tolerance_m=level)
