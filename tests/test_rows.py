@@ -189,3 +189,6 @@ def test_simulate_command_shows_the_yielding_demands(tmp_path, capsys):
     assert "ductility left   nan\n" in text  # the first building is elastic
     assert f"hysteresis       {out['hysteretic_energy']:.6g} J" in text
     assert f"at t = {out['peak_force_time']:.6g} s\n" in text
+    # a method given on the command line is named as given (it was integrator.method)
+    assert main(["simulate", str(path), "--method", "adaptive"]) == 2
+    assert "--method: buildings with hysteresis" in capsys.readouterr().err

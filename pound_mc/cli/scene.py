@@ -38,7 +38,12 @@ def simulate_command(args) -> int:
         print(f"warning: {args.scene}: the record.duration_s window keeps {100 * kept:.2g} % of "
               "the record's peak acceleration, which comes later; scaled, that window is not "
               "the earthquake (give a longer duration_s, or none)", file=sys.stderr)  # fmt: skip
-    res = simulate(scene, history=args.plot is not None, method=args.method, dt_s=args.dt)
+    try:
+        res = simulate(scene, history=args.plot is not None, method=args.method, dt_s=args.dt)
+    except InputError as exc:  # a method given here, not in the file, is named as given
+        if args.method is None or exc.key != "integrator.method":
+            raise
+        raise InputError(exc.message, key="--method") from None
     if args.plot:
         time_history_chart(res, args.plot)
     info = res.to_json()
