@@ -166,6 +166,11 @@ def test_a_material_axis_out_of_table_order(tmp_path, capsys):
     steel = ds.pound.spectrum(**{"contact.material": "steel"})
     np.testing.assert_array_equal(steel.values, ds.pound.spectrum(contact_material=0).values)
     ds.pound.plot.history(sample=1, contact_material="steel")
+    # a list of names: a line each, in the order given
+    ax = ds.pound.plot.spectrum(sel={"contact.material": ["steel", "timber"]})
+    assert [ln.get_label() for ln in ax.lines] == ["steel", "timber"]
+    two = ds.pound.spectrum(contact_material=["steel", "timber"])
+    assert two["contact_material"].values.tolist() == [0.0, 2.0]
     for value in (1, 1.0):  # concrete is not on this axis
         with pytest.raises(ValueError, match="has no value 1.*; it has timber, ceramics, steel"):
             ds.pound.plot.probability(sel={"contact.material": value})

@@ -301,15 +301,23 @@ def selection(ds, sel: dict | None) -> dict:
     out = {}
     for key, value in (sel or {}).items():
         dim = key if key in ds.dims or grid_dim_name(key) not in ds.dims else grid_dim_name(key)
-        if dim == MATERIAL_DIM and isinstance(value, str) and "material" in ds:
-            names = _material_names(ds)
-            if value not in names:
-                raise ValueError(no_value_message("material", value, names))
-            value = ds[dim].values[names.index(value)]
-        elif dim == MATERIAL_DIM and np.ndim(value) == 0:  # a material's number: one on the axis
-            _nearest_index(ds, dim, value)
+        if dim == MATERIAL_DIM and "material" in ds:
+            many = np.ndim(value) > 0 and not isinstance(value, str)
+            picked = [_material_value(ds, v) for v in (value if many else [value])]
+            value = picked if many else picked[0]
         out[dim] = value
     return out
+
+
+def _material_value(ds, value):
+    """The material axis' coordinate for a material's name or number (one on the axis)."""
+    if isinstance(value, str):
+        names = _material_names(ds)
+        if value not in names:
+            raise ValueError(no_value_message("material", value, names))
+        return ds[MATERIAL_DIM].values[names.index(value)]
+    _nearest_index(ds, MATERIAL_DIM, value)  # a number on the axis, or refused
+    return value
 
 
 def _material_names(ds) -> list[str]:
