@@ -37,7 +37,8 @@ def inelastic_chart(ds, path: str | Path | None = None, *, side="left", record=0
 
     The horizontal axis is the first grid axis, one line per value of the second (the yield
     displacement ``{side}_yield_disp_m`` in ``studies/inelastic_spectrum.toml``); other grid
-    axes are held at their first value; 5-95 % bands over the samples.  A line whose building
+    axes are held at their first value; medians and 5-95 % bands over the samples that ended
+    ``ok`` (as the force spectrum: a run flagged ``inaccurate`` is left out).  A line whose building
     never yields (ductility below 1 everywhere) is the elastic reference: its ductility demand
     is its peak displacement over the smallest yield displacement of the line axis.
 
@@ -53,9 +54,12 @@ def inelastic_chart(ds, path: str | Path | None = None, *, side="left", record=0
     """
     x, line, others = _spectrum_selection(ds)
     hold = {"record": _record_index(ds, record), **{d: 0 for d in others}}
-    duct = ds[f"peak_ductility_{side}"].isel(hold)
-    disp = ds[f"peak_disp_{side}"].isel(hold)
-    force = ds["peak_force"].isel(hold) / 1e6
+    # status ok only, as the force spectrum and the ductility profiles (a run flagged
+    # inaccurate has its forces and displacements in doubt)
+    ok = (ds["status"] == 0).isel(hold)
+    duct = ds[f"peak_ductility_{side}"].isel(hold).where(ok)
+    disp = ds[f"peak_disp_{side}"].isel(hold).where(ok)
+    force = ds["peak_force"].isel(hold).where(ok) / 1e6
     values = [None] if line is None else list(ds[line].values)
     u_ref = float(min(values)) if line == f"{side}_yield_disp_m" else np.nan
     ref_text = value_text(ds, line, int(np.argmin(values))) if np.isfinite(u_ref) else ""
@@ -92,7 +96,7 @@ def inelastic_chart(ds, path: str | Path | None = None, *, side="left", record=0
     )
     fig.suptitle(
         f"Inelastic spectrum ({ds.attrs.get('study_name', '')}, {held}): "
-        f"median over {ds.sizes['sample']} samples and 5-95 % band",
+        f"median over the status-ok runs of {ds.sizes['sample']} samples and 5-95 % band",
         fontsize=9,
     )
     legend_below(fig, ax_mu, title=axis_label(ds, line) if line is not None else None)
