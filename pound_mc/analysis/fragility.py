@@ -26,8 +26,8 @@ Confidence intervals come from a nonparametric bootstrap that resamples the simu
 stripe (``z*_j ~ Binomial(n_j, z_j / n_j)``, the same as drawing ``n_j`` of the stripe's
 simulations with replacement), refitting each replicate, and taking percentiles (Efron & Tibshirani
 1993, ch. 13).  With few stripes a resample can lose the few events (or non-events) that make the
-stripes overlap: with 0/88, 2/88 and 48/88 events at PGA 0.1, 0.2 and 0.4 g (the quickstart's 100
-mm gap on 15-s record windows) the 0.2 g stripe draws no event in ``(86/88)^88 = 13 %`` of the
+stripes overlap: with 0/88, 2/88 and 48/88 events at PGA 0.1, 0.2 and 0.4 g (the quickstart's
+100 mm gap on 15-s record windows) the 0.2 g stripe draws no event in ``(86/88)^88 = 13 %`` of the
 resamples, which are then separated.  Such a resample has no maximum-likelihood fit, the data the
 point fit refuses: its likelihood grows without bound towards a step (``beta -> 0``).  That limit is
 not a value the data allow: while the observed stripes overlap, their likelihood tends to 0 as

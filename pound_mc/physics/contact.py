@@ -592,7 +592,7 @@ def reported_xi(law: str, e, relation: str | None):
     if spec.damping == "xi":
         relation = check_relation(law, relation)
         xi = np.asarray(RELATIONS[relation](e), dtype=float)
-        if law != "kelvin" and np.any(xi > largest_xi()):  # beyond the law's table (as xi is)
+        if np.any(xi > largest_xi()):  # beyond the law's table, as xi is (kelvin's xi < 1)
             raise InputError(
                 f"e = {float(np.min(e)):.4g} gives xi = {float(np.max(xi)):.4g} under "
                 f"{relation}, beyond {largest_xi():.4g}, the end of the Jankowski law's "

@@ -234,7 +234,7 @@ def plan_text(study, chunk_size: int | None = None, seconds_per_simulation: floa
     for key, values in study.grid.items():
         names = study.grid_labels.get(key)
         span = ", ".join(names) if names else f"{values.min():g} .. {values.max():g}"
-        lines.append(f"  grid      : {key} = {values.size} value{'s' * (values.size != 1)} {span}")
+        lines.append(f"  grid      : {key} = {_count(values.size, 'value')} {span}")
     lines.append(f"  sampling  : n = {study.n}, method {study.method}, seed {study.sampling_seed}")
     for v in study.variables:
         lines.append(f"    {v.key}: {v.source}")
