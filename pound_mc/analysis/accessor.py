@@ -31,25 +31,23 @@ import xarray as xr
 from matplotlib.axes import Axes
 
 from pound_mc.analysis.plot import (
-    MATERIAL_DIM,
     distribution_chart,
-    no_value_message,
     probability_chart,
     restitution_chart,
     save,
-    selection,
     spectrum_chart,
 )
 from pound_mc.analysis.plot_numerics import time_history_chart
 from pound_mc.analysis.profiles import contacts_chart, profile_chart
+from pound_mc.analysis.risk import counted
 from pound_mc.analysis.risk import fragility as _fragility
 from pound_mc.analysis.risk import required_gap as _required_gap
 from pound_mc.analysis.risk_chart import fragility_panels, required_gap_chart
+from pound_mc.analysis.selection import MATERIAL_DIM, dim_name, no_value_message, selection
 from pound_mc.analysis.style import value_text
 from pound_mc.errors import InputError
 from pound_mc.scene import Scene, SimulationResult
 from pound_mc.scene import simulate as simulate_scene
-from pound_mc.study.dataset import pounding_counted
 from pound_mc.study.definition import grid_dim_name, study_from_text
 from pound_mc.study.engine import StudyEngine
 
@@ -62,7 +60,7 @@ def _select(obj, ds: xr.Dataset, sel: dict):
     """``obj.sel(sel)``, nearest for numeric coordinates, exact otherwise.
 
     ``sel`` may name a dimension by its study key and a material by name
-    (:func:`~pound_mc.analysis.plot.selection`).
+    (:func:`~pound_mc.analysis.selection.selection`).
     """
     sel = selection(ds, sel)
     unknown = sorted(set(sel) - set(ds.dims))
@@ -177,7 +175,7 @@ def _chart_method(name: str, chart: Callable, returns: str, doc: str, **fixed: A
             kwargs["sel"] = selection(ds, kwargs["sel"])
         for option in ("line", "by", "x"):  # a dimension, or its study key
             if isinstance(kwargs.get(option), str):
-                kwargs[option] = next(iter(selection(ds, {kwargs[option]: None})))
+                kwargs[option] = dim_name(ds, kwargs[option])
         return _axes_of(chart(ds, path, ax=ax, **fixed, **kwargs), ax)
 
     method.__name__ = name
@@ -382,9 +380,9 @@ class PoundAccessor:
         if threshold is not None:
             pounded = pounded & (ds["peak_force"] > threshold)
         # any impact: the runs flagged inaccurate count too (their impacts stand); above a
-        # force: status ok only
-        counted = pounding_counted(ds["status"]) if threshold is None else self.ok
-        p = _select(pounded.where(counted), ds, sel).mean("sample")
+        # force: status ok only (risk.counted)
+        event = "pounding" if threshold is None else "peak_force"
+        p = _select(pounded.where(counted(ds, event)), ds, sel).mean("sample")
         more = "" if threshold is None else f" and a peak force above {threshold:g} N"
         p.attrs = {"units": "1", "long_name": f"fraction of samples with an impact{more}"}
         return p.rename("pounding_probability")

@@ -24,6 +24,11 @@ from pound_mc.analysis.physics_charts import (  # noqa: F401  (charts of this mo
     restitution_curves,
     restitution_ranges_chart,
 )
+from pound_mc.analysis.selection import (
+    MATERIAL_DIM,
+    material_names,
+    no_value_message,
+)
 from pound_mc.analysis.style import (
     axis_label,
     chart_doc,
@@ -36,7 +41,6 @@ from pound_mc.analysis.style import (
     value_text,
 )
 from pound_mc.study.dataset import pounding_counted
-from pound_mc.study.definition import grid_dim_name
 
 __all__ = [
     "restitution_chart",
@@ -223,8 +227,6 @@ RULE_ATTRS = {"ABS": "gap_rule_abs_m", "SRSS": "gap_rule_srss_m", "DDC": "gap_ru
 _RULE_STYLES = {"ABS": "--", "SRSS": "-.", "DDC": ":"}
 #: Dimension of the initial gap in a study dataset.
 GAP_DIM = "contact_gap_m"
-#: Dimension of the material grid axis (values: indices; variable ``material``: the names).
-MATERIAL_DIM = "contact_material"
 #: Dimension of the contacts of a shear-building pair (one per pair of floors that can meet).
 CONTACT_DIM = "contact"
 
@@ -291,40 +293,6 @@ def _line_label(ds, dim, i) -> str:
     return f"{ds[dim].attrs.get('long_name', dim)} = {value_text(ds, dim, i)}"
 
 
-def selection(ds, sel: dict | None) -> dict:
-    """``sel`` with the study file's keys named as dimensions and materials by name.
-
-    ``{"left.period_s": 0.6}`` holds ``left_period_s``; on the material axis
-    (:data:`MATERIAL_DIM`) a name (``"steel"``) stands for its coordinate value.  Anything
-    else is passed on as given.
-    """
-    out = {}
-    for key, value in (sel or {}).items():
-        dim = key if key in ds.dims or grid_dim_name(key) not in ds.dims else grid_dim_name(key)
-        if dim == MATERIAL_DIM and "material" in ds:
-            many = np.ndim(value) > 0 and not isinstance(value, str)
-            picked = [_material_value(ds, v) for v in (value if many else [value])]
-            value = picked if many else picked[0]
-        out[dim] = value
-    return out
-
-
-def _material_value(ds, value):
-    """The material axis' coordinate for a material's name or number (one on the axis)."""
-    if isinstance(value, str):
-        names = _material_names(ds)
-        if value not in names:
-            raise ValueError(no_value_message("material", value, names))
-        return ds[MATERIAL_DIM].values[names.index(value)]
-    _nearest_index(ds, MATERIAL_DIM, value)  # a number on the axis, or refused
-    return value
-
-
-def _material_names(ds) -> list[str]:
-    """Names of the materials along :data:`MATERIAL_DIM`, in its order."""
-    return [str(n) for n in np.atleast_1d(ds["material"].values)]
-
-
 def _hold(ds, dims, sel):
     """Index of every dim in ``dims``: the value nearest ``sel[dim]``, else the first."""
     sel = sel or {}
@@ -363,21 +331,13 @@ def _checked_sel(ds, sel, x) -> dict:
     return sel
 
 
-def no_value_message(dim: str, value, coord) -> str:
-    """``dim has no value ...; it has`` its first six values as text, and how many in all."""
-    names = [str(c) for c in coord]
-    more = f", ... ({len(names)} in all)" if len(names) > 6 else ""
-    shown = value.item() if isinstance(value, np.generic) else value  # 1.0, not np.float64(1.0)
-    return f"{dim} has no value {shown!r}; it has {', '.join(names[:6])}{more}"
-
-
 def _nearest_index(ds, dim, value) -> int:
     coord = ds[dim].values
     if coord.dtype.kind in "fiu" and dim != MATERIAL_DIM:  # materials: exactly, as names are
         return int(np.argmin(np.abs(coord.astype(float) - float(value))))
     hits = np.flatnonzero(coord == value)
     if not hits.size:
-        names = _material_names(ds) if dim == MATERIAL_DIM else coord
+        names = material_names(ds) if dim == MATERIAL_DIM else coord
         raise ValueError(no_value_message(dim, value, names))
     return int(hits[0])
 

@@ -30,7 +30,7 @@ from pound_mc.analysis.gaps import RulesDoNotApply, study_gaps
 from pound_mc.errors import InputError
 from pound_mc.study.dataset import pounding_counted
 
-__all__ = ["INTENSITY_DIMS", "GAP_DIM", "event_mask", "fragility", "required_gap"]
+__all__ = ["INTENSITY_DIMS", "GAP_DIM", "counted", "event_mask", "fragility", "required_gap"]
 
 #: Dataset dimensions of the intensity axes (``record.sa_g``, ``record.pga_g``).
 INTENSITY_DIMS = ("sa_g", "pga_g")
@@ -96,14 +96,19 @@ def _intensity_dim(ds: xr.Dataset, im: str | None) -> str:
 _COUNTED = "simulations counted (status ok; for pounding also inaccurate)"
 
 
-def _counts(ds: xr.Dataset, event: str, over=("record", "sample")):
-    """Simulations counted, and those among them with the event, summed over ``over``.
+def counted(ds: xr.Dataset, event: str = "pounding") -> xr.DataArray:
+    """The simulations a summary of ``event`` counts (every summary, chart and check asks here).
 
-    Counted: status ok; for ``pounding`` also ``inaccurate``
+    Status ok; for ``pounding`` also ``inaccurate``
     (:func:`~pound_mc.study.dataset.pounding_counted`: the flag doubts the peak force, and
-    only pounding runs carry it).
+    only pounding runs carry it); a force or ductility event counts status ok only.
     """
-    ok = pounding_counted(ds["status"]) if event == "pounding" else ds["status"] == 0
+    return pounding_counted(ds["status"]) if event == "pounding" else ds["status"] == 0
+
+
+def _counts(ds: xr.Dataset, event: str, over=("record", "sample")):
+    """Simulations counted (:func:`counted`) and those with the event, summed over ``over``."""
+    ok = counted(ds, event)
     hit = event_mask(ds, event) & ok
     return hit.sum(over), ok.sum(over)
 

@@ -16,12 +16,11 @@ import xarray as xr
 
 from pound_mc.analysis import plot, plot_numerics, profiles, risk_chart
 from pound_mc.analysis.report import write_report
-from pound_mc.analysis.risk import fragility
+from pound_mc.analysis.risk import counted, fragility
+from pound_mc.analysis.selection import MATERIAL_DIM, dim_name, selection
 from pound_mc.analysis.style import output_path, require_simulations
 from pound_mc.errors import InputError, OutputError
 from pound_mc.scene import load_scene, simulate
-from pound_mc.study.dataset import pounding_counted
-from pound_mc.study.definition import grid_dim_name
 
 
 def _parse_sel(items) -> dict:
@@ -42,8 +41,7 @@ def _grid_dim(ds, name: str, key: str) -> str:
     refused, naming the option and the grid.
     """
     grid = ds.pound.grid_dims
-    if name not in grid and grid_dim_name(name) in grid:  # the study file's key
-        name = grid_dim_name(name)
+    name = dim_name(ds, name)
     if name not in grid:
         raise InputError(f"no grid dimension {name!r}; the grid has {grid}", key=key)
     return name
@@ -53,8 +51,9 @@ def _typed_sel(ds, sel: dict) -> dict:
     """``sel``'s text values as the dimension's coordinate holds them: numbers, or names.
 
     A dimension may be named by the study file's key (``left.period_s`` for
-    ``left_period_s``).  A material axis takes its materials' names too.  ``record`` and
-    ``sample`` are ``--record`` and ``--sample``: they are refused here.
+    ``left_period_s``).  A material axis takes its materials' names too, as the charts'
+    ``sel`` does (:func:`~pound_mc.analysis.selection.selection`).  ``record`` and ``sample`` are
+    ``--record`` and ``--sample``: they are refused here.
     """
     out = {}
     for dim, value in sel.items():
@@ -64,10 +63,8 @@ def _typed_sel(ds, sel: dict) -> dict:
         if not isinstance(value, str):
             out[dim] = value
             continue
-        names = [str(n) for n in ds["material"].values] if dim == plot.MATERIAL_DIM else []
-        if value in names and ds["material"].dims == (dim,):
-            out[dim] = ds[dim].values[names.index(value)]
-        elif ds[dim].dtype.kind not in "fiu":
+        names = [str(n) for n in ds["material"].values] if dim == MATERIAL_DIM else []
+        if value in names or ds[dim].dtype.kind not in "fiu":  # a name: selection() reads it
             out[dim] = value
         else:
             try:
@@ -77,7 +74,7 @@ def _typed_sel(ds, sel: dict) -> dict:
             if not math.isfinite(out[dim]):
                 allowed = f"one of {', '.join(names)} or a number" if names else "a number"
                 raise InputError(f"{dim}={value!r}: {dim} takes {allowed}", key="--sel")
-    return out
+    return selection(ds, out)
 
 
 def _record(value):
@@ -175,13 +172,12 @@ def draw(path: str | Path, kind: str, *, out=None, sel=None, record=None, sample
             value = kwargs.get(option)
             if value is not None and not (option == "by" and value == "record"):
                 kwargs[option] = _grid_dim(ds, value, f"--{option}")
-        # the charts of the pounding probability count runs flagged inaccurate too (as the
-        # dataset and the report do); the others, status ok only
-        pounding = kind in ("probability", "required-gap") or (
-            kind == "fragility" and (kwargs.get("event") or "pounding") == "pounding"
-        )
-        counted = pounding_counted(ds["status"]) if pounding else ds.pound.ok
-        if kind not in ("history", "restitution") and not bool(counted.any()):
+        # the runs the chart counts are those of its event: pounding for the probability and
+        # the required gap, --event for the fragility, forces for the others
+        event = "pounding" if kind in ("probability", "required-gap") else "peak_force"
+        if kind == "fragility":
+            event = kwargs.get("event") or "pounding"
+        if kind not in ("history", "restitution") and not bool(counted(ds, event).any()):
             counts = ", ".join(f"{n} {s}" for s, n in ds.pound.status_counts().items() if n)
             raise InputError(f"nothing to draw: no simulation ended with status ok ({counts})")
         if kind == "spectrum":
