@@ -138,9 +138,9 @@ def status_warnings(path: Path) -> list[str]:
 def _charts(study, path: Path, out: Path) -> list[Path]:
     """The charts ``run`` draws: the spectrum, or with an intensity axis two risk charts.
 
-    With yielding buildings (:func:`~pound_mc.analysis.inelastic_chart.yielding_sides`), also the
-    inelastic spectrum (ductility demand and peak force,
-    :func:`~pound_mc.analysis.inelastic_chart.inelastic_chart`).
+    Without an intensity axis and with yielding buildings
+    (:func:`~pound_mc.analysis.inelastic_chart.yielding_sides`), also the inelastic spectrum
+    (ductility demand and peak force, :func:`~pound_mc.analysis.inelastic_chart.inelastic_chart`).
 
     With an intensity axis: the required gap against the rules (when the gap is on the grid)
     and the fragility curves.  A study without ``[grid]`` has no axis to draw a spectrum
