@@ -92,6 +92,20 @@ def test_history_chart_draws_each_contacts_neighbours(tmp_path):
         np.testing.assert_allclose(ln.get_ydata(), floors[:, k] * 1e3)
 
 
+def test_history_chart_names_a_wall_and_the_scene(tmp_path):
+    """A wall closing a row was labelled "building 3, floor 1" (it has no floors); a scene's
+    history named no scene (a study's names its simulation instead, test_analysis)."""
+    s = replace(row({**SDOF, "period_s": 0.5}, {**SDOF, "period_s": 1.0}, {"model": "wall"}),
+                file="studies/scenes/my_row.toml")  # fmt: skip
+    fig = time_history_chart(simulate(s, history=True), tmp_path / "row.png")
+    assert [ln.get_label() for ln in fig.axes[0].lines] == [
+        "contact 1: building 1, floor 1", "contact 1: building 2, floor 1",
+        "contact 2: building 2, floor 1", "contact 2: wall",
+    ]  # fmt: skip
+    np.testing.assert_array_equal(fig.axes[0].lines[3].get_ydata(), 0.0)  # the wall stands
+    assert fig._suptitle.get_text() == "scene my_row.toml"
+
+
 @pytest.mark.parametrize(
     "contact",
     [

@@ -124,10 +124,12 @@ def _contact_floors(result) -> list[tuple[str, np.ndarray, str, np.ndarray]]:
                 for c in contacts]  # fmt: skip
     floors = np.hstack([left, right])  # the row's buildings, left to right
     start = np.cumsum([0] + [b.n_floors for b in row])
-    return [(f"building {c.pair + 1}, floor {c.left_floor + 1}",
-             floors[:, start[c.pair] + c.left_floor],
-             f"building {c.pair + 2}, floor {c.right_floor + 1}",
-             floors[:, start[c.pair + 1] + c.right_floor])
+
+    def name(k, floor):  # a wall (at rest with the ground) has no floors
+        return "wall" if row[k].model == "wall" else f"building {k + 1}, floor {floor + 1}"
+
+    return [(name(c.pair, c.left_floor), floors[:, start[c.pair] + c.left_floor],
+             name(c.pair + 1, c.right_floor), floors[:, start[c.pair + 1] + c.right_floor])
             for c in contacts]  # fmt: skip
 
 
@@ -186,6 +188,9 @@ def time_history_chart(
     ax3.set_ylabel("contact force [MN]")
     ax3.set_xlabel("time [s]")
     o = result.outputs
+    file = getattr(result.scene, "file", None)
+    if ax is None and file:  # a study's history names the simulation instead (accessor)
+        fig.suptitle(f"scene {Path(file).name}", fontsize=9)
     ax1.set_title(
         f"peak force {o['peak_force'] / 1e6:.4g} MN (continuous maximum), "
         f"{int(o['impacts'])} impacts, status {result.status}",
