@@ -1,5 +1,6 @@
 """Sphinx configuration of the pound-mc documentation (``sphinx-build -W docs docs/_build``)."""
 
+import os
 import shutil
 import sys
 from pathlib import Path
@@ -9,10 +10,14 @@ sys.path.insert(0, str(ROOT))
 
 from pound_mc._version import __version__  # noqa: E402
 
-# the notebook lives with the studies; it is shown as it is stored, not executed
+# the notebook lives with the studies; it runs on the main job's dataset where there is one
+# (README command 1 writes it), else it is shown as stored, without outputs
 GENERATED = Path(__file__).resolve().parent / "_generated"
 GENERATED.mkdir(exist_ok=True)
 shutil.copyfile(ROOT / "studies" / "analysis.ipynb", GENERATED / "analysis.ipynb")
+QUICKSTART = ROOT / "outputs" / "quickstart.nc"
+if QUICKSTART.is_file():
+    os.environ["POUND_MC_DATASET"] = str(QUICKSTART)
 
 project = "pound-mc"
 author = "pound-mc developers"
@@ -27,7 +32,9 @@ extensions = [
 ]
 source_suffix = {".md": "myst-nb", ".ipynb": "myst-nb"}
 exclude_patterns = ["_build", "jupyter_execute"]
-nb_execution_mode = "off"
+nb_execution_mode = "force" if QUICKSTART.is_file() else "off"
+nb_execution_timeout = 600
+nb_execution_raise_on_error = True
 myst_enable_extensions = ["dollarmath"]
 myst_heading_anchors = 3
 suppress_warnings = ["myst.header", "myst.xref_missing"]
