@@ -2,7 +2,7 @@ import math
 
 import numpy as np
 import pytest
-from reference_impact import jankowski_impact
+from reference_impact import hertzdamp_impact, jankowski_impact
 
 from pound_mc.errors import InputError
 from pound_mc.physics import relations
@@ -58,6 +58,31 @@ def test_table_matches_high_accuracy_integration():
     for i in (5, 150, 390):
         xi, e = table.loc[i, ["xi", "e"]]
         assert relations.single_impact_restitution(xi) == pytest.approx(e, abs=1e-11)
+
+
+@pytest.mark.parametrize("relation", ["ye2009", "muthukumar2006"])
+@pytest.mark.parametrize("e", [0.12, 0.37, 0.65, 0.905])
+def test_hertzdamp_rebound(relation, e):
+    # Independent check: Radau in physical units (tests/reference_impact.py), the law written
+    # out there, zeta = 8 (1 - e) / (5 e v0) (Ye et al. 2009) or 3 (1 - e^2) / (4 v0)
+    # (Muthukumar & DesRoches 2006); the rebound depends on e alone (two velocities agree)
+    zeta = {"ye2009": 8 * (1 - e) / (5 * e), "muthukumar2006": 3 * (1 - e * e) / 4}[relation]
+    for m_eff, v0, beta in ((1.5, 0.7, 5.0e9), (5.0e5, 0.2, 2.75e9)):
+        independent = hertzdamp_impact(m_eff, v0, beta, zeta / v0)
+        assert relations.hertzdamp_restitution(e, relation) == pytest.approx(independent,
+                                                                             abs=1e-6)  # fmt: skip
+    # off the table's grid, the interpolation stays within 1e-8 of a direct integration
+    direct = relations.single_impact_restitution_hertzdamp(e, relation)
+    assert relations.hertzdamp_restitution(e, relation) == pytest.approx(direct, abs=1e-8)
+
+
+def test_hertzdamp_rebound_arrays_and_bounds():
+    e = np.array([np.nan, 0.003, 0.65, 1.0])  # NaN kept; below the table: integrated
+    out = relations.hertzdamp_restitution(e, "ye2009")
+    assert np.isnan(out[0]) and out[3] == pytest.approx(1.0, abs=1e-12)
+    assert out[1] == pytest.approx(relations.single_impact_restitution_hertzdamp(0.003), rel=1e-12)
+    with pytest.raises(InputError, match="relation"):
+        relations.hertzdamp_restitution(0.5, "jankowski2008")
 
 
 def test_exact_roundtrip_and_monotone():

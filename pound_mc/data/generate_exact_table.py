@@ -1,4 +1,8 @@
-"""Write ``restitution_exact.csv``: restitution really produced by the Jankowski law per ``xi``.
+"""Write the restitution tables: what one free impact really rebounds with.
+
+``restitution_exact.csv``: the Jankowski law, per ``xi``; ``restitution_hertzdamp.csv``: the
+Hertz-damp law, per target ``e`` under each of its relations
+(:func:`pound_mc.physics.relations.single_impact_restitution_hertzdamp`, DOP853, rtol 1e-13).
 
 Run from the repository root: ``python pound_mc/data/generate_exact_table.py``.
 
@@ -16,7 +20,11 @@ from pathlib import Path
 
 import numpy as np
 
-from pound_mc.physics.relations import single_impact_restitution
+from pound_mc.physics.relations import (
+    HERTZDAMP_RELATIONS,
+    single_impact_restitution,
+    single_impact_restitution_hertzdamp,
+)
 
 HERE = Path(__file__).resolve().parent
 
@@ -35,6 +43,18 @@ def main() -> None:
     ]
     lines += [f"{x:.17g},{r:.17g}" for x, r in sorted(zip(xi, e, strict=True))]
     (HERE / "restitution_exact.csv").write_text("\n".join(lines) + "\n")
+    rebound = {rel: [single_impact_restitution_hertzdamp(t, rel) for t in targets]
+               for rel in HERTZDAMP_RELATIONS}  # fmt: skip
+    lines = [
+        "# Restitution of one free impact of the Hertz-damp law F = beta delta^1.5 (1 + zeta",
+        "# delta'), clipped at 0, with zeta from the target e by each relation (dimensionless",
+        "# u'' = -max(u^1.5 (1 + f(e) u'), 0), DOP853 rtol 1e-13).",
+        "# Made by generate_exact_table.py.",
+        "e," + ",".join(HERTZDAMP_RELATIONS),
+    ]
+    lines += [f"{t:.17g}," + ",".join(f"{rebound[r][k]:.17g}" for r in HERTZDAMP_RELATIONS)
+              for k, t in enumerate(targets)]  # fmt: skip
+    (HERE / "restitution_hertzdamp.csv").write_text("\n".join(lines) + "\n")
 
 
 if __name__ == "__main__":

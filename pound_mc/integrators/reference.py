@@ -54,7 +54,12 @@ from scipy.optimize import minimize_scalar
 from pound_mc.integrators.outputs import IMPACT_MIN_PENETRATION_M
 from pound_mc.motions import record_arrays
 from pound_mc.physics.materials import restitution_at
-from pound_mc.physics.relations import HERTZDAMP_RELATIONS, xi_from_e
+from pound_mc.physics.relations import (
+    HERTZDAMP_RELATIONS,
+    single_impact_restitution,
+    single_impact_restitution_hertzdamp,
+    xi_from_e,
+)
 
 __all__ = ["reference_solution"]
 
@@ -148,8 +153,9 @@ def reference_solution(
         ``peak_force`` [N], ``impacts``, ``max_penetration`` [m] (0 without impacts),
         ``peak_disp_left``, ``peak_disp_right`` [m] (max over floors and time of ``|x|``),
         ``impact_times`` (list [s]), ``impact_velocities`` (list [m/s], the onset velocity of
-        every impact), ``peak_force_restitution`` (``e`` of the peak-force episode, NaN with
-        fixed restitution), ``peak_force_time`` [s], per-contact arrays
+        every impact), ``peak_force_restitution`` (the restitution the law rebounds with for
+        the damping of the peak-force episode, by a single-impact integration; NaN with fixed
+        restitution), ``peak_force_time`` [s], per-contact arrays
         ``contact_peak_force`` and ``contact_impacts``, ``x_end``, ``v_end`` (final state),
         ``x_samples``, ``f_samples`` (floor displacements [m] and contact forces [N] at the
         record's samples, one row per sample),
@@ -214,7 +220,7 @@ def reference_solution(
     e_episode = np.full(nc, np.nan)
     v_episode = np.zeros(nc)
     impact_velocities: list[float] = []
-    peak_e = np.nan
+    peak_e = peak_xi = np.nan
 
     def start_episode(j, vimp):
         """Damping of an episode of contact ``j`` starting at velocity ``vimp`` [m/s]."""
@@ -415,7 +421,7 @@ def reference_solution(
 
     def scan_segment(sol_t, dense):
         """Continuous-time maxima of |x| per floor and of the contact forces."""
-        nonlocal peak_f_time, peak_e
+        nonlocal peak_f_time, peak_e, peak_xi
         tt = np.asarray(sol_t)
         if tt.size < 2:
             return
@@ -469,7 +475,7 @@ def reference_solution(
                 peak_f[j] = val
                 if val >= peak_f.max():
                     peak_f_time = t_best
-                    peak_e = e_episode[j]
+                    peak_e, peak_xi = e_episode[j], xi[j]
 
     for i in range(npts - 1):
         t_a = i * dt_rec
@@ -592,6 +598,11 @@ def reference_solution(
             float(np.max(np.abs(u_end[mine]) / hs)) if hs.size else np.nan
         )
     total_impacts = int(impacts.sum())
+    if np.isfinite(peak_e):  # the law's rebound for that episode's damping, integrated here
+        if model == "hertzdamp":
+            peak_e = single_impact_restitution_hertzdamp(peak_e, scene.relation or "ye2009")
+        elif model == "jankowski":
+            peak_e = single_impact_restitution(peak_xi)
     return {
         "peak_force": float(peak_f.max()) if nc else 0.0,
         "peak_force_time": float(peak_f_time),

@@ -27,7 +27,12 @@ from pound_mc.integrators.laws import LAW_CODES, RELATION_CODES
 from pound_mc.integrators.outputs import PEAK_FORCE_RESTITUTION, STATUS
 from pound_mc.physics.contact import CONTACT_MODELS, check_relation, reported_xi
 from pound_mc.physics.materials import E_FLOOR, PER_IMPACT_OUTSIDE, restitution_rows
-from pound_mc.physics.relations import largest_xi, restitution_of_xi
+from pound_mc.physics.relations import (
+    RELATIONS,
+    hertzdamp_restitution,
+    largest_xi,
+    restitution_of_xi,
+)
 
 __all__ = ["METHODS", "KernelSettings", "kernel_settings", "fixed_restitution"]
 
@@ -131,36 +136,59 @@ def _settings(model, method, relation, dt_s, substeps, restitution) -> KernelSet
 
 
 def fixed_restitution(out, settings, xi) -> None:
-    """``peak_force_restitution`` of runs with one restitution for every impact (ok runs).
+    """``peak_force_restitution``: the restitution the law really rebounds with (ok runs).
 
-    The restitution the law rebounds with for its damping parameter: ``xi`` by the exact
-    single impact (Jankowski), ``exp(-pi xi / sqrt(1 - xi^2))`` (Kelvin), ``e`` itself
-    (Hertz-damp, whose ``xi`` holds it), 1 for the undamped laws.
+    With one restitution for every impact, from the run's damping parameter: ``xi`` by the
+    exact single impact (Jankowski), ``exp(-pi xi / sqrt(1 - xi^2))`` (Kelvin), the rebound
+    of the Hertz-damp law for the ``e`` its ``xi`` holds
+    (:func:`~pound_mc.physics.relations.hertzdamp_restitution`), 1 for the undamped laws.
+    With restitution set per impact, the kernels give the peak-force impact's ``e`` from the
+    seed's Table 2, which becomes the law's rebound for it the same way (the ``xi`` its
+    relation gives, or Hertz-damp's rebound).
     """
-    if settings.rest_v.size > 0:
-        return  # set per impact by the kernels
-    if out.ndim == 1:  # one run: the scalar, computed once per law and ``xi``
-        if out[STATUS] == 0:
-            out[PEAK_FORCE_RESTITUTION] = _restitution_one(settings.model, float(xi))
-        return
-    e = _restitution(settings.model, np.broadcast_to(np.asarray(xi, dtype=float), out.shape[:-1]))
     ok = out[..., STATUS] == 0
+    if settings.rest_v.size > 0:  # the table's e at the peak-force impact
+        target = np.where(ok, out[..., PEAK_FORCE_RESTITUTION], np.nan)
+        e = _rebound_of_e(settings.model, settings.relation, target)
+    elif out.ndim == 1:  # one run: the scalar, computed once per law and ``xi``
+        e = _restitution_one(settings.model, settings.relation, float(xi))
+    else:
+        xi = np.broadcast_to(np.asarray(xi, dtype=float), out.shape[:-1])
+        e = _restitution(settings.model, settings.relation, xi)
     out[..., PEAK_FORCE_RESTITUTION] = np.where(ok, e, out[..., PEAK_FORCE_RESTITUTION])
 
 
-def _restitution(model: int, xi: np.ndarray) -> np.ndarray:
-    """Restitution [-] the law of code ``model`` rebounds with, per damping parameter ``xi``."""
+def _restitution(model: int, relation: int, xi: np.ndarray) -> np.ndarray:
+    """Restitution [-] the law of code ``model`` rebounds with, per damping parameter ``xi``.
+
+    ``xi`` is the restitution aimed at for Hertz-damp (its relation, of code ``relation``,
+    gives ``zeta`` from it).
+    """
     law = CONTACT_MODELS[_LAW_NAMES[model]]
     if law.damping is None:
         return np.ones_like(xi)
     if law.damping == "zeta":
-        return xi
+        return np.asarray(hertzdamp_restitution(xi, law.relations[relation]), dtype=float)
     if law.name == "kelvin":
         return np.exp(-math.pi * xi / np.sqrt(np.maximum(1.0 - xi * xi, 1e-300)))
-    return np.asarray(restitution_of_xi(np.clip(xi, 0.0, _XI_MAX)), dtype=float)
+    known = np.isfinite(xi)
+    e = np.full(np.shape(xi), np.nan)
+    e[known] = restitution_of_xi(np.clip(xi[known], 0.0, _XI_MAX))
+    return e
+
+
+def _rebound_of_e(model: int, relation: int, e: np.ndarray) -> np.ndarray:
+    """:func:`_restitution` of the damping that ``e`` gives under the run's relation (NaN kept)."""
+    law = CONTACT_MODELS[_LAW_NAMES[model]]
+    if law.damping != "xi":
+        return _restitution(model, relation, e)
+    known = np.isfinite(e)
+    xi = np.full(e.shape, np.nan)
+    xi[known] = RELATIONS[law.relations[relation]](e[known])
+    return _restitution(model, relation, xi)
 
 
 @functools.lru_cache(maxsize=256)
-def _restitution_one(model: int, xi: float) -> float:
+def _restitution_one(model: int, relation: int, xi: float) -> float:
     """:func:`_restitution` of one run (a scene looped over in a notebook pays it once)."""
-    return float(_restitution(model, np.asarray(xi)))
+    return float(_restitution(model, relation, np.asarray(xi)))

@@ -19,7 +19,9 @@ noted:
     The linear viscoelastic law (Anagnostopoulos 1992), ``xi = -ln e / sqrt(pi^2 + ln^2 e)``.
 
 The Hertz-damp law takes a damping constant ``zeta`` [s/m] instead (:func:`hertzdamp_zeta`,
-relations :data:`HERTZDAMP_RELATIONS`: ``ye2009``, the default, and ``muthukumar2006``).
+relations :data:`HERTZDAMP_RELATIONS`: ``ye2009``, the default, and ``muthukumar2006``), with
+which one free impact rebounds with another restitution than the ``e`` it was given
+(:func:`hertzdamp_restitution`: 0.630 and 0.775 for 0.65).
 Which relations a law accepts is declared with the law
 (:func:`pound_mc.physics.contact.allowed_relations`).
 """
@@ -48,6 +50,8 @@ __all__ = [
     "xi_exact",
     "xi_kelvin",
     "hertzdamp_zeta",
+    "hertzdamp_restitution",
+    "single_impact_restitution_hertzdamp",
     "effective_restitution",
     "restitution_of_xi",
     "single_impact_restitution",
@@ -329,3 +333,85 @@ def hertzdamp_zeta(e: ArrayLike, v0: ArrayLike, relation: str = "ye2009") -> flo
             key="relation",
         ) from None
     return _scalar_or_array(func(e, v0))
+
+
+def single_impact_restitution_hertzdamp(
+    e: float, relation: str = "ye2009", rtol: float = 1e-13
+) -> float:
+    """Restitution one free impact of the Hertz-damp law really produces for target ``e``.
+
+    With ``zeta = f(e) / v0`` (:data:`HERTZDAMP_RELATIONS`) and lengths in units of
+    ``(m v0^2 / beta)^0.4``, times in that over ``v0``, the impact is
+    ``u'' = -max(u^1.5 (1 + f(e) u'), 0)`` from ``u = 0, u' = 1``, whatever the mass,
+    stiffness and velocity; integrated with DOP853 to separation (``u = 0`` again, located as an
+    event), the restitution is ``-u'`` there.  The force is clipped at zero as the law's is, so
+    the bodies may part before ``u`` returns to 0 (``muthukumar2006`` then rebounds with at
+    least 0.66 whatever ``e``).
+
+    Parameters
+    ----------
+    e : float
+        Target coefficient of restitution [-], in (0, 1].
+    relation : {"ye2009", "muthukumar2006"}
+        Which relation gives ``zeta``.
+    rtol : float
+        Relative tolerance of the integration.
+    """
+    f = float(hertzdamp_zeta(e, 1.0, relation))
+
+    def rhs(_t, y):
+        u = y[0] if y[0] > 0.0 else 0.0
+        return [y[1], -max(u**1.5 * (1.0 + f * y[1]), 0.0)]
+
+    def separation(_t, y):
+        return y[0]
+
+    separation.terminal = True
+    separation.direction = -1
+    sol = solve_ivp(rhs, (0.0, 1e3), [0.0, 1.0], method="DOP853", rtol=rtol, atol=rtol * 1e-2,
+                    events=separation)  # fmt: skip
+    return float(-sol.y_events[0][0][1])
+
+
+@functools.cache
+def _hertzdamp_interpolants() -> tuple:
+    path = resources.files("pound_mc") / "data" / "restitution_hertzdamp.csv"
+    with resources.as_file(path) as p:
+        table = pd.read_csv(p, comment="#").sort_values("e")
+    e = table["e"].to_numpy()
+    return float(e[0]), {
+        rel: PchipInterpolator(e, table[rel].to_numpy(), extrapolate=False)
+        for rel in HERTZDAMP_RELATIONS
+    }
+
+
+def hertzdamp_restitution(e: ArrayLike, relation: str = "ye2009") -> float | np.ndarray:
+    """Restitution the Hertz-damp law really rebounds with when ``zeta`` comes from target ``e``.
+
+    Independent of mass, stiffness and impact velocity
+    (:func:`single_impact_restitution_hertzdamp`); interpolated in the shipped table
+    (``data/restitution_hertzdamp.csv``, made by ``data/generate_exact_table.py``), integrated
+    directly below its smallest ``e`` (0.005).  NaN stays NaN.
+
+    Parameters
+    ----------
+    e : float or array_like
+        Target coefficient of restitution [-], in (0, 1].
+    relation : {"ye2009", "muthukumar2006"}
+        Which relation gives ``zeta``.
+    """
+    if relation not in HERTZDAMP_RELATIONS:
+        raise InputError(
+            f"unknown relation {relation!r}; choose one of {sorted(HERTZDAMP_RELATIONS)}",
+            key="relation",
+        )
+    e = np.asarray(e, dtype=float)
+    known = np.isfinite(e)
+    _check_e(e[known])
+    e_min, interpolants = _hertzdamp_interpolants()
+    out = np.full(e.shape, np.nan)
+    out[known] = interpolants[relation](e[known])
+    low = known & (e < e_min)
+    for value in np.unique(e[low]):
+        out[e == value] = single_impact_restitution_hertzdamp(float(value), relation)
+    return _scalar_or_array(out)

@@ -492,7 +492,8 @@ CONTACT = Table(
         Field("restitution", "string", "`fixed`: one restitution (`e` or `xi`) for every impact; "
               "`velocity`: each impact's e from the seed's Table 2 at its prior-impact velocity "
               "(the relative velocity at contact onset) for `material`, at quantile `e_quantile` "
-              "of the measured range, its damping from `relation`, fixed for that impact.",
+              "of the measured range, its damping from `relation`, fixed for that impact (under "
+              "`jankowski2008` the impact rebounds above that e; `exact` rebounds with it).",
               default="fixed", choices=("fixed", "velocity")),
         Field("material", "string", "Material of Table 2 (restitution = \"velocity\").",
               choices=MATERIALS),

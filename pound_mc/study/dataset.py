@@ -63,8 +63,8 @@ RESULT_VARIABLES = {
     "median_impact_velocity": ("m s-1", "median prior-impact velocity of the impacts", "f8"),
     "peak_force_restitution": (
         "1",
-        "coefficient of restitution of the impact that holds the "
-        "peak force (with one restitution for every impact: the one its law rebounds with)",
+        "coefficient of restitution the contact law really rebounds with at the impact that "
+        "holds the peak force (for its damping, fixed or set per impact)",
         "f8",
     ),
 }
