@@ -75,8 +75,14 @@ def test_every_plot_method_draws_on_the_axes_given(small):
         # and on a figure of its own: the Axes it made
         own = np.atleast_1d(getattr(ds.pound.plot, name)(**kwargs))
         assert all(isinstance(a, Axes) for a in own), name
-    with pytest.raises(ValueError, match=f"draws {n_gaps} panel"):  # one Axes per panel
-        ds.pound.plot.fragility(ax=_axes(n_gaps + 1), n_boot=20)
+    with pytest.raises(ValueError, match=f"draws {n_gaps} panel"):  # an Axes per panel
+        ds.pound.plot.fragility(ax=_axes(n_gaps - 1), n_boot=20)
+    # a grid of more Axes than panels (plt.subplots(2, 3) for 5 gaps) was refused: the spare
+    # ones are hidden
+    grid = _axes(n_gaps + 1)
+    got = ds.pound.plot.fragility(ax=grid, n_boot=20)
+    assert [id(a) for a in got] == [id(a) for a in grid[:n_gaps]]
+    assert [a.get_visible() for a in grid] == [True] * n_gaps + [False]
 
 
 def test_required_gap_chart_marks_the_gap_the_api_finds(small):
@@ -109,9 +115,18 @@ def test_spectrum_sel_picks_lines_and_refuses_what_it_cannot_hold(small):
     gaps = ds["contact_gap_m"].values
     ax = ds.pound.plot.spectrum(sel={"contact_gap_m": [gaps[-1], gaps[0]]})
     assert [ln.get_label() for ln in ax.lines] == [f"{g * 1e3:g} mm" for g in (gaps[-1], gaps[0])]
-    # the lines are the median over records of each record's median over samples [MN]
+    # the lines are the median over records and samples pooled [MN] (numpy, ok runs)
+    force = np.where(ds["status"].values == 0, ds["peak_force"].values, np.nan)
+    dims = list(ds["peak_force"].dims)
+    pooled = np.nanmedian(force, axis=(dims.index("record"), dims.index("sample"))) / 1e6
+    gap_axis = [d for d in dims if d not in ("record", "sample")].index("contact_gap_m")
+    np.testing.assert_allclose(ax.lines[1].get_ydata(), np.take(pooled, 0, axis=gap_axis))
+    # record="median": the median over records of each record's median over samples
+    ax = ds.pound.plot.spectrum(sel={"contact_gap_m": [gaps[0]]}, record="median")
     q = ds["peak_force_quantile"].sel(quantile=0.5).median("record") / 1e6
-    np.testing.assert_allclose(ax.lines[1].get_ydata(), q.isel(contact_gap_m=0).values)
+    np.testing.assert_allclose(ax.lines[0].get_ydata(), q.isel(contact_gap_m=0).values)
+    with pytest.raises(ValueError, match="horizontal axis"):
+        ds.pound.plot.spectrum(line=ds.pound.grid_dims[0])
     with pytest.raises(ValueError, match="no dimension 'colour'"):
         ds.pound.plot.spectrum(sel={"colour": 1})
     with pytest.raises(ValueError, match="horizontal axis"):

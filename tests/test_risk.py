@@ -95,6 +95,15 @@ def test_dataset_record_variables(glob_dataset):
     assert list(ds["record_event"].values[:2]) == ["Imperial Valley-02"] * 2
 
 
+def test_data_frame_holds_each_rows_scale_factor(glob_dataset):
+    """to_dataframe left out scale_factor (record x intensity): a row's scaling was lost."""
+    ds, _ = glob_dataset
+    table = ds.pound.to_dataframe()
+    assert "scale_factor" in table and "record_sa_g" in table
+    assert "pounding_probability" not in table  # a summary over samples
+    np.testing.assert_allclose(table["scale_factor"], table["sa_g"] / table["record_sa_g"])
+
+
 def test_results_do_not_depend_on_chunks(glob_study, glob_dataset, tmp_path):
     ds, _ = glob_dataset
     report = run_study(load_study(glob_study), tmp_path, chunk_size=5, progress=False)

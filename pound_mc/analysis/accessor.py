@@ -39,7 +39,7 @@ from pound_mc.analysis.plot import (
 )
 from pound_mc.analysis.plot_numerics import time_history_chart
 from pound_mc.analysis.profiles import contacts_chart, profile_chart
-from pound_mc.analysis.risk import counted
+from pound_mc.analysis.risk import INTENSITY_DIMS, counted
 from pound_mc.analysis.risk import fragility as _fragility
 from pound_mc.analysis.risk import required_gap as _required_gap
 from pound_mc.analysis.risk_chart import fragility_panels, required_gap_chart
@@ -154,8 +154,9 @@ def scene_at(
 
 def _axes_of(fig, ax):
     """What a plot method returns: the Axes it drew on (one), or an array of them (panels)."""
-    if ax is not None:
+    if ax is not None:  # those given, less the spare ones a chart hid
         axes = np.asarray([ax] if isinstance(ax, Axes) else list(ax), dtype=object).ravel()
+        axes = np.asarray([a for a in axes if a.get_visible()], dtype=object)
     else:
         axes = np.asarray([a for a in fig.axes if a.get_label() != "<colorbar>"], dtype=object)
     return axes[0] if axes.size == 1 else axes
@@ -203,8 +204,9 @@ class PoundPlot:
         "Axes",
         """Impact force spectrum (:func:`pound_mc.analysis.plot.spectrum_chart`).
 
-        ``record="median"`` (default, the median over records), ``"each"`` (a line per record)
-        or one record's index or name.
+        ``record="pooled"`` (default: every record and sample together), ``"median"`` (the
+        median over records of each record's quantiles), ``"each"`` (a line per record) or one
+        record's index or name.
         """,
     )
     probability = _chart_method(
@@ -406,7 +408,10 @@ class PoundAccessor:
         return _required_gap(self._ds, probability, **kwargs)
 
     def status_counts(self) -> pd.Series:
-        """Number of simulations per status (index ``ok``, ``unstable``, ``not_converged``)."""
+        """Number of simulations per status (the dataset's ``status`` flags).
+
+        Index ``ok``, ``unstable``, ``not_converged``, ``inaccurate``.
+        """
         status = self._ds["status"]
         values = np.asarray(status.attrs.get("flag_values", [0, 1, 2])).tolist()
         names = str(status.attrs.get("flag_meanings", "ok unstable not_converged")).split()
@@ -432,16 +437,20 @@ class PoundAccessor:
         return pd.Series(values, index=index, dtype=object, name="energy_residual")
 
     def per_simulation(self) -> list[str]:
-        """Variables with one value per simulation, per sample or per record (not summaries)."""
+        """Variables with one value per simulation, per sample or per record (not summaries).
+
+        Per record includes per scaled record (``scale_factor``: record and intensity).
+        """
         dims = set(self._ds["peak_force"].dims)
         return [
             name
             for name, var in self._ds.data_vars.items()
             if var.dims
             and set(var.dims) <= dims
-            and ("sample" in var.dims or var.dims == ("record",))
+            and ("sample" in var.dims
+                 or (var.dims[0] == "record" and set(var.dims[1:]) <= set(INTENSITY_DIMS)))
             and var.dtype.kind in "fiub"
-        ]
+        ]  # fmt: skip
 
     def to_dataframe(self) -> pd.DataFrame:
         """One row per simulation: its coordinates and every per-simulation result.

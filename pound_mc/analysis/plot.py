@@ -40,6 +40,7 @@ from pound_mc.analysis.style import (
     scale_of,
     value_text,
 )
+from pound_mc.integrators.outputs import STATUS_OK
 from pound_mc.study.dataset import pounding_counted
 
 __all__ = [
@@ -75,6 +76,7 @@ def finish_axes(ax, *, title: str, title_size=9, legend_size=8, grid="major", **
         More :meth:`matplotlib.axes.Axes.set` properties (``xlabel``, ``ylabel``, ``ylim``, ...).
     """
     ax.set(title=title, **props)
+    ax.title.set_wrap(True)  # a long title over narrow axes wraps inside the figure
     if title_size is not None:
         ax.title.set_fontsize(title_size)
     ax.grid(True, which=grid, alpha=0.3)
@@ -90,22 +92,41 @@ def _spectrum_selection(ds, x=None, line=None):
     if x not in grid_dims:
         raise ValueError(f"no grid dimension {x!r}; the dataset has {grid_dims}")
     rest = [d for d in grid_dims if d != x]
-    line = line if line is not None else (rest[0] if rest else None)
+    line = _line_axis(rest, x, line)
     return x, line, [d for d in rest if d != line]
 
 
-def spectrum_quantiles(ds: xr.Dataset, record: int | str = "median") -> xr.DataArray:
-    """Quantiles of peak force over the samples [N] that a spectrum chart draws.
+def _line_axis(rest, x, line):
+    """The line axis: ``line``, a grid dimension other than ``x`` (default: ``rest[0]``)."""
+    if line is None:
+        return rest[0] if rest else None
+    if line == x:
+        raise ValueError(f"line names {x!r}, the chart's horizontal axis; draw lines of "
+                         + (f"another grid dimension ({', '.join(rest)})" if rest else
+                            "another grid dimension (the dataset has no other)"))  # fmt: skip
+    if line not in rest:
+        raise ValueError(f"no grid dimension {line!r}; the dataset has {[x, *rest]}")
+    return line
+
+
+def spectrum_quantiles(ds: xr.Dataset, record: int | str = "pooled") -> xr.DataArray:
+    """Quantiles of peak force [N] that a spectrum chart draws (runs with status ok).
 
     Parameters
     ----------
     ds : xarray.Dataset
-        A study dataset (its ``peak_force_quantile``).
-    record : "median", "each", int or str
-        ``"median"``: the median over the records of each record's quantiles; ``"each"``: every
-        record (a ``record`` dim kept); an index or a name: that record.
+        A study dataset (its ``peak_force`` and ``status``, or ``peak_force_quantile``).
+    record : "pooled", "median", "each", int or str
+        ``"pooled"``: over the records and samples together (the record-to-record scatter
+        included); ``"median"``: the median over the records of each record's quantiles over
+        its samples; ``"each"``: every record (a ``record`` dim kept); an index or a name: that
+        record.
     """
     q = ds["peak_force_quantile"]
+    if isinstance(record, str) and record == "pooled":
+        ok = ds["status"] == STATUS_OK
+        pooled = ds["peak_force"].where(ok).quantile(q["quantile"].values, dim=("record", "sample"))
+        return pooled.transpose(*q.dims[:1], *(d for d in q.dims[1:] if d != "record"))
     if isinstance(record, str) and record == "median":
         return q.median("record")
     if isinstance(record, str) and record == "each":
@@ -120,7 +141,7 @@ def spectrum_chart(
     *,
     x: str | None = None,
     line: str | None = None,
-    record: int | str = "median",
+    record: int | str = "pooled",
     sel: dict | None = None,
     ax: Axes | None = None,
 ) -> Figure:
@@ -135,10 +156,11 @@ def spectrum_chart(
         Grid dimension on the horizontal axis (default: the first).
     line : str, optional
         Grid dimension drawn as one line per value (default: the second, if any).
-    record : "median", "each", int or str
-        ``"median"`` (default): median over the records of each record's quantiles;
-        ``"each"``: one line per record (the median over samples; the line axis held);
-        an index or a name: that record alone.
+    record : "pooled", "median", "each", int or str
+        ``"pooled"`` (default): quantiles over every record and sample together (the
+        records' own scatter in the band); ``"median"``: median over the records of each
+        record's quantiles over its samples; ``"each"``: one line per record (the median over
+        samples; the line axis held); an index or a name: that record alone.
     sel : dict, optional
         ``{dim: value}`` holding other grid dimensions at one value (nearest; default their
         first value).
@@ -197,10 +219,16 @@ def spectrum_chart(
         fit_tick_labels(ax, ds.sizes[x])
     if each:
         rec_text = f"one line per record ({ds.sizes['record']})"
+    n_rec, n_smp = ds.sizes["record"], ds.sizes["sample"]
+    over_text = f"{n_smp} samples"
+    if isinstance(record, str) and record in ("median", "pooled") and n_rec == 1:
+        rec_text = f"record {ds['record'].values[0]}"
+    elif isinstance(record, str) and record == "pooled":
+        rec_text = f"all {n_rec} records pooled"
+        over_text = f"{n_rec} records x {n_smp} samples"
     elif isinstance(record, str) and record == "median":
-        n = ds.sizes["record"]
-        rec_text = f"median over {n} records" if n > 1 else f"record {ds['record'].values[0]}"
-    else:
+        rec_text = f"median over {n_rec} records"
+    elif not each:
         rec_text = f"record {ds['record'].values[_record_index(ds, record)]}"
     held = ", ".join(f"{d} = {value_text(ds, d, i)}" for d, i in hold.items())
     finish_axes(
@@ -210,8 +238,9 @@ def spectrum_chart(
         title=(
             f"Impact force spectrum ({ds.attrs.get('study_name', '')}, {rec_text}"
             + (f", {held}" if held else "")
-            + f")\nmedian over {ds.sizes['sample']} samples"
+            + f")\nmedian over {over_text}"
             + (" and 5-95 % band" if band else "")
+            + " (runs that do not pound count as 0)"
         ),
     )
     if line is not None:
@@ -412,7 +441,7 @@ def probability_chart(
         raise ValueError(f"no grid dimension {x!r}; the dataset has {grid}")
     sel = _checked_sel(ds, sel, x)
     rest = [d for d in grid if d != x]
-    line = line if line is not None else (rest[0] if rest else None)
+    line = _line_axis(rest, x, line)
     wanted = sel.pop(line, None) if line is not None else None
     hold = _hold(ds, [d for d in rest if d != line], sel)
     if record is None:

@@ -57,7 +57,8 @@ def fragility_panels(
     max_panels : int
         Most panels drawn (the first combinations).
     ax : matplotlib.axes.Axes or sequence of Axes, optional
-        Where to draw: one Axes per panel (default a new figure, three panels a row).
+        Where to draw: one Axes per panel, or a grid of more (the spare ones hidden; default a
+        new figure, three panels a row).
 
     Returns
     -------
@@ -76,7 +77,7 @@ def fragility_panels(
     if ax is None:
         fig, axes = new_axes(None, (4.6 * ncols, 3.6 * nrows), nrows=nrows, ncols=ncols)
     else:
-        fig, axes = new_axes(ax, (0.0, 0.0), ncols=len(combos))
+        fig, axes = new_axes(ax, (0.0, 0.0), ncols=len(combos), spare=True)
     own = ax is None
     legend = None
     x = np.asarray(ds[dim].values, dtype=float)

@@ -167,6 +167,7 @@ def new_axes(
     *,
     nrows: int = 1,
     ncols: int = 1,
+    spare: bool = False,
 ) -> tuple[Figure, np.ndarray]:
     """The figure and axes a chart draws on: ``ax`` given, or a new figure's.
 
@@ -178,6 +179,8 @@ def new_axes(
         Size of a new figure [in].
     nrows, ncols : int
         Panels of a new figure.
+    spare : bool
+        Take a given ``ax`` with more Axes than panels (a grid), hiding the spare ones.
 
     Returns
     -------
@@ -190,9 +193,12 @@ def new_axes(
         axes = np.asarray(fig.subplots(nrows, ncols, squeeze=False), dtype=object).ravel()
         return fig, axes
     axes = np.asarray([ax] if isinstance(ax, Axes) else list(ax), dtype=object).ravel()
-    if axes.size != nrows * ncols:
-        raise ValueError(f"this chart draws {nrows * ncols} panel(s); got {axes.size} Axes")
-    return axes[0].figure, axes
+    wanted = nrows * ncols
+    if axes.size != wanted and not (spare and axes.size > wanted):
+        raise ValueError(f"this chart draws {wanted} panel(s); got {axes.size} Axes")
+    for extra in axes[wanted:]:  # a grid of Axes larger than the panels: the rest hidden
+        extra.set_visible(False)
+    return axes[0].figure, axes[:wanted]
 
 
 def output_path(path: str | Path, *, key: str | None = None, suffix: str | None = None) -> Path:

@@ -185,7 +185,7 @@ def draw(path: str | Path, kind: str, *, out=None, sel=None, record=None, sample
                 ds,
                 out,
                 line=kwargs.get("line"),
-                record="median" if record is None else record,
+                record="pooled" if record is None else record,
                 sel=sel,
             )
         if kind in ("contacts", "drift", "ductility") and record is not None:  # one record

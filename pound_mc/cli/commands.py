@@ -53,8 +53,9 @@ PLOT_DESCRIPTION = """\
 Draw one chart. What FILE is depends on the kind:
 
   spectrum        a study dataset (the .nc of pound-mc run): median peak force against a
-                  grid axis, the median over records (--record N for one, --record each for
-                  one line per record)
+                  grid axis and its 5-95 % band, records and samples pooled (--record N for
+                  one, --record each for one line per record, --record median for the median
+                  of each record's quantiles)
   probability     a study dataset: pounding probability against the gap (or the first
                   grid axis)
   distribution    a study dataset: peak force box plots and histograms per value of --by
@@ -347,7 +348,8 @@ def _analysis(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--record",
         metavar="N|NAME",
-        help="record index or name; spectrum: also 'each' (default: all records pooled)",
+        help="record index or name; spectrum: also 'each' or 'median' (default: all records "
+        "pooled)",
     )
     p.add_argument("--sample", type=int, default=0, metavar="N", help="sample index (history)")
     p.add_argument(
