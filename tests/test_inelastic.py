@@ -407,6 +407,23 @@ def test_inelastic_chart_draws_the_elastic_line_as_displacement_over_the_yield_o
     np.testing.assert_allclose(ax_f.get_lines()[1].get_ydata(), np.divide(ok_median(force, 1), 1e6))
 
 
+def test_a_yield_displacement_no_run_reaches_is_named_so():
+    """The elastic variant (yield_disp_m = 1000 m) read "1e+06 mm" in every chart's legend but
+    the inelastic chart's; the chart labels come from value_text."""
+    from pound_mc.analysis.style import value_text
+
+    dims = ("record", "left_yield_disp_m", "sample")
+    duct = np.array([[[0.5, 2.0], [2e-5, 5e-5]]])  # yields at 20 mm; never at 1,000 m
+    ds = xr.Dataset({"peak_ductility_left": (dims, duct)},
+                    coords={"left_yield_disp_m": ("left_yield_disp_m", [0.02, 1000.0],
+                                                  {"units": "m"})})  # fmt: skip
+    assert [value_text(ds, "left_yield_disp_m", i) for i in (0, 1)] == [
+        "20 mm", "1e+06 mm (never yields)"
+    ]  # fmt: skip
+    # without its ductility (or on another axis) the value alone
+    assert value_text(ds.drop_vars("peak_ductility_left"), "left_yield_disp_m", 1) == "1e+06 mm"
+
+
 def test_inelastic_chart_titles_fit_and_lines_take_the_shared_style():
     """Titles inside the figure, one legend below both panels, the shared colours and markers."""
     from pound_mc.analysis.style import PALETTE, line_style

@@ -102,7 +102,9 @@ def scale_of(ds: xr.Dataset, name: str) -> float:
 def value_text(ds: xr.Dataset, dim: str, i: int) -> str:
     """The ``i``-th value of coordinate ``dim`` as text, in chart units (``"10 mm"``).
 
-    A material axis (``contact_material`` with a ``material`` variable of names) gives the name.
+    A material axis (``contact_material`` with a ``material`` variable of names) gives the name;
+    a yield displacement at which no run of the building yields says so (a study's elastic
+    variant, e.g. ``left.yield_disp_m = 1000``: "1e+06 mm (never yields)").
     """
     if dim == "contact_material" and "material" in ds and ds["material"].dims == (dim,):
         return str(ds["material"].values[i])
@@ -111,7 +113,13 @@ def value_text(ds: xr.Dataset, dim: str, i: int) -> str:
         return str(value)
     _, units = _name_and_units(ds[dim].attrs, dim)
     shown, factor = chart_units(units)
-    return f"{float(value) * factor:.4g}" + ("" if shown == "-" else f" {shown}")
+    text = f"{float(value) * factor:.4g}" + ("" if shown == "-" else f" {shown}")
+    side = dim.removesuffix("_yield_disp_m")
+    ductility = ds.get(f"peak_ductility_{side}") if side != dim else None
+    if ductility is not None and dim in ductility.dims:
+        if not bool((ductility.isel({dim: i}) > 1.0).any()):
+            text += " (never yields)"
+    return text
 
 
 def legend_outside(ax: Axes, *, title: str | None = None, size: float = 8, **kwargs) -> None:
