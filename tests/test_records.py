@@ -206,6 +206,21 @@ def test_unknown_format(tmp_path):
     assert "notes.dat" in msg and "unknown format" in msg and "MSEED" in msg and "AT2" in msg
 
 
+def test_truncated_miniseed(tmp_path):
+    """A MiniSEED file cut inside a record was read as its first 223 of 2,400 samples without a
+    word (obspy warns and stops); it is refused, as a truncated AT2 file is."""
+    data = Path(obspy.__file__).parent / "clients" / "filesystem" / "tests" / "data"
+    whole = data / "tsindex_data" / "IU" / "2018" / "001"
+    whole = whole / "IU.ANMO.10.BHZ.2018.001_first_minute.mseed"
+    if not whole.is_file():
+        pytest.skip("obspy's test data are not installed")
+    assert len(read_record(whole, units="m/s^2").data) == 2400  # the whole file reads
+    cut = tmp_path / "cut.mseed"
+    cut.write_bytes(whole.read_bytes()[:700])
+    msg = _message(read_record, cut)
+    assert "cut.mseed" in msg and "truncated" in msg and "223 samples" in msg
+
+
 def test_truncated_and_padded_at2(tmp_path):
     short = _at2(tmp_path / "short.AT2", VALUES, npts=30)
     msg = _message(read_record, short)

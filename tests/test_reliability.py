@@ -71,7 +71,8 @@ def test_changed_record_between_interrupt_and_resume_is_refused(make_study, tmp_
     text[4:] = ["  ".join(f"{2 * float(v): .7E}" for v in row.split()) for row in text[4:]]
     record.write_text("\n".join(text) + "\n")
     rc, _, err = _run("run", study, "--out", out, "--chunk-size", "2", *_OPTIONS)
-    _assert_clean_error(rc, err, "changed since", str(record), "--fresh")
+    # the record named as the study names it: relative to the study's folder
+    _assert_clean_error(rc, err, "changed since", "record.source (quake.at2)", "--fresh")
     assert not (out / "small.nc").exists()
     # --fresh discards the old chunks and runs everything on the new record
     rc, text, err = _run("run", study, "--out", out, "--chunk-size", "2", "--fresh", *_OPTIONS)
@@ -434,7 +435,7 @@ def test_method_refusal_names_the_study_file(make_study, tmp_path):
 
 
 def test_refused_run_keeps_earlier_results(make_study, tmp_path):
-    """A refused run removes only what it wrote itself: earlier results stay, --fresh's go."""
+    """A refused run removes only what it wrote itself: earlier results stay."""
     study = _tiny(make_study)
     rc, _, err = _run("run", study, "--out", tmp_path / "o", "--no-plot")
     assert rc == 0, err
@@ -442,12 +443,50 @@ def test_refused_run_keeps_earlier_results(make_study, tmp_path):
     before = sorted(p.name for p in work.iterdir())
     assert "manifest.json" in before and any(p.startswith("chunk_") for p in before)
     _tiny(make_study, left={"hysteresis": "bouc-wen", "yield_disp_m": 0.02})
-    rc, _, err = _run("run", study, "--out", tmp_path / "o")
-    _assert_clean_error(rc, err, "changed since")
-    assert sorted(p.name for p in work.iterdir()) == before
-    rc, _, err = _run("run", study, "--out", tmp_path / "o", "--fresh")
-    _assert_clean_error(rc, err, "bouc-wen")  # --fresh discarded them, the refusal the rest
-    assert not work.exists()
+    # refused as it loads (Bouc-Wen with adaptive), before the earlier results are looked at:
+    # with --fresh too, nothing is discarded for a run that cannot start
+    for fresh in ([], ["--fresh"]):
+        rc, _, err = _run("run", study, "--out", tmp_path / "o", *fresh)
+        _assert_clean_error(rc, err, "bouc-wen", "integrator.method")
+        assert sorted(p.name for p in work.iterdir()) == before
+
+
+@pytest.mark.parametrize("fresh", [[], ["--fresh"]], ids=["resume", "fresh"])
+def test_a_folder_of_the_users_is_never_taken(make_study, tmp_path, fresh):
+    """``--fresh`` removed any folder ``<out>/<study name>`` (a user's thesis.tex went with it);
+    without it the run wrote its chunks and manifest among the user's files."""
+    study = _tiny(make_study)
+    work = tmp_path / "o" / study.stem
+    work.mkdir(parents=True)
+    (work / "thesis.tex").write_text("precious")
+    rc, _, err = _run("run", study, "--out", tmp_path / "o", *fresh, *_OPTIONS)
+    _assert_clean_error(rc, err, str(work), "thesis.tex", "no pound-mc results folder")
+    assert sorted(p.name for p in work.iterdir()) == ["thesis.tex"]
+    assert (work / "thesis.tex").read_text() == "precious"
+
+
+@pytest.mark.parametrize(
+    ("grid", "vary", "key"),
+    [
+        ({"left.damping_ratio": [0.05, 0.3]}, None, "grid.left.damping_ratio"),
+        (None, {"left.post_yield_ratio": {"distribution": "uniform", "low": 1e-4, "high": 0.004}},
+         "sampling.vary.left.post_yield_ratio"),
+    ],
+    ids=["grid", "sampled"],
+)  # fmt: skip
+def test_a_branch_adaptive_cannot_step_is_refused_before_any_chunk(make_study, tmp_path, grid,
+                                                                   vary, key):  # fmt: skip
+    """A grid damping ratio of 0.3 (0.09 > post_yield_ratio 0.05), or a post_yield_ratio drawn
+    below 0.05^2 = 0.0025, was refused only when its first simulation ran, after earlier chunks
+    were written, and named left.post_yield_ratio."""
+    left = {"hysteresis": "bilinear", "yield_disp_m": 0.02, "post_yield_ratio": 0.05}
+    tables = {"left": left, "grid": {"left.period_s": None, **(grid or {})}}
+    if vary:
+        tables["sampling"] = {"n": 8, "vary": vary}
+    study = _tiny(make_study, **tables)
+    rc, _, err = _run("run", study, "--out", tmp_path / "o", "--chunk-size", "1", *_OPTIONS)
+    _assert_clean_error(rc, err, key, "post_yield_ratio", "damping_ratio^2")
+    assert not (tmp_path / "o" / study.stem).exists()
 
 
 def test_simulate_names_the_scene_file_with_its_records_error(tmp_path):

@@ -95,6 +95,38 @@ def test_dataset_record_variables(glob_dataset):
     assert list(ds["record_event"].values[:2]) == ["Imperial Valley-02"] * 2
 
 
+def test_analysis_reads_relative_records_from_the_study_folder(glob_study, glob_dataset,
+                                                              tmp_path, monkeypatch):  # fmt: skip
+    """The study reads records/*.AT2 beside it and its dataset lies elsewhere: report and the
+    charts that run the records again (probability's rules, required gap, history) looked for
+    them beside the dataset ("the pattern matches no file")."""
+    ds, path = glob_dataset
+    assert ds.attrs["study_dir"] == str(glob_study.parent.resolve())
+    monkeypatch.chdir(tmp_path)  # neither the study's folder nor the dataset's
+    assert main(["report", str(path), "--out", str(tmp_path / "r.html")]) == 0
+    for kind in ("probability", "required-gap", "history"):
+        assert (
+            main(["plot", str(path), "--kind", kind, "--out", str(tmp_path / f"{kind}.png")]) == 0
+        )
+    scene = ds.pound.scene(sample=0)  # the Python API too
+    assert scene.record_arrays()[1].size > 0
+
+
+def test_resume_takes_the_study_by_another_path(glob_study, tmp_path, monkeypatch):
+    """The manifest keyed each record file by its path as the study was given: resuming the
+    same study by another path (absolute, or from its own folder) was refused as changed."""
+    out = tmp_path / "o"
+    monkeypatch.chdir(glob_study.parent.parent)
+    relative = Path(glob_study.parent.name) / glob_study.name
+    run_study(load_study(relative), out, chunk_size=8, max_chunks=1, progress=False)
+    monkeypatch.chdir(glob_study.parent)
+    report = run_study(load_study(glob_study.name), out, chunk_size=8, progress=False)
+    done = run_study(load_study(glob_study.resolve()), tmp_path / "whole", progress=False)
+    a, b = xr.load_dataset(report.path), xr.load_dataset(done.path)
+    for name in ("peak_force", "impacts", "status"):
+        np.testing.assert_array_equal(a[name].values, b[name].values)
+
+
 def test_data_frame_holds_each_rows_scale_factor(glob_dataset):
     """to_dataframe left out scale_factor (record x intensity): a row's scaling was lost."""
     ds, _ = glob_dataset
@@ -102,6 +134,11 @@ def test_data_frame_holds_each_rows_scale_factor(glob_dataset):
     assert "scale_factor" in table and "record_sa_g" in table
     assert "pounding_probability" not in table  # a summary over samples
     np.testing.assert_allclose(table["scale_factor"], table["sa_g"] / table["record_sa_g"])
+    # the intensity the only grid axis: the summaries over samples (record x intensity, as
+    # scale_factor) stay out too
+    only = ds.isel(contact_gap_m=0, drop=True).pound.to_dataframe()
+    assert "scale_factor" in only and "pounding_probability" not in only
+    assert "peak_force_mean" not in only
 
 
 def test_results_do_not_depend_on_chunks(glob_study, glob_dataset, tmp_path):

@@ -114,3 +114,13 @@ def test_study_against_a_wall(tmp_path):
     assert (ds["impacts"].values > 0).all()
     for i in range(peak.size):
         assert simulate(engine.scene_of(i)).outputs["peak_force"] == peak[i]
+
+
+def test_history_chart_names_the_wall(tmp_path):
+    """A wall on the right was labelled "right, floor 1" (it has no floors)."""
+    from pound_mc.analysis.plot_numerics import time_history_chart
+
+    sdof = {"model": "sdof", "period_s": 0.5, "mass_kg": 1.0e6, "damping_ratio": 0.05}
+    res = simulate(against_wall({"model": "jankowski", "xi": 0.35}, left=sdof), history=True)
+    labels = [ln.get_label() for ln in time_history_chart(res).axes[0].lines]
+    assert labels == ["left, floor 1", "wall"]

@@ -33,13 +33,14 @@ from matplotlib.axes import Axes
 from pound_mc.analysis.plot import (
     distribution_chart,
     probability_chart,
+    quantiles_over,
     restitution_chart,
     save,
     spectrum_chart,
 )
 from pound_mc.analysis.plot_numerics import time_history_chart
 from pound_mc.analysis.profiles import contacts_chart, profile_chart
-from pound_mc.analysis.risk import INTENSITY_DIMS, counted
+from pound_mc.analysis.risk import counted
 from pound_mc.analysis.risk import fragility as _fragility
 from pound_mc.analysis.risk import required_gap as _required_gap
 from pound_mc.analysis.risk_chart import fragility_panels, required_gap_chart
@@ -48,6 +49,7 @@ from pound_mc.analysis.style import value_text
 from pound_mc.errors import InputError
 from pound_mc.scene import Scene, SimulationResult
 from pound_mc.scene import simulate as simulate_scene
+from pound_mc.study.dataset import RECORD_VARIABLES, study_folder
 from pound_mc.study.definition import grid_dim_name, study_from_text
 from pound_mc.study.engine import StudyEngine
 
@@ -111,8 +113,8 @@ def scene_at(
     sample : int
         Sample index.
     study_path : str or Path, optional
-        Where the study file was, for records given by a relative path (default: the current
-        folder).
+        Where the study file was, for records given by a relative path (default: the folder
+        the dataset says it ran from, ``study_dir``, else the current folder).
     **coords
         One value per grid dimension (default: its first value).
 
@@ -125,6 +127,8 @@ def scene_at(
     index : dict
         The integer position of the simulation along every dimension of ``peak_force``.
     """
+    if study_path is None and (folder := study_folder(ds)) is not None:
+        study_path = folder / "study.toml"  # the study's own folder: its relative records
     text = ds.attrs.get("study_text")
     if not text:
         raise InputError("the dataset carries no study_text attribute; is it a pound-mc result?")
@@ -333,6 +337,7 @@ class PoundAccessor:
         quantiles: float | Sequence[float] = (0.05, 0.5, 0.95),
         *,
         variable: str = "peak_force",
+        pooled: bool = False,
         **sel: Any,
     ) -> xr.DataArray:
         """Quantiles of a result over the samples (status ok): the impact force spectrum.
@@ -343,22 +348,27 @@ class PoundAccessor:
             Quantile levels in [0, 1].
         variable : str
             Per-simulation result (default ``peak_force`` [N]).
+        pooled : bool
+            Over the records and samples together (what the spectrum chart draws by default)
+            instead of each record's samples.
         **sel
             ``dim=value`` selections (nearest for numeric coordinates).
 
         Returns
         -------
         xarray.DataArray
-            Dims ``quantile`` and the dims left after the selection, less ``sample``; the
-            variable's units.
+            Dims ``quantile`` and the dims left after the selection, less ``sample`` (and
+            ``record`` when pooled); the variable's units; NaN where no run ended ok.
         """
         ds = self._ds
         values = ds[variable].where(self.ok)
         values = _select(values, ds, sel)
-        q = values.quantile(list(np.atleast_1d(quantiles)), dim="sample")
+        over = [d for d in (("record", "sample") if pooled else ("sample",)) if d in values.dims]
+        q = quantiles_over(values, quantiles, over)
         q.attrs = {
             "units": ds[variable].attrs.get("units", "1"),
-            "long_name": f"quantiles over samples of {ds[variable].attrs.get('long_name', '')}",
+            "long_name": f"quantiles over {' and '.join(d + 's' for d in over)} of "
+            f"{ds[variable].attrs.get('long_name', '')}",
         }
         return q.rename(f"{variable}_quantile")
 
@@ -439,7 +449,8 @@ class PoundAccessor:
     def per_simulation(self) -> list[str]:
         """Variables with one value per simulation, per sample or per record (not summaries).
 
-        Per record includes per scaled record (``scale_factor``: record and intensity).
+        Per record: the record's own variables (:data:`~pound_mc.study.dataset.RECORD_VARIABLES`,
+        ``scale_factor`` per record and intensity), not the summaries over its samples.
         """
         dims = set(self._ds["peak_force"].dims)
         return [
@@ -447,10 +458,9 @@ class PoundAccessor:
             for name, var in self._ds.data_vars.items()
             if var.dims
             and set(var.dims) <= dims
-            and ("sample" in var.dims
-                 or (var.dims[0] == "record" and set(var.dims[1:]) <= set(INTENSITY_DIMS)))
+            and ("sample" in var.dims or name in RECORD_VARIABLES)
             and var.dtype.kind in "fiub"
-        ]  # fmt: skip
+        ]
 
     def to_dataframe(self) -> pd.DataFrame:
         """One row per simulation: its coordinates and every per-simulation result.

@@ -18,6 +18,7 @@ from pound_mc.physics.separation import (
     gap_srss,
     peak_displacements,
 )
+from pound_mc.study.dataset import study_folder
 from pound_mc.study.definition import Study, grid_dim_name, study_from_text
 from pound_mc.study.engine import StudyEngine
 
@@ -85,6 +86,7 @@ def study_gaps(study_or_dataset, *, base_dir=None, substeps: int = 8):
         text = study_or_dataset.attrs.get("study_text")
         if not text:
             raise InputError("the dataset has no study_text attribute", key="study_text")
+        base_dir = study_folder(study_or_dataset, base_dir) if base_dir is None else base_dir
         file = None if base_dir is None else str(base_dir) + "/dataset-study.toml"
         study = study_from_text(text, file=file)
     engine = StudyEngine(study)

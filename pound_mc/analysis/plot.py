@@ -9,6 +9,7 @@ the drop test) are in :mod:`pound_mc.analysis.physics_charts`.
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -40,7 +41,6 @@ from pound_mc.analysis.style import (
     scale_of,
     value_text,
 )
-from pound_mc.integrators.outputs import STATUS_OK
 from pound_mc.study.dataset import pounding_counted
 
 __all__ = [
@@ -109,6 +109,13 @@ def _line_axis(rest, x, line):
     return line
 
 
+def quantiles_over(values: xr.DataArray, levels, dims) -> xr.DataArray:
+    """``values.quantile(levels, dim=dims)``, NaN without a warning where every value is NaN."""
+    with warnings.catch_warnings():  # a grid point without an ok run: NaN is the answer
+        warnings.filterwarnings("ignore", "All-NaN slice", RuntimeWarning)
+        return values.quantile(list(np.atleast_1d(levels)), dim=list(dims))
+
+
 def spectrum_quantiles(ds: xr.Dataset, record: int | str = "pooled") -> xr.DataArray:
     """Quantiles of peak force [N] that a spectrum chart draws (runs with status ok).
 
@@ -124,8 +131,8 @@ def spectrum_quantiles(ds: xr.Dataset, record: int | str = "pooled") -> xr.DataA
     """
     q = ds["peak_force_quantile"]
     if isinstance(record, str) and record == "pooled":
-        ok = ds["status"] == STATUS_OK
-        pooled = ds["peak_force"].where(ok).quantile(q["quantile"].values, dim=("record", "sample"))
+        ok = ds["peak_force"].where(ds["status"] == 0)
+        pooled = quantiles_over(ok, q["quantile"].values, ("record", "sample"))
         return pooled.transpose(*q.dims[:1], *(d for d in q.dims[1:] if d != "record"))
     if isinstance(record, str) and record == "median":
         return q.median("record")
@@ -170,7 +177,8 @@ def spectrum_chart(
     Returns
     -------
     matplotlib.figure.Figure
-        ``axes[0].lines``: one line per value drawn, the medians over samples [MN].
+        ``axes[0].lines``: one line per value drawn, the medians [MN] (over the records and
+        samples pooled, or as ``record`` says).
     """
     x, line, others = _spectrum_selection(ds, x, line)
     each = isinstance(record, str) and record == "each"
@@ -185,7 +193,7 @@ def spectrum_chart(
     if each:
         lines = [(i, {"record": i}, str(ds["record"].values[i])) for i in range(ds.sizes["record"])]
     elif line is None:
-        lines = [(0, {}, "median over samples")]
+        lines = [(0, {}, "median")]
     else:
         picked = range(ds.sizes[line])
         if wanted is not None:  # the line values ``sel`` names (nearest), in its order

@@ -114,13 +114,20 @@ def _contact_floors(result) -> list[tuple[str, np.ndarray, str, np.ndarray]]:
     contacts = getattr(scene, "contacts", None)
     left, right = result.disp_left_m, result.disp_right_m
     n = result.penetration_m.shape[1]
+    walls = [getattr(getattr(scene, side, None), "model", None) == "wall"
+             for side in ("left", "right")]  # fmt: skip
+
+    def side_name(k, side, floor):  # a wall (at rest with the ground) has no floors
+        return "wall" if walls[k] else f"{side}, floor {floor}"
+
     if contacts is None or len(contacts) != n:
         nl, nr = left.shape[1], right.shape[1]
-        return [(f"left, floor {nl}", left[:, -1], f"right, floor {nr}", right[:, -1])] * n
+        return [(side_name(0, "left", nl), left[:, -1],
+                 side_name(1, "right", nr), right[:, -1])] * n  # fmt: skip
     row = getattr(scene, "row", None)
     if row is None:
-        return [(f"left, floor {c.left_floor + 1}", left[:, c.left_floor],
-                 f"right, floor {c.right_floor + 1}", right[:, c.right_floor])
+        return [(side_name(0, "left", c.left_floor + 1), left[:, c.left_floor],
+                 side_name(1, "right", c.right_floor + 1), right[:, c.right_floor])
                 for c in contacts]  # fmt: skip
     floors = np.hstack([left, right])  # the row's buildings, left to right
     start = np.cumsum([0] + [b.n_floors for b in row])

@@ -181,9 +181,9 @@ def _figures(ds: xr.Dataset, base_dir, history: bool, forces: bool = True) -> li
             _figure_html(
                 "spectrum",
                 plot.spectrum_chart(ds),
-                "Impact force spectrum: median peak impact force over the samples (line) and "
-                "the 5-95 % range (band) against the first grid axis, one line per value of the "
-                "second; the median over the records of each record's values.",
+                "Impact force spectrum: median peak impact force (line) and the 5-95 % range "
+                "(band) over the records and samples together, against the first grid axis, "
+                "one line per value of the second; runs that do not pound count as 0.",
             )
         )
     sides = yielding_sides(ds) if forces and plot._grid_dims(ds) else []

@@ -21,6 +21,7 @@ from pound_mc.analysis.selection import MATERIAL_DIM, dim_name, selection
 from pound_mc.analysis.style import output_path, require_simulations
 from pound_mc.errors import InputError, OutputError
 from pound_mc.scene import load_scene, simulate
+from pound_mc.study.dataset import study_folder
 
 
 def _parse_sel(items) -> dict:
@@ -196,7 +197,12 @@ def draw(path: str | Path, kind: str, *, out=None, sel=None, record=None, sample
             return profiles.profile_chart(ds, out, quantity=kind, line=kwargs.get("line"), sel=sel)
         if kind == "probability":
             return plot.probability_chart(
-                ds, out, record=record, sel=sel, line=kwargs.get("line"), base_dir=path.parent
+                ds,
+                out,
+                record=record,
+                sel=sel,
+                line=kwargs.get("line"),
+                base_dir=study_folder(ds, path.parent),
             )
         if kind == "distribution":
             return plot.distribution_chart(ds, out, record=record, sel=sel, by=kwargs.get("by"))
@@ -218,7 +224,7 @@ def draw(path: str | Path, kind: str, *, out=None, sel=None, record=None, sample
                 probability=_probability(kwargs.get("probability")),
                 line=kwargs.get("line"),
                 sel=sel,
-                base_dir=path.parent,
+                base_dir=study_folder(ds, path.parent),
             )
     raise ValueError(f"unknown kind {kind!r}")  # pragma: no cover - argparse checks it
 
@@ -276,7 +282,7 @@ def report_command(args) -> int:
     with ds:
         ds.load()
         try:
-            write_report(ds, out, base_dir=path.parent)
+            write_report(ds, out, base_dir=study_folder(ds, path.parent))
         except OutputError:
             raise
         except InputError as exc:

@@ -721,6 +721,7 @@ def simulate_scene_batch(
     )  # fmt: skip
     if settings.method != ADAPTIVE:
         _threaded(_scene_fixed, nsim, *pair, dt_s, settings, out, cout, _NO_PRE)
+        fixed_restitution(out, settings, xi)  # before the flags: runs flagged keep their numbers
         half = None
         if accuracy_check:
             half = np.empty_like(out)  # step doubling (pound_mc.integrators.accuracy)
@@ -740,6 +741,7 @@ def simulate_scene_batch(
                   np.empty_like(cout), first, group, shared, PRE_RUN_TO_CONTACT)  # fmt: skip
         _threaded(_scene_adaptive, nsim, *pair, dt_s, settings, out, cout,
                   np.arange(nsim, dtype=np.int64), group, shared, PRE_RESUME)  # fmt: skip
+        fixed_restitution(out, settings, xi)
     if settings.method == ADAPTIVE and accuracy_check:
         # the finer run gives only its peak force (the same as a full run's, faster)
         _check_substeps(out, settings, lambda hit, finer, fine: _threaded(
@@ -749,5 +751,4 @@ def simulate_scene_batch(
         ))  # fmt: skip
     contacts = {name: cout[:, :, k] for k, name in enumerate(CONTACT_OUTPUTS)}
     contacts["impacts"] = contacts["impacts"].astype(np.int32)
-    fixed_restitution(out, settings, xi)
     return _named(out), contacts

@@ -24,7 +24,7 @@ import numpy as np
 from pound_mc.errors import InputError
 from pound_mc.integrators.fixed import CENTRAL_DIFFERENCE, NEWMARK, NEWMARK_EXPLICIT
 from pound_mc.integrators.laws import LAW_CODES, RELATION_CODES
-from pound_mc.integrators.outputs import PEAK_FORCE_RESTITUTION, STATUS
+from pound_mc.integrators.outputs import PEAK_FORCE, PEAK_FORCE_RESTITUTION, STATUS
 from pound_mc.physics.contact import CONTACT_MODELS, check_relation, reported_xi
 from pound_mc.physics.materials import E_FLOOR, PER_IMPACT_OUTSIDE, restitution_rows
 from pound_mc.physics.relations import (
@@ -136,7 +136,9 @@ def _settings(model, method, relation, dt_s, substeps, restitution) -> KernelSet
 
 
 def fixed_restitution(out, settings, xi) -> None:
-    """``peak_force_restitution``: the restitution the law really rebounds with (ok runs).
+    """``peak_force_restitution``: the restitution the law really rebounds with.
+
+    Of the ok runs with a contact (NaN without one, as the kernels leave it).
 
     With one restitution for every impact, from the run's damping parameter: ``xi`` by the
     exact single impact (Jankowski), ``exp(-pi xi / sqrt(1 - xi^2))`` (Kelvin), the rebound
@@ -146,7 +148,7 @@ def fixed_restitution(out, settings, xi) -> None:
     seed's Table 2, which becomes the law's rebound for it the same way (the ``xi`` its
     relation gives, or Hertz-damp's rebound).
     """
-    ok = out[..., STATUS] == 0
+    ok = (out[..., STATUS] == 0) & (out[..., PEAK_FORCE] > 0.0)  # NaN without a contact
     if settings.rest_v.size > 0:  # the table's e at the peak-force impact
         target = np.where(ok, out[..., PEAK_FORCE_RESTITUTION], np.nan)
         e = _rebound_of_e(settings.model, settings.relation, target)

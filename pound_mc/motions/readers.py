@@ -264,6 +264,10 @@ def _read_obspy(path: Path) -> list[obspy.Trace]:
                 f"obspy could not read it: {type(exc).__name__}: {exc}", file=path
             ) from None
     notes = [f"{w.category.__name__}: {w.message}" for w in caught]
+    cut = [str(w.message) for w in caught if "unexpected end of file" in str(w.message).lower()]
+    if cut:  # obspy keeps the samples before the cut and reads no further
+        kept = sum(len(tr) for tr in stream)
+        raise InputError(f"truncated: obspy read {kept} samples and stopped ({cut[0]})", file=path)
     if len(stream) == 0:
         raise InputError("the file holds no traces (empty record)", file=path)
     traces = []

@@ -42,6 +42,7 @@ __all__ = [
     "build_dataset",
     "write_netcdf",
     "pounding_counted",
+    "study_folder",
 ]
 
 #: Per-simulation outputs: name -> (units, long_name, dtype).
@@ -294,6 +295,8 @@ def build_dataset(
         "study_name": study.name,
         "study_hash": study.hash,
         "study_text": study.text,
+        # where relative record paths of the study text are read from, when analysed again
+        **({"study_dir": str(Path(study.path).resolve().parent)} if study.path else {}),
         "seed": study.seed,
         "sampling_method": study.method,
         "sampling_seed": study.sampling_seed,
@@ -301,6 +304,18 @@ def build_dataset(
         **(provenance or {}),
     }
     return ds
+
+
+def study_folder(ds: xr.Dataset, fallback: str | Path | None = None) -> Path | None:
+    """The folder of the study file a dataset was run from (``study_dir``), or ``fallback``.
+
+    Relative record paths of the study text are read from there; ``fallback`` where the
+    dataset does not say (an older dataset) or that folder is gone.
+    """
+    folder = ds.attrs.get("study_dir")
+    if folder and Path(folder).is_dir():
+        return Path(folder)
+    return None if fallback is None else Path(fallback)
 
 
 def write_netcdf(ds: xr.Dataset, path: str | Path) -> Path:

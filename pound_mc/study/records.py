@@ -139,12 +139,18 @@ def input_hashes(study) -> dict[str, str]:
     Returns
     -------
     dict
-        ``{"study": hash of the text, "<key> (<path>)": hash of the file's bytes, ...}``; a
-        file that cannot be read hashes to ``"unreadable"`` (reading it then fails with its
-        own message).
+        ``{"study": hash of the text, "<key> (<path>)": hash of the file's bytes, ...}``, the
+        path relative to the study's folder (absolute outside it), so that the same study
+        given by another path (``studies/a.toml``, ``/abs/studies/a.toml``, ``a.toml`` from
+        ``studies/``) resumes; a file that cannot be read hashes to ``"unreadable"`` (reading
+        it then fails with its own message).
     """
     out = {"study": study.hash}
+    base = Path(study.path).resolve().parent if study.path is not None else Path.cwd()
     for key, path in record_files(study):
+        shown = Path(path).resolve()
+        if shown.is_relative_to(base):
+            shown = shown.relative_to(base)
         digest = hashlib.sha256()
         try:
             with open(path, "rb") as fh:
@@ -153,5 +159,5 @@ def input_hashes(study) -> dict[str, str]:
             value = digest.hexdigest()
         except OSError:
             value = "unreadable"
-        out[f"{key} ({path})"] = value
+        out[f"{key} ({shown})"] = value
     return out

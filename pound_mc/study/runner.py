@@ -38,6 +38,10 @@ Test hook: when the environment variable ``POUND_MC_TEST_PAUSE_AT`` names a stag
 standard error and sleeps there (``POUND_MC_TEST_PAUSE_S`` seconds, default 600), so the
 interrupt drill (``tests/test_drills.py``) can kill the process at a known point.  It costs one
 environment lookup per stage and is not meant for users.
+
+Longer than 600 lines because the guarantees of a run (one writer per output, resumable
+chunks checked against a manifest of the inputs, nothing half-written, a results folder told
+from a folder of the user's) sit with the loop they guard.
 """
 
 from __future__ import annotations
@@ -322,9 +326,30 @@ def _changed_inputs(old: dict, inputs: dict) -> list[str]:
     return changed
 
 
+def _not_ours(work: Path) -> list[str]:
+    """What ``work`` holds that no run writes (a folder without a manifest; a plain file)."""
+    if work.is_symlink() or not work.exists():
+        return []
+    if not work.is_dir():
+        return [work.name]
+    if (work / _MANIFEST).exists():
+        return []
+    ours = ("chunk_", ".chunk_")
+    return sorted(p.name for p in work.iterdir()
+                  if not (p.name.startswith(ours) or p.name.endswith(".part")))  # fmt: skip
+
+
 def _check_manifest(work: Path, study, fresh: bool) -> None:
     manifest = work / _MANIFEST
     inputs = input_hashes(study)
+    if foreign := _not_ours(work):  # --fresh removed a folder of the user's files
+        more = f" and {len(foreign) - 3} more" if len(foreign) > 3 else ""
+        shown = ", ".join(foreign[:3]) + more
+        raise OutputError(
+            f"exists and is no pound-mc results folder (it holds {shown}): give another --out "
+            "or study name; nothing was removed or written",
+            file=str(work),
+        )
     if fresh and (work.exists() or work.is_symlink()):
         _remove_tree(work)
     elif manifest.exists():
