@@ -489,6 +489,34 @@ def test_a_branch_adaptive_cannot_step_is_refused_before_any_chunk(make_study, t
     assert not (tmp_path / "o" / study.stem).exists()
 
 
+def test_a_study_or_scene_file_with_a_bom_reads(make_study, tmp_path):
+    """An editor's UTF-8 byte-order mark read as "not valid TOML (at line 1, column 1)"."""
+    study = _tiny(make_study)
+    study.write_bytes(b"\xef\xbb\xbf" + study.read_bytes())
+    rc, _, err = _run("check", study)
+    assert rc == 0, err
+    scene = tmp_path / "b1.toml"
+    b1 = Path(__file__).resolve().parent.parent / "studies" / "scenes" / "b1.toml"
+    scene.write_bytes(b"\xef\xbb\xbf" + b1.read_bytes())
+    assert load_scene(scene).contact_model == "jankowski"
+
+
+@pytest.mark.parametrize("command", ["stability", "bench"])
+def test_an_unwritable_out_is_refused_before_the_work(tmp_path, monkeypatch, command):
+    """bench and stability computed for 6-13 s, then failed on --out."""
+    import pound_mc.cli.scene as cli_scene
+
+    def no_work(*args, **kwargs):
+        raise AssertionError("computed before --out was checked")
+
+    monkeypatch.setattr(cli_scene, "head_to_head", no_work)
+    monkeypatch.setattr(cli_scene, "stability_map", no_work)
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    rc, _, err = _run(command, "--out", blocker / "sub")
+    _assert_clean_error(rc, err, "--out", str(blocker / "sub"))
+
+
 def test_simulate_names_the_scene_file_with_its_records_error(tmp_path):
     """Class 7: ``simulate`` reported a record's error without the scene file's name."""
     scene = tmp_path / "s.toml"

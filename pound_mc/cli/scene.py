@@ -14,8 +14,8 @@ from pound_mc.analysis.plot_numerics import (
     time_history_chart,
     work_precision_chart,
 )
-from pound_mc.analysis.style import output_path
-from pound_mc.errors import InputError
+from pound_mc.analysis.style import output_path, write_atomically
+from pound_mc.errors import InputError, OutputError
 from pound_mc.integrators import METHODS
 from pound_mc.motions import record_arrays
 from pound_mc.motions.preprocessing import WINDOW_PEAK_WARN
@@ -99,6 +99,7 @@ def bench_command(args) -> int:
             raise InputError(f"unknown scene {s!r}; allowed: {', '.join(SCENES)}", key="--scenes")
     if args.repeats < 1:
         raise InputError(f"must be >= 1, got {args.repeats}", key="--repeats")
+    out = None if args.head_to_head_only else _out_dir(args.out)  # before minutes of timing
     duel, info = head_to_head(repeats=args.repeats)
     if not args.json:
         _print_head_to_head(duel, info)
@@ -110,9 +111,7 @@ def bench_command(args) -> int:
     # the shear pairs of growing size, with a shear scene asked for
     shear = any(name.startswith("shear") for name in args.scenes)
     scaling = shear_scaling(repeats=args.repeats) if shear else None
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    table.to_csv(out / "bench.csv", index=False)
+    write_atomically(out / "bench.csv", lambda tmp: table.to_csv(tmp, index=False))
     work_precision_chart(table, out / "work_precision.png")
     if args.json:
         sweep = json.loads(table.to_json(orient="records"))
@@ -153,9 +152,24 @@ def _print_head_to_head(duel, info) -> None:
 
 def stability_command(args) -> int:
     """``pound-mc stability``: the largest stable step against contact stiffness."""
+    _out_dir(args.out)  # before the map is computed
     table = stability_map()
     _write_table(args, table, "stability.csv", stability_map_chart, "stability_map.png", ".4g")
     return 0
+
+
+def _out_dir(path) -> Path:
+    """The ``--out`` folder, made and checked writable before any work is done."""
+    out = Path(path)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        probe = out / ".pound-mc-write-check"
+        probe.touch()
+        probe.unlink()
+    except OSError as exc:
+        raise OutputError(f"cannot write results here: {exc.strerror or exc}", file=str(out),
+                          key="--out") from None  # fmt: skip
+    return out
 
 
 def _write_table(args, table, csv_name, chart, png_name, number_format, columns=None) -> None:
@@ -163,9 +177,8 @@ def _write_table(args, table, csv_name, chart, png_name, number_format, columns=
 
     The text shows ``columns`` (default all), numbers in ``number_format``.
     """
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    table.to_csv(out / csv_name, index=False)
+    out = _out_dir(args.out)
+    write_atomically(out / csv_name, lambda tmp: table.to_csv(tmp, index=False))
     chart(table, out / png_name)
     if args.json:
         print(table.to_json(orient="records", indent=1))

@@ -710,7 +710,7 @@ def load_scene(path: str | Path) -> Scene:
     if not path.is_file():
         raise InputError("no such scene file", file=str(path))
     try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
+        data = tomllib.loads(path.read_text(encoding="utf-8-sig"))  # a leading BOM dropped
     except tomllib.TOMLDecodeError as exc:
         raise InputError(f"not valid TOML: {exc}", file=str(path)) from None
     except (OSError, UnicodeDecodeError) as exc:

@@ -595,7 +595,7 @@ def load_study(path: str | Path) -> Study:
         raise InputError("symbolic link that leads nowhere (a loop, or its target is missing)",
                          file=str(path))  # fmt: skip
     try:
-        text = path.read_text(encoding="utf-8")
+        text = path.read_text(encoding="utf-8-sig")  # a leading BOM dropped: TOML has none
     except FileNotFoundError:
         raise InputError("study file not found", file=str(path)) from None
     except (OSError, UnicodeDecodeError) as exc:
