@@ -225,18 +225,18 @@ def spectrum_chart(
     if ds[x].dtype.kind not in "fiu" or x == MATERIAL_DIM:
         ax.set_xticks(xs, [value_text(ds, x, i) for i in range(ds.sizes[x])])
         fit_tick_labels(ax, ds.sizes[x])
-    if each:
-        rec_text = f"one line per record ({ds.sizes['record']})"
     n_rec, n_smp = ds.sizes["record"], ds.sizes["sample"]
     over_text = f"{n_smp} samples"
-    if isinstance(record, str) and record in ("median", "pooled") and n_rec == 1:
+    if each:
+        rec_text = f"one line per record ({n_rec})"
+    elif isinstance(record, str) and record in ("median", "pooled") and n_rec == 1:
         rec_text = f"record {ds['record'].values[0]}"
     elif isinstance(record, str) and record == "pooled":
         rec_text = f"all {n_rec} records pooled"
         over_text = f"{n_rec} records x {n_smp} samples"
     elif isinstance(record, str) and record == "median":
         rec_text = f"median over {n_rec} records"
-    elif not each:
+    else:
         rec_text = f"record {ds['record'].values[_record_index(ds, record)]}"
     held = ", ".join(f"{d} = {value_text(ds, d, i)}" for d, i in hold.items())
     finish_axes(

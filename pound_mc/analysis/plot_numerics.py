@@ -114,27 +114,23 @@ def _contact_floors(result) -> list[tuple[str, np.ndarray, str, np.ndarray]]:
     contacts = getattr(scene, "contacts", None)
     left, right = result.disp_left_m, result.disp_right_m
     n = result.penetration_m.shape[1]
-    walls = [getattr(getattr(scene, side, None), "model", None) == "wall"
-             for side in ("left", "right")]  # fmt: skip
+    row = getattr(scene, "row", None)
+    buildings = row if row is not None else [getattr(scene, s, None) for s in ("left", "right")]
+    who = ["left", "right"] if row is None else [f"building {k + 1}" for k in range(len(row))]
 
-    def side_name(k, side, floor):  # a wall (at rest with the ground) has no floors
-        return "wall" if walls[k] else f"{side}, floor {floor}"
+    def name(k, floor):  # building k's floor (0-based); a wall, at rest with the ground, has none
+        wall = getattr(buildings[k], "model", None) == "wall"
+        return "wall" if wall else f"{who[k]}, floor {floor + 1}"
 
     if contacts is None or len(contacts) != n:
         nl, nr = left.shape[1], right.shape[1]
-        return [(side_name(0, "left", nl), left[:, -1],
-                 side_name(1, "right", nr), right[:, -1])] * n  # fmt: skip
-    row = getattr(scene, "row", None)
+        return [(name(0, nl - 1), left[:, -1], name(1, nr - 1), right[:, -1])] * n
     if row is None:
-        return [(side_name(0, "left", c.left_floor + 1), left[:, c.left_floor],
-                 side_name(1, "right", c.right_floor + 1), right[:, c.right_floor])
+        return [(name(0, c.left_floor), left[:, c.left_floor],
+                 name(1, c.right_floor), right[:, c.right_floor])
                 for c in contacts]  # fmt: skip
     floors = np.hstack([left, right])  # the row's buildings, left to right
     start = np.cumsum([0] + [b.n_floors for b in row])
-
-    def name(k, floor):  # a wall (at rest with the ground) has no floors
-        return "wall" if row[k].model == "wall" else f"building {k + 1}, floor {floor + 1}"
-
     return [(name(c.pair, c.left_floor), floors[:, start[c.pair] + c.left_floor],
              name(c.pair + 1, c.right_floor), floors[:, start[c.pair + 1] + c.right_floor])
             for c in contacts]  # fmt: skip

@@ -68,7 +68,7 @@ from pound_mc.integrators.toolkit import (
     step_size,
 )
 
-__all__ = ["adaptive_bilinear", "branch_supported", "refuse_unsupported"]
+__all__ = ["adaptive_bilinear", "branch_supported", "refuse_unsupported", "BOUC_WEN_NEEDS_NEWMARK"]
 
 _INF = math.inf
 _TWELFTH = 1.0 / 12.0
@@ -88,6 +88,13 @@ def branch_supported(post_yield_ratio: float, damping_ratio: float) -> bool:
     return post_yield_ratio > damping_ratio * damping_ratio
 
 
+#: Why ``adaptive`` refuses Bouc-Wen storeys (key ``integrator.method``), and what to set.
+BOUC_WEN_NEEDS_NEWMARK = (
+    "hysteresis = 'bouc-wen' runs with method = 'newmark' (or 'newmark-explicit'); set it and "
+    "a step dt_s (1e-3 s or less)"
+)
+
+
 def refuse_unsupported(store, zeta) -> None:
     """Raise :class:`~pound_mc.errors.InputError` for a branch ``adaptive`` cannot step.
 
@@ -95,11 +102,7 @@ def refuse_unsupported(store, zeta) -> None:
     Bouc-Wen storeys are not piecewise linear: they run with ``newmark``.
     """
     if np.any(store[:, S_BW] > 0.0):
-        raise InputError(
-            "hysteresis = 'bouc-wen' runs with method = 'newmark' (or 'newmark-explicit'); set "
-            "it and a step dt_s (1e-3 s or less)",
-            key="integrator.method",
-        )
+        raise InputError(BOUC_WEN_NEEDS_NEWMARK, key="integrator.method")
     for j, side in enumerate(("left", "right")):
         alpha = store[j, S_ALPHA]
         if math.isfinite(store[j, S_YIELD]) and not branch_supported(alpha, zeta[j]):

@@ -37,6 +37,7 @@ from pound_mc.integrators.accuracy import (
     flag_inaccurate,
     substep_check_due,
 )
+from pound_mc.integrators.adaptive_bilinear import BOUC_WEN_NEEDS_NEWMARK, branch_supported
 from pound_mc.integrators.outputs import STATUS_OK
 from pound_mc.integrators.threads import numba_threads
 from pound_mc.motions import G, load_record, record_arrays
@@ -240,14 +241,13 @@ class StudyEngine:
             if building.model != "sdof" or not building.inelastic:
                 continue
             if building.hysteresis == "bouc-wen":
-                raise InputError("hysteresis = 'bouc-wen' runs with method = 'newmark' (or "
-                                 "'newmark-explicit'); set it and a step dt_s (1e-3 s or less)",
-                                 file=self.study.path, key="integrator.method")  # fmt: skip
+                raise InputError(BOUC_WEN_NEEDS_NEWMARK, file=self.study.path,
+                                 key="integrator.method")  # fmt: skip
             zeta = varied.get(f"{side}.damping_ratio", building.damping_ratio)
             alpha = varied.get(f"{side}.post_yield_ratio", building.post_yield_ratio)
             zeta, alpha = np.broadcast_arrays(np.atleast_1d(np.asarray(zeta, float)),
                                               np.atleast_1d(np.asarray(alpha, float)))  # fmt: skip
-            bad = ~(alpha > zeta * zeta)
+            bad = ~branch_supported(alpha, zeta)
             if bad.any():
                 k = int(np.argmax(bad))
                 key = f"{side}.damping_ratio" if f"{side}.damping_ratio" in varied else \
