@@ -74,3 +74,21 @@ def test_round_off_contact_is_no_impact(record, method):
     assert out["status"] == 0
     assert out["impacts"] == 0
     assert out["max_penetration"] == 0.0
+
+
+def test_borrowed_view_reads_and_writes_its_owner():
+    """toolkit.borrow: a view without an owner over the same memory (the kernels' loops use it)."""
+    from pound_mc._jit import jit
+    from pound_mc.integrators.toolkit import borrow
+
+    @jit
+    def double_through_view(a):
+        b = borrow(a)
+        for k in range(b.shape[0]):
+            for j in range(b.shape[1]):
+                b[k, j] *= 2.0
+        return b[1, 2]
+
+    a = np.arange(12.0).reshape(3, 4)
+    assert double_through_view(a) == 12.0  # a[1, 2] = 6, doubled in place
+    np.testing.assert_array_equal(a, 2.0 * np.arange(12.0).reshape(3, 4))

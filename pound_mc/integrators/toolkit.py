@@ -15,6 +15,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from numba import types
+from numba.extending import intrinsic
+from numba.np.arrayobj import make_array, populate_array
 
 from pound_mc._jit import jit
 
@@ -472,3 +475,25 @@ def solve_small(a, b, nc):
             acc -= a[k, col] * b[col]
         b[k] = acc / a[k, k]
     return True
+
+
+@intrinsic
+def borrow(typingctx, arr):
+    """A view of ``arr`` that does not own its memory (no reference counting on it).
+
+    numba counts the references of every array that a helper receives, atomically, at each
+    call of an inlined helper with loops; a view without an owner makes each count a test
+    for null.  The owner must outlive the view: only views of a function's arguments, or of
+    arrays its caller holds, are safe.
+    """
+    if not isinstance(arr, types.Array):
+        return None
+
+    def codegen(context, builder, sig, args):
+        src = make_array(arr)(context, builder, value=args[0])
+        dst = make_array(arr)(context, builder)
+        populate_array(dst, data=src.data, shape=src.shape, strides=src.strides,
+                       itemsize=src.itemsize, meminfo=None, parent=None)  # fmt: skip
+        return dst._getvalue()
+
+    return arr(arr), codegen
