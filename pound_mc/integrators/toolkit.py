@@ -16,7 +16,7 @@ import math
 
 import numpy as np
 from numba import types
-from numba.extending import intrinsic
+from numba.extending import intrinsic, overload
 from numba.np.arrayobj import make_array, populate_array
 
 from pound_mc._jit import jit
@@ -477,15 +477,20 @@ def solve_small(a, b, nc):
     return True
 
 
-@intrinsic
-def borrow(typingctx, arr):
+def borrow(arr):
     """A view of ``arr`` that does not own its memory (no reference counting on it).
 
     numba counts the references of every array that a helper receives, atomically, at each
     call of an inlined helper with loops; a view without an owner makes each count a test
     for null.  The owner must outlive the view: only views of a function's arguments, or of
-    arrays its caller holds, are safe.
+    arrays its caller holds, are safe.  In Python (``NUMBA_DISABLE_JIT=1``) ``arr`` itself.
     """
+    return arr
+
+
+@intrinsic
+def _ownerless(typingctx, arr):
+    """Compiled :func:`borrow`: ``arr``'s data, shape and strides without its meminfo."""
     if not isinstance(arr, types.Array):
         return None
 
@@ -497,3 +502,10 @@ def borrow(typingctx, arr):
         return dst._getvalue()
 
     return arr(arr), codegen
+
+
+@overload(borrow)
+def _borrow_compiled(arr):
+    if isinstance(arr, types.Array):
+        return lambda arr: _ownerless(arr)
+    return None
