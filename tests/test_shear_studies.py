@@ -241,40 +241,19 @@ def test_flagged_runs_report_their_rebound_as_simulate_does(tmp_path):
     """A shear study took the restitution after flagging runs inaccurate, so those kept the
     kernel's raw value (Table 2's e per impact, NaN with fixed e) where simulate() gives the
     law's rebound; both give the rebound now."""
-    text = """
-[study]
-name = "flagged"
-seed = 5
-[record]
-source = "builtin:elcentro"
-duration_s = 4.0
-pga_g = 0.5
-[left]
-model = "shear"
-storey_mass_kg = [1.0e6, 1.0e6, 1.0e6]
-storey_stiffness_N_per_m = [1.2e9, 1.0e9, 0.8e9]
-storey_height_m = [3.0, 3.0, 3.0]
-damping_ratio = 0.05
-[right]
-model = "shear"
-storey_mass_kg = [1.0e6, 1.0e6, 1.0e6, 1.0e6, 1.0e6]
-storey_stiffness_N_per_m = [0.9e9, 0.8e9, 0.7e9, 0.6e9, 0.5e9]
-storey_height_m = [3.0, 3.0, 3.0, 3.0, 3.0]
-damping_ratio = 0.05
-[contact]
-model = "jankowski"
-gap_m = 0.0
-beta = 2.75e9
-restitution = "velocity"
-material = "concrete"
-[integrator]
-method = "newmark"
-dt_s = 0.01
-[sampling]
-n = 3
-[sampling.vary]
-"contact.e_quantile" = { distribution = "uniform", low = 0.0, high = 1.0 }
-"""
+    text = study_text(
+        SMALL_SHEAR,
+        study=Whole(name="flagged", seed=5),
+        record={"duration_s": 4.0},
+        contact=Whole(
+            model="jankowski", gap_m=0.0, beta=2.75e9, restitution="velocity", material="concrete"
+        ),  # fmt: skip
+        integrator=Whole(method="newmark", dt_s=0.01),
+        grid=None,
+        sampling=Whole(
+            n=3, vary={"contact.e_quantile": {"distribution": "uniform", "low": 0.0, "high": 1.0}}
+        ),  # fmt: skip
+    )
     study = study_from_text(text, file=tmp_path / "flagged.toml")
     ds = xr.load_dataset(run_study(study, tmp_path, progress=False).path)
     status = ds["status"].values.ravel()
