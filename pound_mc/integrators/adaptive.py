@@ -66,21 +66,18 @@ _ONSET, _TO_RESTITUTION, _SEPARATION, _TO_APPROACH = 1, 2, 3, 4
 @jit
 def rk4(
     q, v, s, hs, ag0, slope, omega, zeta, gamma, psi, gap, beta, cd, zhd, phase, model,
-    qn, vn, wk, fc, cimp, fc0, rate, st,
+    qn, vn, wk, fc, cimp, fc0, rate,
 ):  # fmt: skip
     """One classical Runge-Kutta step of length ``hs`` from local time ``s``.
 
     Writes the new state into ``qn, vn``, the contact impulses of the step into ``cimp`` and
     the forces at the start into ``fc0`` (the accelerations at the start are ``wk[4]``);
     returns the increments of input energy, damping energy and contact work.  ``rate``:
-    scratch of one value per contact; ``st``: the stage's state and accelerations, three
-    arrays of one value per mode (whole arrays: a row of ``wk`` passed on would be a view,
-    whose reference count numba updates atomically at every stage).
+    scratch of one value per contact.
     """
     n = q.size
     nc = fc.size
-    sq, sv, sa = st
-    # wk rows: 0..3 dq stages, 4..7 dv stages
+    # wk rows: 0..3 dq stages, 4..7 dv stages, 8 q stage, 9 v stage
     e_in = 0.0
     e_d = 0.0
     w_c = 0.0
@@ -90,24 +87,23 @@ def rk4(
         if stage == 0:
             tau = 0.0
             for j in range(n):
-                sq[j] = q[j]
-                sv[j] = v[j]
+                wk[8, j] = q[j]
+                wk[9, j] = v[j]
         else:
             tau = hs if stage == 3 else 0.5 * hs
             fac = hs if stage == 3 else 0.5 * hs
             for j in range(n):
-                sq[j] = q[j] + fac * wk[stage - 1, j]
-                sv[j] = v[j] + fac * wk[4 + stage - 1, j]
+                wk[8, j] = q[j] + fac * wk[stage - 1, j]
+                wk[9, j] = v[j] + fac * wk[4 + stage - 1, j]
         ag = ag0 + slope * (s + tau)
-        contact_forces(sq, sv, psi, gap, beta, cd, zhd, phase, model, fc, rate)
-        accel(sq, sv, ag, omega, zeta, gamma, psi, fc, sa)
+        contact_forces(wk[8], wk[9], psi, gap, beta, cd, zhd, phase, model, fc, rate)
+        accel(wk[8], wk[9], ag, omega, zeta, gamma, psi, fc, wk[4 + stage])
         if stage == 0:
             for c in range(nc):
                 fc0[c] = fc[c]
         for j in range(n):
-            wk[stage, j] = sv[j]
-            wk[4 + stage, j] = sa[j]
-        pin, pd = powers(sv, ag, omega, zeta, gamma)
+            wk[stage, j] = wk[9, j]
+        pin, pd = powers(wk[9], ag, omega, zeta, gamma)
         pc = 0.0
         for c in range(nc):
             if fc[c] != 0.0:
@@ -132,20 +128,11 @@ def _exact_step(q, v, q1, v1, coef, regular, p0s, p1s, omega, zeta, gamma, hh):
     """Exact step of every mode over ``hh`` (the precomputed coefficients on a regular step)."""
     for j in range(q.size):
         if regular:
-            p0 = -gamma[j] * p0s  # coef[j, ., .] indexed whole (a view coef[j] costs atomics)
+            cf = coef[j]
+            p0 = -gamma[j] * p0s
             p1 = -gamma[j] * p1s
-            q1[j] = (
-                coef[j, 0, 0] * q[j]
-                + coef[j, 0, 1] * v[j]
-                + coef[j, 0, 2] * p0
-                + coef[j, 0, 3] * p1
-            )
-            v1[j] = (
-                coef[j, 1, 0] * q[j]
-                + coef[j, 1, 1] * v[j]
-                + coef[j, 1, 2] * p0
-                + coef[j, 1, 3] * p1
-            )
+            q1[j] = cf[0, 0] * q[j] + cf[0, 1] * v[j] + cf[0, 2] * p0 + cf[0, 3] * p1
+            v1[j] = cf[1, 0] * q[j] + cf[1, 1] * v[j] + cf[1, 2] * p0 + cf[1, 3] * p1
         else:
             q1[j], v1[j] = advance(q[j], v[j], -gamma[j] * p0s, -gamma[j] * p1s, omega[j],
                                    zeta[j], hh)  # fmt: skip
@@ -466,14 +453,8 @@ def adaptive(
     the loop keeps its scalar state (energies, clocks, phase flags) in locals across the two
     kinds of step; each step's work is in the helpers above.
     """
-    ag, omega, zeta, gamma, phi, side = (
-        borrow(ag),
-        borrow(omega),
-        borrow(zeta),
-        borrow(gamma),
-        borrow(phi),
-        borrow(side),
-    )
+    ag, omega, zeta, gamma = borrow(ag), borrow(omega), borrow(zeta), borrow(gamma)
+    phi, side = borrow(phi), borrow(side)
     psi, gap, meff, beta, xi = borrow(psi), borrow(gap), borrow(meff), borrow(beta), borrow(xi)
     q, v, out, cout, pre = borrow(q), borrow(v), borrow(out), borrow(cout), borrow(pre)
     model = settings.model
@@ -487,8 +468,7 @@ def adaptive(
     v1 = np.empty(n)
     a0 = np.empty(n)
     a1 = np.empty(n)
-    wk = np.empty((8, n))
-    st = (np.empty(n), np.empty(n), np.empty(n))  # rk4's stage scratch
+    wk = np.empty((10, n))
     fc = np.zeros(nc)
     fc0 = np.zeros(nc)
     cimp = np.zeros(nc)
@@ -520,12 +500,11 @@ def adaptive(
     zf = np.zeros(nf)
     # the loop works on views without an owner (toolkit.borrow): the arrays stay owned by
     # ``owned``, alive to every return below (_alive)
-    owned = (coef, q1, v1, a0, a1, wk, st, fc, fc0, cimp, phase, pending, zhd, ep, peak_e, peaks,
+    owned = (coef, q1, v1, a0, a1, wk, fc, fc0, cimp, phase, pending, zhd, ep, peak_e, peaks,
              dc0, ddc0, dc1, ddc1, xf0, xfd0, en0, en1, nphi, phi_t, psi_t, flo, fhi, clo, chi,
              xb, xdb, pw0, pw1, rate, zf, cd)  # fmt: skip
     coef, q1, v1, a0, a1 = borrow(coef), borrow(q1), borrow(v1), borrow(a0), borrow(a1)
     wk, fc, fc0, cimp, zhd = borrow(wk), borrow(fc), borrow(fc0), borrow(cimp), borrow(zhd)
-    st = (borrow(st[0]), borrow(st[1]), borrow(st[2]))
     phase, pending, ep, peak_e = borrow(phase), borrow(pending), borrow(ep), borrow(peak_e)
     dc0, ddc0, dc1, ddc1 = borrow(dc0), borrow(ddc0), borrow(dc1), borrow(ddc1)
     xf0, xfd0, en0, en1, nphi = borrow(xf0), borrow(xfd0), borrow(en0), borrow(en1), borrow(nphi)
@@ -622,7 +601,7 @@ def adaptive(
                                      dt_rec - s)  # fmt: skip
                 de_in, de_d, dw_c = rk4(q, v, s, hs, ag0, slope, omega, zeta, gamma, psi, gap,
                                         beta, cd, zhd, phase, model, q1, v1, wk, fc, cimp,
-                                        fc0, rate, st)  # fmt: skip
+                                        fc0, rate)  # fmt: skip
                 for j in range(n):
                     a0[j] = wk[4, j]
                 contact_forces(q1, v1, psi, gap, beta, cd, zhd, phase, model, fc, rate)
@@ -633,7 +612,7 @@ def adaptive(
                     hs = t_ev
                     de_in, de_d, dw_c = rk4(q, v, s, hs, ag0, slope, omega, zeta, gamma, psi,
                                             gap, beta, cd, zhd, phase, model, q1, v1, wk, fc,
-                                            cimp, fc0, rate, st)  # fmt: skip
+                                            cimp, fc0, rate)  # fmt: skip
                     contact_forces(q1, v1, psi, gap, beta, cd, zhd, phase, model, fc, rate)
                     accel(q1, v1, ag0 + slope * (s + hs), omega, zeta, gamma, psi, fc, a1)
                 e_in += de_in
