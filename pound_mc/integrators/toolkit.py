@@ -240,11 +240,14 @@ def hermite_root(y0, yp0, y1, yp1, h):
             hi = s
         fp = b + s * (2.0 * c + 3.0 * d * s)
         s_new = s - f / fp if fp != 0.0 else 0.5 * (lo + hi)
+        if abs(s_new - s) < 1e-15:
+            # converged; tested before the safeguard, which would take a converged step
+            # onto the bracket's end (the bracket moved to ``s``) for a bisection
+            if lo <= s_new <= hi:
+                s = s_new
+            break
         if not (lo < s_new < hi):
             s_new = 0.5 * (lo + hi)
-        if abs(s_new - s) < 1e-15:
-            s = s_new
-            break
         s = s_new
     return s * h
 
@@ -422,6 +425,10 @@ def newton_in_bracket(t, d, dd, ddd, which, lo, hi, tol):
     else:
         lo = t
     t_new = t - g / gp if gp != 0.0 else 0.5 * (lo + hi)
+    if abs(t_new - t) <= tol * (hi + 1e-300) and lo <= t_new <= hi:
+        # converged: tested before the safeguard, which would take a converged step onto
+        # the bracket's end (the bracket moved to ``t``) for a bisection
+        return t_new, lo, hi, True
     if not (lo < t_new < hi):
         t_new = 0.5 * (lo + hi)
     done = abs(t_new - t) <= tol * (hi + 1e-300) or hi - lo <= 1e-15 * hi
