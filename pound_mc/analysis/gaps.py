@@ -86,7 +86,7 @@ def study_gaps(study_or_dataset, *, base_dir=None, substeps: int = 8):
         text = study_or_dataset.attrs.get("study_text")
         if not text:
             raise InputError("the dataset has no study_text attribute", key="study_text")
-        base_dir = study_folder(study_or_dataset, base_dir) if base_dir is None else base_dir
+        base_dir = study_folder(study_or_dataset) if base_dir is None else base_dir
         file = None if base_dir is None else str(base_dir) + "/dataset-study.toml"
         study = study_from_text(text, file=file)
     engine = StudyEngine(study)

@@ -152,9 +152,10 @@ def _print_head_to_head(duel, info) -> None:
 
 def stability_command(args) -> int:
     """``pound-mc stability``: the largest stable step against contact stiffness."""
-    _out_dir(args.out)  # before the map is computed
+    out = _out_dir(args.out)  # before the map is computed
     table = stability_map()
-    _write_table(args, table, "stability.csv", stability_map_chart, "stability_map.png", ".4g")
+    _write_table(args, out, table, "stability.csv", stability_map_chart, "stability_map.png",
+                 ".4g")  # fmt: skip
     return 0
 
 
@@ -172,12 +173,13 @@ def _out_dir(path) -> Path:
     return out
 
 
-def _write_table(args, table, csv_name, chart, png_name, number_format, columns=None) -> None:
-    """Write ``table`` as CSV and its chart into ``args.out``; print it as JSON or as text.
+def _write_table(args, out, table, csv_name, chart, png_name, number_format,
+                 columns=None) -> None:  # fmt: skip
+    """Write ``table`` as CSV and its chart into ``out`` (:func:`_out_dir`); print it.
 
-    The text shows ``columns`` (default all), numbers in ``number_format``.
+    As JSON (``args.json``) or as text showing ``columns`` (default all), numbers in
+    ``number_format``.
     """
-    out = _out_dir(args.out)
     write_atomically(out / csv_name, lambda tmp: table.to_csv(tmp, index=False))
     chart(table, out / png_name)
     if args.json:
