@@ -99,6 +99,20 @@ def test_interrupted_run_resumes_identically(study_file, reference, tmp_path):
     _assert_identical(reference, third.path)
 
 
+def test_run_resumed_with_another_chunk_size_keeps_its_chunks(study_file, reference, tmp_path,
+                                                              capsys):  # fmt: skip
+    out = tmp_path / "resize"
+    first = run_study(load_study(study_file), out, chunk_size=7, max_chunks=3, progress=False)
+    assert first.chunks_run == 3
+    second = run_study(load_study(study_file), out, chunk_size=5, progress=False)
+    # the three chunks of 7 are kept: the rest is cut to 7 as well, not everything run again
+    assert second.complete and second.chunks_total == len(chunk_ranges(N, 7))
+    assert second.chunks_run == second.chunks_total - 3
+    assert "holds 3 finished chunks of 7 simulations" in capsys.readouterr().err
+    assert not list((out / "small").glob("chunk_5_*.npz"))
+    _assert_identical(reference, second.path)
+
+
 _KILLED_RUN = """
 import sys, time
 from pound_mc.study.engine import StudyEngine

@@ -46,6 +46,7 @@ from a folder of the user's) sit with the loop they guard.
 
 from __future__ import annotations
 
+import collections
 import fcntl
 import io
 import json
@@ -571,6 +572,31 @@ def run_study(
             raise
 
 
+def _resumed_chunk_size(work: Path, chunk_size: int) -> int:
+    """The chunk size to go on with: that of the finished chunks in ``work``, if any.
+
+    A run resumed with another ``chunk_size`` (``--chunk-size``) keeps the chunks it has: the
+    size they were cut to wins, and a note says so (without them, every simulation would run
+    again).  Among chunk files of several sizes, the requested size wins if it has any, else
+    the size with the most files.
+    """
+    sizes = collections.Counter()
+    for path in work.glob("chunk_*_*.npz"):
+        _, size, index = path.stem.split("_", 2)
+        if size.isdigit() and index.isdigit() and int(size) > 0:
+            sizes[int(size)] += 1
+    if not sizes or chunk_size in sizes:
+        return chunk_size
+    size, count = sizes.most_common(1)[0]
+    print(
+        f"{work} holds {_count(count, 'finished chunk')} of {size:,} simulations: going on "
+        f"with that chunk size ({chunk_size:,} applies to a fresh run, --fresh)",
+        file=sys.stderr,
+        flush=True,
+    )
+    return size
+
+
 def _run_locked(study, out_dir, engine, layout, fresh, chunk_size, progress, max_chunks, executor,
                 on_chunk) -> RunReport:  # fmt: skip
     """:func:`run_study` once the output lock is held."""
@@ -578,6 +604,7 @@ def _run_locked(study, out_dir, engine, layout, fresh, chunk_size, progress, max
     _check_manifest(work, study, fresh)
 
     n = study.n_simulations
+    chunk_size = _resumed_chunk_size(work, chunk_size)  # --fresh removed them
     ranges = chunk_ranges(n, chunk_size)
     try:
         flat = {name: np.empty((n, *tail), dtype=dtype) for name, (tail, dtype) in layout.items()}
