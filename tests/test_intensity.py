@@ -75,6 +75,19 @@ def test_scale_factor_refuses_unclear_targets(kwargs, message):
         intensity.scale_factor(0.01, np.ones(10), **kwargs)
 
 
+def test_scale_factor_refuses_a_period_longer_than_the_record():
+    # Sa(T) of a 4-s record at T = 10 s is no spectral ordinate; at T = 1e6 s the factor that
+    # scales it to 0.3 g would be about 1e12
+    dt, acc = 0.01, np.sin(np.linspace(0.0, 40.0, 401))
+    assert intensity.scale_factor(dt, acc, sa_g=0.3, sa_period_s=4.0) > 0  # the record's length
+    for period in (4.5, 1e6):
+        with pytest.raises(InputError, match="longer than the record") as info:
+            intensity.scale_factor(dt, acc, sa_g=0.3, sa_period_s=period)
+        assert info.value.key == "record.sa_period_s"
+    with pytest.raises(InputError, match=r"> 0 \[s\]"):
+        intensity.scale_factor(dt, acc, sa_g=0.3, sa_period_s=-1.0)
+
+
 def test_scale_factor_refuses_a_silent_record():
     with pytest.raises(InputError, match="is zero"):
         intensity.scale_factor(0.01, np.zeros(10), sa_g=0.3, sa_period_s=1.0)

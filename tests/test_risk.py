@@ -263,6 +263,29 @@ pga_g = 0.3
     assert "record.pga_g" in text and "record.sa_period_s" in text
 
 
+def test_sa_period_longer_than_the_record_is_refused():
+    # a 4-s record has no Sa at 10 s: scaling to it would multiply the record by ~1e3 (1e12 at
+    # 1e6 s, every simulation unstable); refused naming the file and the key, before any run
+    study = study_from_text(
+        f"""
+[study]
+name = "x"
+seed = 1
+[[records]]
+source = "builtin:elcentro"
+duration_s = 4.0
+sa_period_s = 10.0
+{SCENE}
+[grid]
+"record.sa_g" = [0.1, 0.2]
+""",
+        file="s.toml",
+    )
+    with pytest.raises(InputError, match="longer than the record") as info:
+        StudyEngine(study)
+    assert info.value.file == "s.toml" and info.value.key == "records[0].sa_period_s"
+
+
 def test_required_gap_chart_draws_the_dataset(glob_dataset):
     ds, _ = glob_dataset
     fig = required_gap_chart(ds, probability=0.1, rules=None)

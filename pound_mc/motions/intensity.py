@@ -25,7 +25,7 @@ from pound_mc.errors import InputError
 from pound_mc.motions import G, record_arrays
 from pound_mc.physics.spectra import response_spectrum
 
-__all__ = ["pga_g", "sa_g", "scale_factor"]
+__all__ = ["checked_sa_period", "pga_g", "sa_g", "scale_factor"]
 
 
 def _arrays(record) -> tuple[float, np.ndarray]:
@@ -100,14 +100,37 @@ def sa_g(dt: float, acc, period_s, damping: float = 0.05):
     return float(values[0]) if np.ndim(period_s) == 0 else values
 
 
-def _target(value, name: str) -> float:
+def _target(value, name: str, unit: str = "g") -> float:
     try:
         target = float(value)
     except (TypeError, ValueError):
-        raise InputError(f"{name} must be a number > 0 [g], got {value!r}", key=name) from None
+        raise InputError(f"{name} must be a number > 0 [{unit}], got {value!r}", key=name) from None
     if not (math.isfinite(target) and target > 0):
-        raise InputError(f"{name} must be > 0 [g], got {value!r}", key=name)
+        raise InputError(f"{name} must be > 0 [{unit}], got {value!r}", key=name)
     return target
+
+
+def checked_sa_period(value, dt: float, acc, key: str = "record.sa_period_s") -> float:
+    """The period [s] of an Sa target, checked: a number > 0, no longer than the record.
+
+    At a period longer than the record the oscillator does not complete a cycle within it:
+    its peak response there is no spectral ordinate, and a record scaled to it is multiplied
+    by about ``T^2`` (``1e6`` s: a factor of ``1e12``, every simulation unstable).
+
+    Raises
+    ------
+    InputError
+        Naming ``key``.
+    """
+    period = _target(value, key, "s")
+    duration = (np.size(acc) - 1) * dt
+    if period > duration:
+        raise InputError(
+            f"sa_period_s = {period:g} s is longer than the record ({duration:g} s): the record "
+            "does not define its Sa there",
+            key=key,
+        )
+    return period
 
 
 def scale_factor(
@@ -147,8 +170,8 @@ def scale_factor(
     Raises
     ------
     InputError
-        Neither or both targets, a missing or needless ``sa_period_s``, a target <= 0, or a
-        record whose own intensity is zero.
+        Neither or both targets, a missing or needless ``sa_period_s``, an ``sa_period_s``
+        longer than the record, a target <= 0, or a record whose own intensity is zero.
     """
     if (pga_g is None) == (sa_g is None):
         raise InputError("give exactly one of pga_g and sa_g (the target intensity)", key="record")
@@ -165,9 +188,11 @@ def scale_factor(
                 "an sa_g target needs the oscillator period sa_period_s [s]",
                 key="record.sa_period_s",
             )
-        period = _target(sa_period_s, "record.sa_period_s")
+        period = _target(sa_period_s, "record.sa_period_s", "s")
         own = float(response_spectrum(dt, acc, period, damping)[0]) / G
         what = f"Sa({period:g} s)"
     if not own > 0:
         raise InputError(f"the record's {what} is zero: it cannot be scaled to a target", key="acc")
+    if sa_g is not None:
+        checked_sa_period(sa_period_s, dt, acc)
     return target / own

@@ -353,7 +353,8 @@ RECORD = Table(
         Field("component", "string", "Trace of a multi-trace file (e.g. `EW`, `HNE`), or a "
               "suite's component (e.g. `NORTHR/MUL009`)."),
         Field("sa_period_s", "number", "Period of the 5 %-damped spectral acceleration of the "
-              "study grid axis `record.sa_g`.", unit="s", minimum=0.0, exclusive_minimum=True),
+              "study grid axis `record.sa_g`; no longer than the record.", unit="s",
+              minimum=0.0, exclusive_minimum=True),
         Field("seed", "integer", "Realisation of a synthetic motion (required for "
               "`synthetic:`).", minimum=0),
         Field("params", "table", "Parameters of a synthetic motion "

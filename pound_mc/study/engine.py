@@ -41,7 +41,7 @@ from pound_mc.integrators.adaptive_bilinear import BOUC_WEN_NEEDS_NEWMARK, branc
 from pound_mc.integrators.outputs import STATUS_OK
 from pound_mc.integrators.threads import numba_threads
 from pound_mc.motions import G, load_record, record_arrays
-from pound_mc.motions.intensity import sa_g
+from pound_mc.motions.intensity import checked_sa_period, sa_g
 from pound_mc.motions.preprocessing import WINDOW_PEAK_WARN
 from pound_mc.physics.contact import default_relation, kernel_damping, reported_xi
 from pound_mc.physics.relations import restitution_of_xi
@@ -273,6 +273,13 @@ class StudyEngine:
         #: unscaled 5 %-damped Sa there [g] (None when no record has a period).
         self.sa_period_s = np.array([float(r.get("sa_period_s", np.nan)) for r in study.records])
         self.record_sa_g = None
+        for k, ((dt, acc), period) in enumerate(zip(self.records, self.sa_period_s, strict=True)):
+            if np.isfinite(period):
+                try:
+                    checked_sa_period(period, dt, acc)
+                except InputError as exc:
+                    key = study.record_table(k) + ".sa_period_s"
+                    raise InputError(exc.message, file=study.path, key=key) from None
         if np.any(np.isfinite(self.sa_period_s)):
             self.record_sa_g = np.array(
                 [
