@@ -287,3 +287,39 @@ def test_no_contact_pair():
     assert fast["impacts"] == ref["impacts"] == 0
     for key in ("peak_disp_left", "peak_disp_right", "input_energy", "steps"):
         assert close(fast[key], ref[key], 1e-12), key
+
+
+def test_jankowski_bound_screen_never_changes_a_sub_step():
+    # the screen of adaptive_pair._contact_bound skips Jankowski's local bounds below a
+    # penetration where they can neither bind nor be tight at the check's finer setting: its
+    # sub-step and tightness must be those of the full evaluation, bit for bit, over a wide
+    # random set of states and contacts and right at the screen's thresholds
+    from pound_mc.integrators import adaptive_pair as ap
+
+    law = ap._JANKOWSKI
+    bound = ap._contact_bound.py_func
+    rng = np.random.default_rng(11)
+    screened = 0
+    n = 4000
+    for k in range(n):
+        b = 10.0 ** rng.uniform(6.0, 13.0)
+        me = 10.0 ** rng.uniform(1.0, 7.0)
+        cd = 2.0 * rng.choice([0.0, 1e-6, 0.05, 0.35, 1.5, 5.8]) * np.sqrt(b * me)
+        substeps = int(rng.choice([4, 8, 16, 32]))
+        loc_k = ap.LOCAL_PERIOD_SHARE * np.sqrt(me) / substeps
+        loc_c = ap.LOCAL_DAMPING_SHARE * me / substeps
+        kp4, kc4 = ap._period_screen(law, b, loc_k), ap._damping_screen(law, b, cd, loc_c)
+        hs = 10.0 ** rng.uniform(-6.0, -1.5)
+        phase = int(rng.integers(0, 3))
+        dd = rng.uniform(-1.0, 1.0) if k % 3 else 0.0
+        d = 10.0 ** rng.uniform(-14.0, -0.5)
+        if k % 4 == 0:  # at a threshold, within rounding of it
+            edge = min(kp4, kc4 if phase == 1 else np.inf) / hs**4
+            d = edge * (1.0 + rng.choice([-1.0, 1.0]) * 10.0 ** rng.uniform(-16.0, -5.0))
+            d -= max(dd, 0.0) * hs
+        full = bound(hs, d, dd, law, b, cd, 0.0, phase, loc_k, loc_c, -1.0, -1.0)
+        fast = bound(hs, d, dd, law, b, cd, 0.0, phase, loc_k, loc_c, kp4, kc4)
+        assert fast == full, (b, me, cd, substeps, hs, phase, d, dd)
+        h4 = hs**4
+        screened += (d + max(dd, 0.0) * hs) * h4 <= min(kp4, kc4 if phase == 1 else np.inf)
+    assert screened > n // 4  # the screen is exercised, not only the full evaluation

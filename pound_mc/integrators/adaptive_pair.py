@@ -136,6 +136,16 @@ LOCAL_DAMPING_SHARE = 8.0
 #: that depends on ``substeps`` is this fraction of the run's (exactly, the factor being a
 #: power of two), so the run can tell whether the check's run would take its very sub-steps.
 _FINE = 1.0 / ADAPTIVE_SUBSTEPS_FACTOR
+#: Jankowski's local bounds are powers of the penetration (``_contact_bound``): below a
+#: penetration that follows from ``hs`` without a root, neither binds nor is tight at
+#: ``_FINE``, and their evaluation (six square roots, two divisions) is skipped.  The screen
+#: passes only this far below that penetration, far beyond the bounds' rounding, so that the
+#: sub-steps are those of the full evaluation bit for bit.
+_SCREEN_MARGIN = 1.0 - 1e-6
+#: The damping bound's rate of force is a difference, ``F(d, 1) - F(d, 0)``, whose rounding
+#: grows with ``beta d^1.25 / c0``: screened only where ``beta / c0`` is below this (and the
+#: penetration below 1 m), which keeps that rounding below 1e-7 of the difference.
+_SCREEN_CANCEL = 1e8
 
 
 @jit
@@ -573,6 +583,8 @@ def adaptive_pair(
     tail_min = TAIL_MIN_POT if pot else TAIL_MIN
     loc_k = LOCAL_PERIOD_SHARE * math.sqrt(me) / substeps
     loc_c = LOCAL_DAMPING_SHARE * me / substeps
+    kp4 = _period_screen(model, b, loc_k)
+    kc4 = _damping_screen(model, b, cd, loc_c)
     status = STATUS_OK
     store = hx.shape[0] > 0
     mode = int(pre[PRE_MODE]) if pre.size > 0 else 0
@@ -596,6 +608,7 @@ def adaptive_pair(
         s, k_grid, peak_f = pre[ONSET_S], int(pre[ONSET_GRID]), pre[ONSET_PEAK]
         cd, zhd = pre[ONSET_CD], pre[ONSET_ZHD]
         kpot = 0.8 * cd
+        kc4 = _damping_screen(model, b, cd, loc_c)
     i = i_first
     while i < npts - 1:
         if fresh and not in_contact:
@@ -771,6 +784,7 @@ def adaptive_pair(
                         cd, zhd, e_ep = laws.episode_damping(settings, model, relation, xi0, v0c, b,
                                                         me, cd, zhd)  # fmt: skip
                         kpot = 0.8 * cd
+                        kc4 = _damping_screen(model, b, cd, loc_c)
                     else:
                         zhd = laws.episode_zeta(model, relation, xi0, v0c, zhd)
                     hc, same_fine = _episode_substep(
@@ -795,7 +809,7 @@ def adaptive_pair(
                 # at the penetration the step may reach (its rate), not only at its start
                 dc = ps0 * q0 + ps1 * q1 - gp
                 hs, tight = _contact_bound(hs, dc, ps0 * v0 + ps1 * v1, model, b, cd, zhd, phase,
-                                           loc_k, loc_c)  # fmt: skip
+                                           loc_k, loc_c, kp4, kc4)  # fmt: skip
                 same_fine = same_fine and not tight
                 if hs >= dt_rec - s or dt_rec - s - hs < 1e-9 * hc:
                     hs = dt_rec - s
@@ -886,6 +900,7 @@ def adaptive_pair(
                             cd, zhd, e_ep = laws.episode_damping(settings, model, relation, xi0,
                                                                  v0c, b, me, cd, zhd)  # fmt: skip
                             kpot = 0.8 * cd
+                            kc4 = _damping_screen(model, b, cd, loc_c)
                         else:
                             zhd = laws.episode_zeta(model, relation, xi0, v0c, zhd)
                         hc, same_fine = _episode_substep(
@@ -955,7 +970,39 @@ def _episode_substep(hc, dur, same_fine):
 
 
 @jit(inline=True)
-def _contact_bound(hs, d, dd, model, b, cd, zhd, phase, loc_k, loc_c):
+def _period_screen(model, b, loc_k):
+    """``kp4`` of :func:`_contact_bound`: ``(_FINE loc_k)^4 / (0.4 b)^2`` (Jankowski), else -1.
+
+    The local period bound at ``_FINE`` of Jankowski's law, ``_FINE loc_k d / sqrt(0.4 b
+    d^2.5)``, is at least ``hs`` where ``d hs^4 <= (_FINE loc_k)^4 / (0.4 b)^2``.
+    """
+    if model != _JANKOWSKI:
+        return -1.0
+    k = _FINE * loc_k
+    k *= k
+    return _SCREEN_MARGIN * k * k / ((0.4 * b) * (0.4 * b))
+
+
+@jit(inline=True)
+def _damping_screen(model, b, cd, loc_c):
+    """``kc4`` of :func:`_contact_bound`: ``(_FINE loc_c / c0)^4`` (Jankowski), else -1.
+
+    The approach's damping rate ``c0 d^0.25`` times ``hs`` is at most ``_FINE loc_c`` where
+    ``d hs^4 <= (_FINE loc_c / c0)^4``; without damping (``c0 = 0``) it never binds.
+    """
+    if model != _JANKOWSKI:
+        return -1.0
+    if cd == 0.0:
+        return _INF
+    if not b <= _SCREEN_CANCEL * cd:
+        return -1.0
+    k = _FINE * loc_c / cd
+    k *= k
+    return _SCREEN_MARGIN * k * k
+
+
+@jit(inline=True)
+def _contact_bound(hs, d, dd, model, b, cd, zhd, phase, loc_k, loc_c, kp4, kc4):
     """``hs`` [s] bounded by the contact's local period and damping time at penetration ``d``.
 
     Local period (:data:`LOCAL_PERIOD_SHARE`): that of the secant stiffness ``2 E(d) / d^2``
@@ -968,11 +1015,20 @@ def _contact_bound(hs, d, dd, model, b, cd, zhd, phase, loc_k, loc_c):
     point of the step bounds it); ``loc_c`` is ``LOCAL_DAMPING_SHARE m_eff / substeps``.
     Also returns whether the bounds at :data:`_FINE` of these (the accuracy check's run) would
     shorten ``hs``: they are those bounds times ``_FINE`` exactly, and until one shortens it
-    both runs evaluate them at the same points.
+    both runs evaluate them at the same points.  ``kp4`` and ``kc4``
+    (:func:`_period_screen`, :func:`_damping_screen`): where ``d hs^4`` at the deepest point is
+    below them (and the penetration below 1 m), neither bound can bind or be tight at ``_FINE``.
     """
     hs0 = hs
     tight = False
     reach = max(dd, 0.0)
+    dmax = d + reach * hs
+    if dmax <= 1.0:
+        h4 = hs * hs
+        h4 *= h4
+        x = dmax * h4
+        if x <= kp4 and (phase != 1 or x <= kc4):
+            return hs, False
     for k in range(1 if reach == 0.0 else 2):  # without a rate both points are ``d``
         dk = d + reach * hs if k == 1 else d
         if dk > 0.0:
