@@ -529,6 +529,28 @@ def test_bad_numerics_tables_are_input_errors(tmp_path, capsys, kind, text, name
     assert _left(tmp_path) == ["table.csv"]
 
 
+def test_plot_refuses_options_its_chart_does_not_read(tiny, tmp_path, capsys):
+    from pound_mc.cli.analysis import PLOT_OPTIONS
+    from pound_mc.cli.commands import KINDS
+
+    assert set(PLOT_OPTIONS) == set(KINDS)
+    out = tmp_path / "x.png"
+    for argv, names in (
+        (("--kind", "spectrum", "--im", "pga_g"), ("--im", "--kind spectrum", "only to fragility")),
+        (("--kind", "fragility", "--by", "record"), ("--by", "only to distribution")),
+        (("--kind", "probability", "--sample", "0"), ("--sample", "only to history")),
+        (("--kind", "spectrum", "--probability", "0.2"), ("--probability", "required-gap")),
+        (("--kind", "restitution", "--sel", "gap_m=0"), ("--sel",)),
+        (("--kind", "required-gap", "--event", "pounding"), ("--event", "only to fragility")),
+    ):
+        _fails(capsys, "plot", tiny, *argv, "--out", out, names=names)
+    assert not out.exists()
+    # the history of a scene file is one run: no record, sample or grid to choose
+    scene = ROOT / "studies" / "scenes" / "b1.toml"
+    _fails(capsys, "plot", scene, "--kind", "history", "--record", "0", "--out", out,
+           names=("--record", "a scene file's history"))  # fmt: skip
+
+
 def test_analysis_options_out_of_range_are_input_errors(tiny, ds, tmp_path, capsys):
     out = tmp_path / "x.png"
     _fails(capsys, "plot", tiny, "--kind", "history", "--record", "5", "--out", out,

@@ -238,9 +238,41 @@ def _probability(value) -> float:
     return float(value)
 
 
+#: The options each chart reads besides FILE, ``--kind`` and ``--out``; another is refused
+#: (silently ignored, it would leave the user believing the chart shows what it does not).
+PLOT_OPTIONS = {
+    "spectrum": ("sel", "record", "line"),
+    "probability": ("sel", "record", "line"),
+    "distribution": ("sel", "record", "by"),
+    "restitution": (),
+    "work-precision": (),
+    "stability": (),
+    "history": ("sel", "record", "sample"),
+    "contacts": ("sel", "record", "line"),
+    "drift": ("sel", "record", "line"),
+    "ductility": ("sel", "record", "line"),
+    "fragility": ("sel", "im", "event"),
+    "required-gap": ("sel", "line", "probability"),
+}
+
+
+def _refuse_foreign_options(args) -> None:
+    """An option given that chart ``args.kind`` does not read: an error naming it."""
+    scene = args.kind == "history" and Path(args.file).suffix == ".toml"  # one run: no axes
+    reads = () if scene else PLOT_OPTIONS[args.kind]
+    for name in ("sel", "record", "sample", "line", "by", "im", "event", "probability"):
+        if getattr(args, name) in (None, []) or name in reads:
+            continue
+        users = [kind for kind, options in PLOT_OPTIONS.items() if name in options]
+        where = "a scene file's history" if scene else f"--kind {args.kind}"
+        raise InputError(f"does not apply to {where} (only to {', '.join(users)})",
+                         key=f"--{name}")  # fmt: skip
+
+
 def plot_command(args) -> int:
     """``pound-mc plot``: draw one chart (:func:`draw`)."""
     path = Path(args.file)
+    _refuse_foreign_options(args)
     if args.out:
         out = Path(args.out)
     else:
@@ -254,7 +286,7 @@ def plot_command(args) -> int:
             out=out,
             sel=_parse_sel(args.sel),
             record=_record(args.record),
-            sample=args.sample,
+            sample=args.sample or 0,
             line=args.line,
             by=args.by,
             im=args.im,

@@ -70,7 +70,8 @@ Draw one chart. What FILE is depends on the kind:
   drift           a study dataset with inelastic buildings: peak storey drift profiles
   ductility       a study dataset with inelastic buildings: peak ductility profiles
 
-A kind that does not apply to the file says so in one line (exit status 2).
+A kind that does not apply to the file says so in one line (exit status 2), as does an
+option the kind does not read (--im with spectrum, --by with fragility).
 """
 
 COMPILE_DESCRIPTION = (
@@ -351,7 +352,7 @@ def _analysis(sub: argparse._SubParsersAction) -> None:
         help="record index or name; spectrum: also 'each' or 'median' (default: all records "
         "pooled)",
     )
-    p.add_argument("--sample", type=int, default=0, metavar="N", help="sample index (history)")
+    p.add_argument("--sample", type=int, metavar="N", help="sample index (history; default 0)")
     p.add_argument(
         "--line",
         metavar="DIM",
@@ -361,8 +362,9 @@ def _analysis(sub: argparse._SubParsersAction) -> None:
         "--by", metavar="DIM", help="grid dimension (or its study key) of the distribution's groups"
     )
     _shared(p, "im", "event")
+    p.set_defaults(event=None)  # pounding; None tells an option given from one left out
     p.add_argument(
-        "--probability", type=float, default=0.1, help="target probability (required-gap)"
+        "--probability", type=float, help="target probability (required-gap; default 0.1)"
     )
 
     p = _command(sub, "fragility", help="fit lognormal fragility curves to a study dataset")
