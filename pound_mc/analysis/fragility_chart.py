@@ -91,20 +91,33 @@ def fragility_chart(
 
 
 def stripe_counts(ax: Axes, im, n_event, n_total) -> None:
-    """Label each stripe's point with its count, ``z/n``, inside the axes' horizontal range."""
+    """Label each stripe's point with its count, ``z/n``, inside the axes' horizontal range.
+
+    Labels of stripes closer than a label's width at about the same height are stacked (low
+    intensities on an axis stretched to a high median crowd together).
+    """
     im = np.asarray(im, dtype=float)
     n_event, n_total = np.asarray(n_event), np.asarray(n_total)
     left, right = ax.get_xlim()
+    width_pt = ax.get_position().width * ax.figure.get_figwidth() * 72.0
+    placed = []  # (x [pt], fraction, stacking level) of the labels drawn
     for xi, zi, ni in zip(im, n_event, n_total, strict=True):
         if ni <= 0:
             continue
         fi = zi / ni
+        text = f"{int(zi)}/{int(ni)}"
+        x_pt = (xi - left) / (right - left) * width_pt
+        near = [
+            lv for px, pf, lv in placed if abs(px - x_pt) < 5.0 * len(text) and abs(pf - fi) < 0.1
+        ]
+        level = max(near) + 1 if near else 0
+        placed.append((x_pt, fi, level))
         at_right = xi >= left + 0.9 * (right - left)  # the label goes left of the point
         ax.annotate(
-            f"{int(zi)}/{int(ni)}",
+            text,
             (xi, fi),
             textcoords="offset points",
-            xytext=(-4 if at_right else 4, -11 if fi > 0.9 else 5),
+            xytext=(-4 if at_right else 4, -11 - 9 * level if fi > 0.9 else 5 + 9 * level),
             ha="right" if at_right else "left",
             fontsize=7,
         )
