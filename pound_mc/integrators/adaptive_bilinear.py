@@ -590,4 +590,8 @@ def _contact_substep(qs, v, nq, nv, a_end, s, hs, ag0, slope, w_b, zw2, g, ps, g
         if t_ev >= hh:
             break
         hh = t_ev
+    if pot and phase == 2:  # the elastic force alone: its work is exact (adaptive_pair)
+        de[2] = stored(model, ps[0] * nq[0] + ps[1] * nq[1] - gpe, b) - stored(
+            model, ps[0] * qs[0] + ps[1] * qs[1] - gpe, b
+        )
     return hh, fc0, fc1, kind, ac0, ac1, de

@@ -382,14 +382,17 @@ def _stage_pot(q0, q1, u0, u1, ag, k0, ww0, g0, k1, ww1, g1, ps0, ps1, gp, b, cd
     fdamp = cq * dd
     au0 = k0 * v0 - ww0 * q0 - g0 * ag - fel * ps0
     au1 = k1 * v1 - ww1 * q1 - g1 * ag - fel * ps1
-    return fel, fdamp, dd, v0, v1, au0, au1
+    return fel, fdamp, dd, v0, v1, au0, au1, pot
 
 
 @jit(inline=True)
-def _potential(q0, q1, ps0, ps1, gp, kpot):
-    """``D(delta) = 0.8 c0 delta^1.25`` (0 without contact)."""
+def _potential(q0, q1, ps0, ps1, gp, kpot, b):
+    """``D(delta) = 0.8 c0 delta^1.25`` and the stored energy ``0.4 beta delta^2.5`` (0 open)."""
     d = ps0 * q0 + ps1 * q1 - gp
-    return kpot * d * math.sqrt(math.sqrt(d)) if d > 0.0 else 0.0
+    if not d > 0.0:
+        return 0.0, 0.0
+    sd = math.sqrt(d)
+    return kpot * d * math.sqrt(sd), 0.4 * b * d * d * sd
 
 
 @jit(inline=True)
@@ -402,11 +405,11 @@ def _rk4_pot(
     The damping force is the rate of ``D``: its impulse over the step is the change of ``D``
     (exact), and ``u`` sees only the elastic force, which is smooth enough for RK4 from onset.
     """
-    pot0 = _potential(q0, q1, ps0, ps1, gp, kpot)
+    pot0, en0 = _potential(q0, q1, ps0, ps1, gp, kpot, b)
     u0 = v0 + ps0 * pot0
     u1 = v1 + ps1 * pot0
     h6 = hs / 6.0
-    e_in = e_d = w_c = imp = 0.0
+    e_in = e_d = w_d = imp = 0.0
     sq0 = sq1 = su0 = su1 = 0.0
     kq0 = kq1 = ku0 = ku1 = 0.0
     fc_start = acc0 = acc1 = 0.0
@@ -414,7 +417,7 @@ def _rk4_pot(
         fac = 0.0 if stage == 0 else (hs if stage == 3 else 0.5 * hs)
         wgt = 1.0 if stage == 0 or stage == 3 else 2.0
         ag = ag0 + slope * (s + fac)
-        fel, fdamp, dd, wv0, wv1, au0, au1 = _stage_pot(
+        fel, fdamp, dd, wv0, wv1, au0, au1, pot = _stage_pot(
             q0 + fac * kq0, q1 + fac * kq1, u0 + fac * ku0, u1 + fac * ku1, ag, k0, ww0, g0,
             k1, ww1, g1, ps0, ps1, gp, b, cd, kpot,
         )  # fmt: skip
@@ -430,13 +433,20 @@ def _rk4_pot(
         su1 += wgt * ku1
         e_in -= wgt * (ag * g0 * wv0 + ag * g1 * wv1)
         e_d += wgt * (zw2_0 * wv0 * wv0 + zw2_1 * wv1 * wv1)
-        w_c += wgt * (fc * dd)
+        # the damping force's work by parts, [delta' D] - int D delta'': D (delta^1.25) is
+        # smooth where the damping power (delta^0.25 delta'^2) is not
+        w_d += wgt * pot * (ps0 * (au0 - ps0 * fdamp) + ps1 * (au1 - ps1 * fdamp))
         imp += wgt * fel
     nq0 = q0 + h6 * sq0
     nq1 = q1 + h6 * sq1
-    pot1 = _potential(nq0, nq1, ps0, ps1, gp, kpot)
-    return (nq0, nq1, u0 + h6 * su0 - ps0 * pot1, u1 + h6 * su1 - ps1 * pot1, h6 * e_in,
-            h6 * e_d, h6 * w_c, h6 * imp + (pot1 - pot0), fc_start, acc0, acc1)  # fmt: skip
+    pot1, en1 = _potential(nq0, nq1, ps0, ps1, gp, kpot, b)
+    nv0 = u0 + h6 * su0 - ps0 * pot1
+    nv1 = u1 + h6 * su1 - ps1 * pot1
+    # the contact's work: the elastic force's is the change of its stored energy (exact), the
+    # damping force's by parts
+    w_c = en1 - en0 + (ps0 * nv0 + ps1 * nv1) * pot1 - (ps0 * v0 + ps1 * v1) * pot0 - h6 * w_d
+    return (nq0, nq1, nv0, nv1, h6 * e_in, h6 * e_d, w_c, h6 * imp + (pot1 - pot0), fc_start,
+            acc0, acc1)  # fmt: skip
 
 
 @jit(inline=True)
@@ -863,6 +873,8 @@ def adaptive_pair(
                     hs = t_ev
                     have, fs0, as0, as1 = True, fc0, ac0, ac1
                 event = t_ev < _INF
+                if pot and phase == 2:  # the elastic force alone: its work is exact
+                    dw_c = laws.stored(model, d1, b) - laws.stored(model, d0, b)
                 e_in += de_in
                 e_d += de_d
                 w_c += dw_c

@@ -40,6 +40,10 @@ velocity at the onset event, and its damping (``xi`` by
 :func:`pound_mc.physics.relations.xi_from_e`, or ``zeta``) is fixed for that episode.
 
 This is slow (seconds for a 30 s SDOF-pair record) and meant for tests and checks only.
+
+Longer than 600 lines because one solver covers every scene the kernels run (rows of buildings,
+yielding storeys, per-impact restitution, the contacts' work), so that each test meets the same
+independent reference.
 """
 
 from __future__ import annotations
@@ -53,6 +57,7 @@ from scipy.optimize import minimize_scalar
 
 from pound_mc.integrators.outputs import IMPACT_MIN_PENETRATION_M
 from pound_mc.motions import record_arrays
+from pound_mc.physics.contact import CONTACT_MODELS
 from pound_mc.physics.materials import restitution_at
 from pound_mc.physics.relations import (
     HERTZDAMP_RELATIONS,
@@ -128,6 +133,7 @@ def reference_solution(
     *,
     x0=None,
     v0=None,
+    contact_work: bool = False,
 ) -> dict:
     """Solve ``scene`` with SciPy's DOP853 at a tight tolerance.
 
@@ -146,6 +152,10 @@ def reference_solution(
     x0, v0 : array_like, optional
         Initial floor displacements [m] and velocities [m/s] relative to the ground, left
         building's floors (bottom to top) then right building's; default at rest.
+    contact_work : bool
+        Also integrate the work done on the contacts, ``int sum_j F_j delta_dot_j dt``, as a
+        state of the ODE (under the solver's error control): ``contact_work`` [J] and
+        ``dissipated_energy`` (that less the energy stored in the contacts at the end) [J].
 
     Returns
     -------
@@ -283,7 +293,7 @@ def reference_solution(
             up[bw_idx] = u[bw_idx] - yy[2 * n : 2 * n + nz]
         return up
 
-    y = np.zeros(2 * n + (nz + 1 if nz else 0))
+    y = np.zeros(2 * n + (nz + 1 if nz else 0) + (1 if contact_work else 0))
     if x0 is not None:
         y[:n] = np.asarray(x0, dtype=float)
         y[2 * n : 2 * n + nz] = drifts(y[:n])[bw_idx]
@@ -301,6 +311,10 @@ def reference_solution(
     if nz:
         e_scale = float(np.max(k_plastic[bw_idx] * uy_finite[bw_idx] * x_scale))
         atol = np.r_[atol, np.full(nz, atol_scale * x_scale), atol_scale * e_scale]
+    if contact_work:
+        m_finite = masses[np.isfinite(masses)]
+        w_scale = float(m_finite.max()) * (x_scale * omega_all.max()) ** 2
+        atol = np.r_[atol, atol_scale * w_scale]
 
     # phases at the start (already in contact: by the sign of delta_dot, not counted)
     phase = np.zeros(nc, dtype=int)
@@ -323,12 +337,14 @@ def reference_solution(
         return f
 
     def rhs(t, yy):
-        dy = a_lin @ yy if not nz else a_lin @ yy[: 2 * n]
+        dy = a_lin @ yy[: 2 * n]
         dy[n:] -= state["ag0"] + state["slope"] * (t - state["t0"])
         dy[n + fixed] = 0.0
+        power_c = 0.0
         if np.any(phase):
             f = forces(yy[:n], yy[n : 2 * n])
             dy[n:] -= (w.T @ f) / masses
+            power_c = float(f @ (w @ yy[n : 2 * n]))
         if inelastic_storey.any():
             # the plastic drifts' forces (1 - alpha) k u_p pull the floor above a storey back
             # and push the floor below
@@ -345,6 +361,8 @@ def reference_solution(
             zd = ud * (1.0 - r * (0.5 * np.sign(ud * z) + 0.5))
             power = np.sum(k_plastic[bw_idx] * z * (ud - zd))
             dy = np.r_[dy, zd, power]
+        if contact_work:
+            dy = np.r_[dy, power_c]
         return dy
 
     def unload(st, yy):
@@ -582,7 +600,7 @@ def reference_solution(
     up_end = plastic_drift(u_end, y)
     e_hyst += float(np.sum(np.where(yielding, k_plastic * uy_finite * np.abs(up_end - s_up), 0)))
     if nz:
-        e_hyst += float(y[-1])
+        e_hyst += float(y[2 * n + nz])
     side_of = np.array(s_side)
     storey_out = {}
     # "right": the right building, or the largest over the others of a row
@@ -625,4 +643,13 @@ def reference_solution(
         "peak_storey_drift": peak_u.copy(),
         "plastic_drift_end": up_end,
         "hysteretic_energy": e_hyst,
+        **(_contact_energies(model, y[-1], w @ y[:n] - gap, phase, beta) if contact_work else {}),
     }
+
+
+def _contact_energies(model, work, penetration, phase, beta) -> dict:
+    """``contact_work`` and ``dissipated_energy`` [J]: the work less the energy held at the end."""
+    stored = CONTACT_MODELS[model].kernel.stored
+    held = sum(float(stored(max(float(d), 0.0), beta)) for d, p in zip(penetration, phase,
+               strict=True) if p != _OPEN)  # fmt: skip
+    return {"contact_work": float(work), "dissipated_energy": float(work) - held}
