@@ -273,20 +273,19 @@ class StudyEngine:
         #: unscaled 5 %-damped Sa there [g] (None when no record has a period).
         self.sa_period_s = np.array([float(r.get("sa_period_s", np.nan)) for r in study.records])
         self.record_sa_g = None
-        for k, ((dt, acc), period) in enumerate(zip(self.records, self.sa_period_s, strict=True)):
-            if np.isfinite(period):
+        if np.any(np.isfinite(self.sa_period_s)):
+            self.record_sa_g = np.full(len(self.records), np.nan)
+            for k, ((dt, acc), period) in enumerate(
+                zip(self.records, self.sa_period_s, strict=True)
+            ):
+                if not np.isfinite(period):
+                    continue
                 try:
                     checked_sa_period(period, dt, acc)
                 except InputError as exc:
                     key = study.record_table(k) + ".sa_period_s"
                     raise InputError(exc.message, file=study.path, key=key) from None
-        if np.any(np.isfinite(self.sa_period_s)):
-            self.record_sa_g = np.array(
-                [
-                    sa_g(dt, acc, period) if np.isfinite(period) else np.nan
-                    for (dt, acc), period in zip(self.records, self.sa_period_s, strict=True)
-                ]
-            )
+                self.record_sa_g[k] = sa_g(dt, acc, period)
         #: ``(n_records, n_intensities)`` factors ``target / own`` (None without an axis).
         self.scale_factors = None
         self._intensity_axis = None
