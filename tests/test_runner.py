@@ -5,9 +5,11 @@ import signal
 import subprocess
 import sys
 import textwrap
+import threading
 import time
 from pathlib import Path
 
+import numba
 import numpy as np
 import pytest
 import xarray as xr
@@ -17,7 +19,13 @@ from pound_mc.errors import InputError, InputErrors
 from pound_mc.study.dataset import RESULT_VARIABLES
 from pound_mc.study.definition import load_study, study_from_text
 from pound_mc.study.engine import StudyEngine
-from pound_mc.study.runner import chunk_ranges, default_chunk_size, plan_text, run_study
+from pound_mc.study.runner import (
+    CHUNKS_PER_THREAD,
+    chunk_ranges,
+    default_chunk_size,
+    plan_text,
+    run_study,
+)
 from studies import study_text
 
 # studies.SMALL_SDOF: T = 0.3, 0.5, 0.7 s x gap 0, 2 mm x 8 concrete samples
@@ -82,6 +90,37 @@ def test_chunk_size_does_not_change_results(study_file, reference, tmp_path, chu
     )
     assert report.chunks_total == len(chunk_ranges(N, chunk_size))
     _assert_identical(reference, report.path)
+
+
+def test_whole_chunks_on_threads_identical_and_drained_by_ctrl_c(study_file, reference,
+                                                                 tmp_path):  # fmt: skip
+    # 16 chunks of 3 on 2 threads: CHUNKS_PER_THREAD (8) chunks per thread, so each thread
+    # runs whole chunks on one numba thread of its own
+    assert len(chunk_ranges(N, 3)) >= CHUNKS_PER_THREAD * 2
+    study = load_study(study_file)
+    engine = StudyEngine(study)
+    run_range = engine.run_range
+    calls = []
+
+    def recording(start, stop):
+        calls.append((threading.current_thread().name, numba.get_num_threads()))
+        if len(calls) == 3:
+            os.kill(os.getpid(), signal.SIGINT)  # Ctrl-C while chunks are in flight
+        return run_range(start, stop)
+
+    engine.run_range = recording
+    out = tmp_path / "threads"
+    first = run_study(study, out, threads=2, chunk_size=3, engine=engine, progress=False)
+    assert first.interrupted and not first.complete
+    # every chunk started before the Ctrl-C was finished and kept, and none after it started
+    assert first.chunks_run == len(calls) < first.chunks_total
+    assert len(list((out / "small").glob("chunk_*.npz"))) == len(calls)
+    assert {n_threads for _, n_threads in calls} == {1}
+    assert threading.main_thread().name not in {name for name, _ in calls}
+    engine.run_range = run_range
+    second = run_study(study, out, threads=2, chunk_size=3, engine=engine, progress=False)
+    assert second.complete and second.chunks_run == second.chunks_total - len(calls)
+    _assert_identical(reference, second.path)
 
 
 def test_interrupted_run_resumes_identically(study_file, reference, tmp_path):

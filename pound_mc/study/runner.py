@@ -2,7 +2,7 @@
 
 The simulations of a study are numbered in C order of ``study.shape`` = ``(record, *grid
 axes, sample)`` and cut into chunks of ``chunk_size``.  Each finished chunk is written
-atomically to ``<out>/<name>/chunk_NNNNNN.npz`` (temporary file renamed into place), so an
+atomically to ``<out>/<name>/chunk_<size>_NNNNNN.npz`` (temporary file renamed into place), so an
 interrupted run (Ctrl-C, a killed process) loses at most the chunks in flight; re-running the
 same study skips the finished ones.  When every chunk is done the dataset is assembled and
 written to ``<out>/<name>.nc``.
@@ -26,8 +26,8 @@ Every simulation writes only its own output slot and all random numbers are draw
 chunk runs, so results do not depend on thread count, chunk size or backend.
 
 Chunks run through an *executor*: a callable ``executor(engine, chunks)`` that yields
-``(chunk, result)`` pairs as chunks finish, in any order.  The default runs them one after the
-other in this process on numba's threads; :mod:`pound_mc.study.distributed` runs them on a Dask
+``(chunk, result)`` pairs as chunks finish, in any order.  The default runs them in this process
+on numba's threads (:func:`local_executor`); :mod:`pound_mc.study.distributed` runs them on a Dask
 cluster.  Either way this process alone writes the chunk files and the dataset.  An executor
 whose chunks run elsewhere has a ``warm_up(engine, index, quiet=...)`` attribute, called instead
 of :func:`~pound_mc.study.warmup.warm_up` before the progress bar starts, so that the kernels
@@ -49,6 +49,7 @@ from __future__ import annotations
 import collections
 import fcntl
 import io
+import itertools
 import json
 import os
 import shutil
@@ -58,10 +59,12 @@ import threading
 import time
 import zipfile
 from collections.abc import Callable, Iterable, Iterator
+from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 from contextlib import closing, contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
+import numba
 import numpy as np
 from tqdm.auto import tqdm
 
@@ -482,8 +485,20 @@ def _load_chunk(path: Path, study, start: int, stop: int, layout: dict) -> dict 
 Executor = Callable[[object, list[Chunk]], Iterator[tuple[Chunk, dict[str, np.ndarray]]]]
 
 
+#: Chunks per thread from which the local executor runs whole chunks on each thread: every
+#: chunk split over all threads waits at three barriers (a thread idles while the other ends
+#: its slices), one chunk per thread waits only at the end of the run, for at most a chunk.
+CHUNKS_PER_THREAD = 8
+
+
 def local_executor(threads: int | None = None) -> Executor:
-    """Executor that runs chunks one after the other in this process.
+    """Executor that runs chunks in this process on numba's threads.
+
+    With :data:`CHUNKS_PER_THREAD` chunks per thread or more, each thread runs whole chunks,
+    its kernels on one numba thread (:func:`_chunks_on_threads`); with fewer, the chunks run
+    one after the other, each split over every thread.  The results are the same either way:
+    each simulation writes only its own slot.  The executor *drains*: when the iterable of
+    chunks ends early (the runner's Ctrl-C), the chunks in flight finish and are yielded.
 
     Parameters
     ----------
@@ -496,10 +511,63 @@ def local_executor(threads: int | None = None) -> Executor:
 
     def run(engine, chunks: Iterable[Chunk]):
         with numba_threads(threads):
+            workers = numba.get_num_threads()
+            many = hasattr(chunks, "__len__") and len(chunks) >= CHUNKS_PER_THREAD * workers
+            if workers > 1 and many:
+                yield from _chunks_on_threads(engine, chunks, workers)
+                return
             for chunk in chunks:
                 yield chunk, engine.run_range(chunk.start, chunk.stop)
 
+    run.drains = True
     return run
+
+
+def _chunks_on_threads(engine, chunks: Iterable[Chunk], workers: int):
+    """Run whole chunks on ``workers`` threads, one numba thread each; yield them as they end.
+
+    At most ``workers`` chunks are in flight, and the next one is taken from ``chunks`` when
+    one ends (before it is yielded, so that no thread waits while its file is written).
+    """
+
+    def one(chunk):
+        numba.set_num_threads(1)  # thread-local: this chunk's kernels run on this thread
+        return engine.run_range(chunk.start, chunk.stop)
+
+    feed = iter(chunks)
+    running = {}
+    pool = ThreadPoolExecutor(workers)
+    try:
+        for chunk in itertools.islice(feed, workers):
+            running[pool.submit(one, chunk)] = chunk
+        while running:
+            done, _ = wait(running, return_when=FIRST_COMPLETED)
+            for future in sorted(done, key=lambda f: running[f].index):
+                chunk = running.pop(future)
+                result = future.result()
+                following = next(feed, None)
+                if following is not None:
+                    running[pool.submit(one, following)] = following
+                yield chunk, result
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)
+
+
+class _Feed:
+    """The chunks to run, cut short by a Ctrl-C: iterating ends once ``stop`` is set."""
+
+    def __init__(self, chunks: list[Chunk], stop: threading.Event):
+        self.chunks = chunks
+        self.stop = stop
+
+    def __len__(self) -> int:
+        return len(self.chunks)
+
+    def __iter__(self) -> Iterator[Chunk]:
+        for chunk in self.chunks:
+            if self.stop.is_set():
+                return
+            yield chunk
 
 
 def run_study(
@@ -572,6 +640,19 @@ def run_study(
             raise
 
 
+def _chunk_path(work: Path, chunk_size: int, index: int) -> Path:
+    """The file of chunk ``index`` of a run cut into chunks of ``chunk_size`` simulations."""
+    return work / f"chunk_{chunk_size}_{index:06d}.npz"
+
+
+def _chunk_size_of(path: Path) -> int | None:
+    """The chunk size in the name of a :func:`_chunk_path` file (None: not such a name)."""
+    parts = path.stem.split("_")
+    if len(parts) != 3 or parts[0] != "chunk" or not (parts[1] + parts[2]).isdigit():
+        return None
+    return int(parts[1]) or None
+
+
 def _resumed_chunk_size(work: Path, chunk_size: int) -> int:
     """The chunk size to go on with: that of the finished chunks in ``work``, if any.
 
@@ -582,9 +663,9 @@ def _resumed_chunk_size(work: Path, chunk_size: int) -> int:
     """
     sizes = collections.Counter()
     for path in work.glob("chunk_*_*.npz"):
-        _, size, index = path.stem.split("_", 2)
-        if size.isdigit() and index.isdigit() and int(size) > 0:
-            sizes[int(size)] += 1
+        size = _chunk_size_of(path)
+        if size is not None:
+            sizes[size] += 1
     if not sizes or chunk_size in sizes:
         return chunk_size
     size, count = sizes.most_common(1)[0]
@@ -617,7 +698,7 @@ def _run_locked(study, out_dir, engine, layout, fresh, chunk_size, progress, max
         ) from None
     todo = []
     for k, (start, stop) in enumerate(ranges):
-        path = work / f"chunk_{chunk_size}_{k:06d}.npz"
+        path = _chunk_path(work, chunk_size, k)
         done = _load_chunk(path, study, start, stop, layout)
         if done is None:
             todo.append(Chunk(k, start, stop, path))
@@ -652,7 +733,7 @@ def _run_locked(study, out_dir, engine, layout, fresh, chunk_size, progress, max
     try:
         with (
             _stop_between_chunks() as stop_requested,
-            closing(iter(executor(engine, todo_now))) as results,
+            closing(iter(executor(engine, _Feed(todo_now, stop_requested)))) as results,
         ):
             for chunk, result in results:
                 _atomic_savez(
@@ -671,9 +752,10 @@ def _run_locked(study, out_dir, engine, layout, fresh, chunk_size, progress, max
                 _pause_at(f"chunks:{ran}")
                 if on_chunk is not None:
                     on_chunk(chunk)
-                if stop_requested.is_set():
-                    interrupted = ran < len(todo)
+                # a draining executor yields the chunks in flight once the feed has stopped
+                if stop_requested.is_set() and not getattr(executor, "drains", False):
                     break
+        interrupted = stop_requested.is_set() and ran < len(todo)
     finally:
         bar.close()
     seconds = time.perf_counter() - t0
