@@ -15,6 +15,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import matplotlib.pyplot as plt
 import numpy as np
 import pytest
 import xarray as xr
@@ -23,6 +24,9 @@ import pound_mc  # noqa: F401  (registers ds.pound)
 from pound_mc.analysis.gaps import study_gaps
 from pound_mc.cli import main
 from pound_mc.cli.analysis import draw
+from pound_mc.motions.catalogue import _builtin_path
+from pound_mc.study.definition import load_study
+from pound_mc.study.runner import run_study
 from studies import study_text
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -231,6 +235,49 @@ def test_every_kind_writes_a_png_from_the_command_line(tiny, tmp_path):
         out = tmp_path / f"{kind}.png"
         assert main(["plot", str(tiny), "--kind", kind, "--out", str(out)]) == 0
         assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and out.stat().st_size > 10_000
+
+
+def test_accessor_charts_are_pyplot_figures_unless_written_to_a_file(ds, tiny, tmp_path):
+    # drawn for a person (no path, no ax): pyplot's figure, which a notebook and plt.show()
+    # display; written to a file, or drawn by the command line: no pyplot figure left open
+    plt.close("all")
+    try:
+        ax = ds.pound.plot.spectrum()
+        assert plt.get_fignums() == [ax.figure.number] and plt.gcf() is ax.figure
+        axes = ds.pound.plot.distribution()
+        assert axes[0].figure is plt.gcf() and len(plt.get_fignums()) == 2
+        plt.close("all")
+        ds.pound.plot.probability(tmp_path / "p.png")
+        ds.pound.plot.restitution(tmp_path / "r.png")
+        assert (
+            main(["plot", str(tiny), "--kind", "spectrum", "--out", str(tmp_path / "s.png")]) == 0
+        )
+        assert main(["report", str(tiny), "--out", str(tmp_path / "r.html")]) == 0
+        assert (tmp_path / "p.png").is_file() and plt.get_fignums() == []
+        _, given = plt.subplots()
+        assert ds.pound.plot.spectrum(ax=given) is given and len(plt.get_fignums()) == 1
+    finally:
+        plt.close("all")
+
+
+def test_analysis_names_the_study_file_the_dataset_ran_from(tmp_path, capsys):
+    # a study file named otherwise than its study, reading a record beside it: the scene and
+    # the error once the record is gone name that file (they named ".../study.toml")
+    folder = tmp_path / "st"
+    folder.mkdir()
+    shutil.copy(_builtin_path("elcentro"), folder / "elc.AT2")
+    text = study_text(record={"source": "elc.AT2"}, grid={"contact.gap_m": None},
+                      sampling={"n": 2})  # fmt: skip
+    (folder / "pair.toml").write_text(text)
+    report = run_study(load_study(folder / "pair.toml"), tmp_path / "out", progress=False)
+    with xr.open_dataset(report.path) as ds:
+        assert ds.attrs["study_name"] == "small" and ds.attrs["study_file"] == "pair.toml"
+        assert ds.pound.scene(sample=0).file == str(folder.resolve() / "pair.toml")
+    (folder / "elc.AT2").unlink()
+    out = tmp_path / "h.png"
+    assert main(["plot", str(report.path), "--kind", "history", "--out", str(out)]) == 2
+    assert f"{folder.resolve() / 'pair.toml'}: record.source" in capsys.readouterr().err
+    assert not out.exists()
 
 
 def test_plot_errors_are_input_errors(tiny, tmp_path, capsys):

@@ -8,9 +8,12 @@ from __future__ import annotations
 
 import io
 import json
+import re
+import time
 from dataclasses import replace
 from pathlib import Path
 
+import numba
 import numpy as np
 import pytest
 from numba import types
@@ -18,10 +21,12 @@ from numba.core.caching import NullCache
 
 from pound_mc._jit import jit
 from pound_mc.cli import main
+from pound_mc.errors import InputError
 from pound_mc.numerics import bench
 from pound_mc.scene import load_scene, simulate
 from pound_mc.study import warmup
 from pound_mc.study.definition import load_study
+from pound_mc.study.engine import StudyEngine
 from pound_mc.study.runner import run_study
 
 B1 = Path(__file__).resolve().parents[1] / "studies" / "scenes" / "b1.toml"
@@ -70,32 +75,74 @@ def test_scene_cache_follows_edits(b1_first):
     assert "record" not in replace(scene)._cache
 
 
+def _compiles_a_kernel():
+    """Compile a new numba function (a real compilation, whatever the cache holds)."""
+    numba.njit(lambda x: x + 1.0)(1.0)
+
+
 def test_compiling_notice_shown_and_not():
     stream = io.StringIO()
     with warmup.compiling_notice(stream, after_s=0.0) as state:
-        pass
-    # a zero delay shows the notice as soon as the timer runs (joined before the block ends)
+        _compiles_a_kernel()
+    # a zero delay shows the notice as soon as a compilation has started
     assert state["shown"] and warmup.COMPILING_MESSAGE in stream.getvalue()
     quiet = io.StringIO()
     with warmup.compiling_notice(quiet, after_s=600.0) as state:
-        pass
+        _compiles_a_kernel()
     assert not state["shown"] and quiet.getvalue() == ""
+    # a slow block that compiles nothing (kernels from the cache, a tiny step) is not compiling
+    slow = io.StringIO()
+    with warmup.compiling_notice(slow, after_s=0.0) as state:
+        time.sleep(0.3)
+    assert not state["shown"] and slow.getvalue() == ""
+    # elsewhere (the Dask workers: their compilations are not seen here) the time decides
+    remote = io.StringIO()
+    with warmup.compiling_notice(remote, after_s=0.0, where="on the workers") as state:
+        time.sleep(0.05)
+    assert state["shown"] and "on the workers" in remote.getvalue()
 
 
-def test_run_warms_up_before_the_bar(make_study, tmp_path, monkeypatch, capsys):
-    monkeypatch.setattr(warmup, "NOTICE_AFTER_S", 0.0)  # any warm-up counts as compiling
-    report = run_study(load_study(make_study()), tmp_path / "out", threads=1)
-    err = capsys.readouterr().err
-    assert report.complete
-    notice = err.index(warmup.COMPILING_MESSAGE)
-    # the notice, then the compile report, then the bar (its first draw shows the "sim/s" rate)
-    assert notice < err.index("kernels compiled in") < err.index("sim/s")
-    assert report.warmup_seconds > 0.0
+def _compiling_engine(study, seconds: float = 0.0, compile_: bool = True) -> StudyEngine:
+    """The study's engine, whose first call compiles a new kernel (and then sleeps)."""
+    engine = StudyEngine(study)
+    run_indices = engine.run_indices
+
+    def first(indices):
+        engine.run_indices = run_indices
+        if compile_:
+            _compiles_a_kernel()
+        time.sleep(seconds)
+        return run_indices(indices)
+
+    engine.run_indices = first
+    return engine
 
 
-def test_run_without_progress_prints_no_notice(make_study, tmp_path, monkeypatch, capsys):
+@pytest.mark.parametrize("progress", [True, False])
+def test_run_warms_up_before_the_bar(make_study, tmp_path, monkeypatch, capsys, progress):
     monkeypatch.setattr(warmup, "NOTICE_AFTER_S", 0.0)
-    run_study(load_study(make_study()), tmp_path / "out", threads=1, progress=False)
+    study = load_study(make_study())
+    report = run_study(study, tmp_path / "out", threads=1, engine=_compiling_engine(study),
+                       progress=progress)  # fmt: skip
+    err = capsys.readouterr().err
+    assert report.complete and report.warmup_compiled and report.warmup_seconds > 0.0
+    # the notice and the compile report, with the bar or without it (a log still says why the
+    # first seconds pass in silence); then the bar, whose first draw shows the "sim/s" rate
+    notice = err.index(warmup.COMPILING_MESSAGE)
+    assert notice < err.index("kernels compiled in")
+    assert ("sim/s" in err) == progress and err.index("kernels compiled in") < err.find("sim/s") + (
+        0 if progress else len(err) + 1
+    )
+
+
+def test_slow_first_simulation_from_the_cache_is_not_compiling(make_study, tmp_path, monkeypatch,
+                                                                capsys):  # fmt: skip
+    # a warm-up longer than the notice's delay used to be reported as compiling
+    monkeypatch.setattr(warmup, "NOTICE_AFTER_S", 0.0)
+    study = load_study(make_study())
+    engine = _compiling_engine(study, seconds=0.3, compile_=False)
+    report = run_study(study, tmp_path / "out", threads=1, engine=engine, progress=False)
+    assert report.complete and not report.warmup_compiled and report.warmup_seconds >= 0.3
     assert warmup.COMPILING_MESSAGE not in capsys.readouterr().err
 
 
@@ -168,6 +215,24 @@ def test_textbook_newmark_matches_the_package_scheme():
     assert impacts == ours["impacts"] == 22
     # DESIGN.md section 5: Newmark at dt = 1e-3 s is about 6e-4 from the SciPy solution
     assert abs(peak - B1_PEAK_FORCE) / B1_PEAK_FORCE < 1e-3
+
+
+@pytest.mark.parametrize(
+    ("override", "message"),
+    [
+        ({"method": "newmark", "dt_s": -1.0}, "dt_s: must be in (0, 1], got -1.0"),
+        ({"dt_s": 0.0}, "dt_s: must be in (0, 1], got 0.0"),  # was taken as "not given"
+        ({"substeps": 0}, "substeps: must be an integer in [4, 1024], got 0"),
+        ({"substeps": 2.5}, "substeps: must be an integer, got 2.5"),
+        ({"method": "rk45"}, "method: unknown value 'rk45'"),
+    ],
+)
+def test_simulate_refuses_overrides_the_scene_file_would_refuse(override, message):
+    # the command line refused them (--dt, --method); from Python a negative step ran to
+    # not_converged, a zero step and zero sub-steps quietly took the scene's own
+    scene = load_scene(B1)
+    with pytest.raises(InputError, match=re.escape(message)):
+        simulate(scene, **override)
 
 
 def test_bench_prints_ratios(capsys):

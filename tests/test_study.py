@@ -168,6 +168,16 @@ def test_seed_the_dataset_cannot_store_is_refused(tmp_path, capsys, table):
     assert study_from_text(_replace("seed = 7", "seed = 18446744073709551615")).seed == 2**64 - 1
 
 
+def test_a_relation_given_to_a_law_without_damping_says_so(tmp_path, capsys):
+    # the message listed the law's relations: "unknown value 'jankowski2008'; allowed: "
+    text = _replace('model = "jankowski"', 'model = "hertz"').replace(
+        "e = 0.65", 'relation = "jankowski2008"'
+    ).replace('"contact.e" = { material = "concrete" }\n', "")
+    assert _refused(tmp_path, capsys, text) == (
+        "STUDY: contact.relation: the 'hertz' law has no damping and takes no relation; remove it"
+    )
+
+
 def test_sampled_values_out_of_bounds_are_blamed_on_the_sampled_key_once(tmp_path, capsys):
     # beta uniform over [-2e9, 1e9] on a two-value gap axis: its draws were reported as
     # grid.contact.gap_m's, once per gap.  Sobol (seed 7) draws -1.14e9 first, < 0.

@@ -45,11 +45,11 @@ from pound_mc.analysis.risk import fragility as _fragility
 from pound_mc.analysis.risk import required_gap as _required_gap
 from pound_mc.analysis.risk_chart import fragility_panels, required_gap_chart
 from pound_mc.analysis.selection import MATERIAL_DIM, dim_name, no_value_message, selection
-from pound_mc.analysis.style import value_text
+from pound_mc.analysis.style import pyplot_figures, value_text
 from pound_mc.errors import InputError
 from pound_mc.scene import Scene, SimulationResult
 from pound_mc.scene import simulate as simulate_scene
-from pound_mc.study.dataset import RECORD_VARIABLES, study_folder
+from pound_mc.study.dataset import RECORD_VARIABLES, study_file
 from pound_mc.study.definition import grid_dim_name, study_from_text
 from pound_mc.study.engine import StudyEngine
 
@@ -127,8 +127,8 @@ def scene_at(
     index : dict
         The integer position of the simulation along every dimension of ``peak_force``.
     """
-    if study_path is None and (folder := study_folder(ds)) is not None:
-        study_path = folder / "study.toml"  # the study's own folder: its relative records
+    if study_path is None:
+        study_path = study_file(ds)  # in the study's own folder: its relative records
     text = ds.attrs.get("study_text")
     if not text:
         raise InputError("the dataset carries no study_text attribute; is it a pound-mc result?")
@@ -181,7 +181,8 @@ def _chart_method(name: str, chart: Callable, returns: str, doc: str, **fixed: A
         for option in ("line", "by", "x"):  # a dimension, or its study key
             if isinstance(kwargs.get(option), str):
                 kwargs[option] = dim_name(ds, kwargs[option])
-        return _axes_of(chart(ds, path, ax=ax, **fixed, **kwargs), ax)
+        with pyplot_figures(path is None, unless_set=True):
+            return _axes_of(chart(ds, path, ax=ax, **fixed, **kwargs), ax)
 
     method.__name__ = name
     method.__qualname__ = f"PoundPlot.{name}"
@@ -196,7 +197,10 @@ class PoundPlot:
     Each method draws on ``ax`` (a new figure's when not given; a sequence of Axes for the
     charts with several panels), writes a PNG when given ``path``, and returns the Axes it drew
     on: one :class:`matplotlib.axes.Axes`, or a numpy array of them for several panels.  The
-    figure is ``ax.figure``.
+    figure is ``ax.figure``.  Without ``ax`` and ``path`` the new figure is pyplot's, as with
+    xarray's ``ds.plot``: a notebook shows it and ``plt.show()`` or ``plt.savefig()`` take it;
+    with ``path`` it is written to the file and left out of pyplot (no figures pile up in a
+    script that writes many).
     """
 
     def __init__(self, ds: xr.Dataset):
@@ -278,7 +282,8 @@ class PoundPlot:
             law = ds.attrs.get("contact_model", "contact")
             relation = ds.attrs.get("xi_relation", "")
             samples = (e.values, e_eff.values, f"study: {law} law, {relation} ({e.size} values)")
-        return _axes_of(restitution_chart(path, samples=samples, ax=ax, **kwargs), ax)
+        with pyplot_figures(path is None, unless_set=True):
+            return _axes_of(restitution_chart(path, samples=samples, ax=ax, **kwargs), ax)
 
     def history(
         self,
@@ -298,7 +303,8 @@ class PoundPlot:
         result, index = self._ds.pound.simulate(
             record=record, sample=sample, study_path=study_path, **coords
         )
-        fig = time_history_chart(result, ax=ax)
+        with pyplot_figures(path is None, unless_set=True):
+            fig = time_history_chart(result, ax=ax)
         names = {"record": lambda i: f"record {self._ds['record'].values[i]}"}
         names["sample"] = lambda i: f"sample {i}"
         where = ", ".join(

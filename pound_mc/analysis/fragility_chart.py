@@ -9,10 +9,9 @@ from __future__ import annotations
 
 import numpy as np
 from matplotlib.axes import Axes
-from matplotlib.figure import Figure
 
 from pound_mc.analysis.fragility import FragilityFit
-from pound_mc.analysis.style import PALETTE, legend_outside
+from pound_mc.analysis.style import PALETTE, legend_outside, new_figure
 
 __all__ = ["fragility_chart"]
 
@@ -57,7 +56,7 @@ def fragility_chart(
         and the stripes (``lines[1]``, markers only); the counts are ``ax.texts``.
     """
     if ax is None:
-        ax = Figure(figsize=(6.4, 4.2), layout="constrained").add_subplot()
+        ax = new_figure((6.4, 4.2)).add_subplot()
     im = fit.im
     fraction = np.divide(
         fit.n_event, fit.n_total, out=np.full(im.shape, np.nan), where=fit.n_total > 0

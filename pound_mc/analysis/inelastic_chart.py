@@ -22,6 +22,7 @@ from pound_mc.analysis.style import (
     chart_doc,
     legend_below,
     line_style,
+    new_figure,
     no_values,
     save,
     scale_of,
@@ -63,7 +64,7 @@ def inelastic_chart(ds, path: str | Path | None = None, *, side="left", record=0
     values = [None] if line is None else list(ds[line].values)
     u_ref = float(min(values)) if line == f"{side}_yield_disp_m" else np.nan
     ref_text = value_text(ds, line, int(np.argmin(values))) if np.isfinite(u_ref) else ""
-    fig = Figure(figsize=(9.6, 4.6), layout="constrained")
+    fig = new_figure((9.6, 4.6))
     ax_mu, ax_f = fig.subplots(1, 2, sharex=True)
     xs = ds[x].values * scale_of(ds, x)
     for i, value in enumerate(values):

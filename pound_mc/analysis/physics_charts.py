@@ -13,7 +13,15 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from numpy.typing import ArrayLike
 
-from pound_mc.analysis.style import PALETTE, chart_doc, legend_outside, line_style, new_axes, save
+from pound_mc.analysis.style import (
+    PALETTE,
+    chart_doc,
+    legend_outside,
+    line_style,
+    new_axes,
+    new_figure,
+    save,
+)
 from pound_mc.physics import materials, relations
 from pound_mc.physics.droptest import DropTestResult, drop_test
 
@@ -116,7 +124,7 @@ def restitution_chart(
 
 def restitution_ranges_chart(path: str | Path | None = None) -> Figure:
     """Jankowski (2008) Table 2: measured restitution range against impact velocity."""
-    fig = Figure(figsize=(6.4, 4.6), layout="constrained")
+    fig = new_figure((6.4, 4.6))
     ax = fig.add_subplot()
     t2 = materials.table(2)
     for material in materials.MATERIALS:
@@ -138,7 +146,7 @@ def restitution_ranges_chart(path: str | Path | None = None) -> Figure:
 
 def droptest_chart(result: DropTestResult, path: str | Path | None = None) -> Figure:
     """Force against time and against penetration for one virtual drop test."""
-    fig = Figure(figsize=(9.6, 4.0), layout="constrained")
+    fig = new_figure((9.6, 4.0))
     ax1, ax2 = fig.subplots(1, 2)
     t_ms = result.time_s * 1e3
     ax1.plot(t_ms, result.force_N / 1e3, color=PALETTE[3])

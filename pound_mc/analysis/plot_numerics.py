@@ -19,6 +19,7 @@ from pound_mc.analysis.style import (
     legend_outside,
     line_style,
     new_axes,
+    new_figure,
     save,
 )
 from pound_mc.scene import SimulationResult
@@ -46,7 +47,7 @@ def work_precision_chart(
         Error column to draw.
     """
     scenes = list(dict.fromkeys(table["scene"]))
-    fig = Figure(figsize=(5.2 * len(scenes), 4.2), layout="constrained")
+    fig = new_figure((5.2 * len(scenes), 4.2))
     axes = fig.subplots(1, len(scenes), squeeze=False)[0]
     for ax, label in zip(axes, scenes, strict=True):
         part = table[table["scene"] == label]
@@ -76,7 +77,7 @@ def stability_map_chart(table: pd.DataFrame, path: str | Path | None = None) -> 
     table : pandas.DataFrame
         :func:`pound_mc.numerics.stability.stability_map` output.
     """
-    fig = Figure(figsize=(6.4, 4.4), layout="constrained")
+    fig = new_figure((6.4, 4.4))
     ax = fig.subplots()
     top = 20.0
     for method, rows in table.groupby("method", sort=False):

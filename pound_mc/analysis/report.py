@@ -25,8 +25,13 @@ from pound_mc.analysis import (
     risk_chart,
 )
 from pound_mc.analysis.inelastic_chart import inelastic_chart, yielding_sides
-from pound_mc.analysis.style import output_path, require_simulations, write_atomically
-from pound_mc.study.dataset import pounding_counted
+from pound_mc.analysis.style import (
+    output_path,
+    pyplot_figures,
+    require_simulations,
+    write_atomically,
+)
+from pound_mc.study.dataset import pounding_counted, study_file
 
 __all__ = ["chart_png", "report_html", "write_report"]
 
@@ -280,16 +285,17 @@ def _figures(ds: xr.Dataset, base_dir, history: bool, forces: bool = True) -> li
         if index is not None and float(ds["peak_force"].isel(index)) > 0:
             coords = {d: ds[d].values[i] for d, i in index.items() if d not in ("record", "sample")}
             try:
-                fig = (
-                    ds.pound.plot.history(
-                        record=index["record"],
-                        sample=index["sample"],
-                        study_path=None if base_dir is None else Path(base_dir) / "study.toml",
-                        **coords,
+                with pyplot_figures(False):  # into the page, not pyplot
+                    fig = (
+                        ds.pound.plot.history(
+                            record=index["record"],
+                            sample=index["sample"],
+                            study_path=study_file(ds, base_dir),
+                            **coords,
+                        )
+                        .ravel()[0]
+                        .figure
                     )
-                    .ravel()[0]
-                    .figure
-                )
             except ValueError as exc:  # records not readable here: say so
                 figures.append(f"<p>(No time history: {html.escape(str(exc))})</p>")
             else:

@@ -14,7 +14,9 @@ placement from here, so that charts read alike:
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+import contextvars
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
@@ -169,6 +171,39 @@ def fit_tick_labels(ax: Axes, n: int, *, axis: str = "x", most: int = 6) -> None
             label.set_rotation_mode("anchor")
 
 
+#: Whether new figures are pyplot's (the ``ds.pound.plot`` charts drawn for a person: shown by
+#: a notebook and by ``plt.show()``) or detached (files: no pyplot state, safe in threads).
+_PYPLOT: contextvars.ContextVar[bool | None] = contextvars.ContextVar(
+    "pound_mc_pyplot_figures", default=None
+)
+
+
+@contextmanager
+def pyplot_figures(on: bool = True, *, unless_set: bool = False) -> Iterator[None]:
+    """Inside the block, :func:`new_figure` makes pyplot figures (``on``), else detached ones.
+
+    ``unless_set``: leave the choice of an enclosing block as it is (the report draws the
+    accessor's charts into its page, never into pyplot).
+    """
+    if unless_set and _PYPLOT.get() is not None:
+        yield
+        return
+    token = _PYPLOT.set(on)
+    try:
+        yield
+    finally:
+        _PYPLOT.reset(token)
+
+
+def new_figure(figsize: tuple[float, float]) -> Figure:
+    """A new figure with constrained layout: pyplot's inside :func:`pyplot_figures`."""
+    if _PYPLOT.get():
+        import matplotlib.pyplot as plt  # only where a person looks at the chart
+
+        return plt.figure(figsize=figsize, layout="constrained")
+    return Figure(figsize=figsize, layout="constrained")
+
+
 def new_axes(
     ax: Axes | Sequence[Axes] | None,
     figsize: tuple[float, float],
@@ -197,7 +232,7 @@ def new_axes(
         Flat, ``nrows * ncols`` long.
     """
     if ax is None:
-        fig = Figure(figsize=figsize, layout="constrained")
+        fig = new_figure(figsize)
         axes = np.asarray(fig.subplots(nrows, ncols, squeeze=False), dtype=object).ravel()
         return fig, axes
     axes = np.asarray([ax] if isinstance(ax, Axes) else list(ax), dtype=object).ravel()

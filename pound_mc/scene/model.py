@@ -747,7 +747,13 @@ def simulate(
         A record already loaded (``records.record_arrays``); default the scene's own, read
         once and cached on the scene (:meth:`Scene.record_arrays`).
     method, dt_s, substeps : optional
-        Override the scene's integrator settings.
+        Override the scene's integrator settings, within the bounds of the scene file's
+        ``[integrator]`` keys.
+
+    Raises
+    ------
+    InputError
+        An override out of those bounds (``dt_s = 0``, an unknown method), naming it.
 
     Notes
     -----
@@ -755,11 +761,16 @@ def simulate(
     calls on the same scene reuse it and the modal arrays, and cost the kernel plus a few
     microseconds of Python.
     """
+    for key, value in (("method", method), ("dt_s", dt_s), ("substeps", substeps)):
+        if value is not None and (problem := schema.INTEGRATOR[key].problem(value)):
+            raise InputError(problem, key=key)
+    m = scene.method if method is None else method
+    dt_s = scene.dt_s if dt_s is None else float(dt_s)
+    substeps = scene.substeps if substeps is None else substeps
     if record is None:
         record = scene.record_arrays()
     dt_rec, acc = record
     arrays = scene.kernel_arrays()
-    m = method or scene.method
     storeys = scene.kernel_storeys()
     storey_out = None
     if storeys is not None:
@@ -772,17 +783,15 @@ def simulate(
         model=scene.contact_model,
         method=m,
         relation=scene.relation,
-        dt_s=dt_s or scene.dt_s,
-        substeps=substeps or scene.substeps,
+        dt_s=dt_s,
+        substeps=substeps,
         history=history,
         storeys=storeys,
         restitution=scene.restitution_rule(),
         storey_out=storey_out,
     )
-    if m != scene.method or dt_s or substeps:
-        scene = replace(
-            scene, method=m, dt_s=dt_s or scene.dt_s, substeps=substeps or scene.substeps
-        )
+    if (m, dt_s, substeps) != (scene.method, scene.dt_s, scene.substeps):
+        scene = replace(scene, method=m, dt_s=dt_s, substeps=substeps)
     res = SimulationResult(outputs, contacts, scene)
     if storey_out is not None:
         owner = None

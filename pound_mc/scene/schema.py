@@ -79,6 +79,8 @@ class Field:
         the table) and returns them, for choices that depend on another key.
     choices_doc : str
         How dependent choices are described in the reference (default: the choices listed).
+    no_choices : str
+        The problem where dependent choices are none (``str.format`` of the table's values).
     pattern : str, optional
         Regular expression a string must match (JSON Schema syntax).
     varied : bool
@@ -97,6 +99,7 @@ class Field:
     exclusive_maximum: bool = False
     choices: tuple | Callable[[dict], tuple] | None = None
     choices_doc: str = ""
+    no_choices: str = ""
     pattern: str | None = None
     varied: bool = False
 
@@ -143,6 +146,8 @@ class Field:
         if not isinstance(value, python_type):
             return f"must be {what}, got {value!r}"
         choices = self.choices_for(values or {})
+        if choices == ():  # no value fits the table's other keys
+            return (self.no_choices or "takes no value here; remove it").format(**(values or {}))
         if choices is not None and value not in choices:
             return f"unknown value {value!r}; allowed: {', '.join(map(str, choices))}"
         if self.pattern is not None and not _matches(self.pattern, value):
@@ -489,7 +494,8 @@ CONTACT = Table(
               choices_doc="; ".join(
                   f"{name}: {', '.join(law.relations)}"
                   for name, law in contact.CONTACT_MODELS.items() if law.relations
-              )),
+              ),
+              no_choices="the {model!r} law has no damping and takes no relation; remove it"),
         Field("restitution", "string", "`fixed`: one restitution (`e` or `xi`) for every impact; "
               "`velocity`: each impact's e from the seed's Table 2 at its prior-impact velocity "
               "(the relative velocity at contact onset) for `material`, at quantile `e_quantile` "

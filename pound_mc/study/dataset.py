@@ -42,6 +42,7 @@ __all__ = [
     "build_dataset",
     "write_netcdf",
     "pounding_counted",
+    "study_file",
     "study_folder",
 ]
 
@@ -297,6 +298,7 @@ def build_dataset(
         "study_text": study.text,
         # where relative record paths of the study text are read from, when analysed again
         **({"study_dir": str(Path(study.path).resolve().parent)} if study.path else {}),
+        **({"study_file": Path(study.path).name} if study.path else {}),
         "seed": study.seed,
         "sampling_method": study.method,
         "sampling_seed": study.sampling_seed,
@@ -316,6 +318,18 @@ def study_folder(ds: xr.Dataset, fallback: str | Path | None = None) -> Path | N
     if folder and Path(folder).is_dir():
         return Path(folder)
     return None if fallback is None else Path(fallback)
+
+
+def study_file(ds: xr.Dataset, fallback: str | Path | None = None) -> Path | None:
+    """The study file a dataset was run from, in :func:`study_folder` (None: not known).
+
+    Records given by a relative path are read from its folder, and messages name it; a dataset
+    written before ``study_file`` was stored is named ``<study_name>.toml``.
+    """
+    folder = study_folder(ds, fallback)
+    if folder is None:
+        return None
+    return folder / ds.attrs.get("study_file", f"{ds.attrs.get('study_name', 'study')}.toml")
 
 
 def write_netcdf(ds: xr.Dataset, path: str | Path) -> Path:

@@ -716,7 +716,7 @@ def _run_locked(study, out_dir, engine, layout, fresh, chunk_size, progress, max
     compiled = False
     if todo_now:
         warm = getattr(executor, "warm_up", warm_up)  # where the chunks run
-        warmup_s, compiled = warm(engine, todo_now[0].start, quiet=not progress)
+        warmup_s, compiled = warm(engine, todo_now[0].start)  # with or without the bar
     t0 = time.perf_counter()
     ran = 0
     simulations_run = 0

@@ -20,6 +20,7 @@ from contextlib import contextmanager
 from typing import TextIO
 
 import numpy as np
+from numba.core import event as numba_event
 
 # imported as a module: a "from ... import" of it would add this file to the sources that key
 # the kernel cache (see pound_mc._jit.source_key), and every edit here would recompile
@@ -50,35 +51,62 @@ def cache_directory() -> str:
     return str(jit_cache.cache_root() / "numba" / jit_cache.source_key())
 
 
+class _Compilations(numba_event.Listener):
+    """Counts the numba compilations that start (a kernel loaded from the cache is none)."""
+
+    def __init__(self):
+        self.started = 0
+
+    def on_start(self, event):
+        self.started += 1
+
+    def on_end(self, event):
+        pass
+
+
 @contextmanager
 def compiling_notice(stream: TextIO | None = None, after_s: float | None = None, *,
                      where: str | None = None, quiet: bool = False):  # fmt: skip
-    """Print :data:`COMPILING_MESSAGE` to ``stream`` if the block runs longer than ``after_s``.
+    """Print :data:`COMPILING_MESSAGE` to ``stream`` once the block has compiled for ``after_s``.
 
-    Yields a dict whose ``"shown"`` entry tells, after the block, whether the message was
-    due (the kernels were compiled rather than loaded from the cache).  ``where``: where the
-    kernels compile (default: here, and the message names this process's cache); ``quiet``:
-    print nothing.
+    Here (``where`` None) the message is due when numba compiles a kernel in the block and
+    the block has run ``after_s``: a slow first simulation whose kernels come from the cache
+    is no compilation.  Elsewhere (``where``: the Dask workers, whose compilations this process
+    does not see) it is due when the block runs longer than ``after_s``.  Yields a dict whose
+    ``"shown"`` entry tells, after the block, whether it was due; ``quiet``: print nothing.
     """
     stream = sys.stderr if stream is None else stream
     after_s = NOTICE_AFTER_S if after_s is None else after_s
     state = {"shown": False}
     done = threading.Event()
+    compilations = _Compilations()
+
+    def show():
+        state["shown"] = True
+        if not quiet:
+            text = where if where is not None else f"(cache: {cache_directory()})"
+            print(f"{COMPILING_MESSAGE} {text}", file=stream, flush=True)
 
     def notice():
-        if not done.wait(after_s):
-            state["shown"] = True
-            if not quiet:
-                text = where if where is not None else f"(cache: {cache_directory()})"
-                print(f"{COMPILING_MESSAGE} {text}", file=stream, flush=True)
+        if done.wait(after_s):
+            return
+        while where is None and not compilations.started:
+            if done.wait(0.1):
+                return
+        show()
 
+    t0 = time.perf_counter()
     timer = threading.Thread(target=notice, daemon=True)
-    timer.start()
-    try:
-        yield state
-    finally:
-        done.set()
-        timer.join()
+    with numba_event.install_listener("numba:compile", compilations):
+        timer.start()
+        try:
+            yield state
+        finally:
+            done.set()
+            timer.join()
+            # a compilation in the last moments before the block ended, which the timer missed
+            if not state["shown"] and compilations.started and time.perf_counter() - t0 >= after_s:
+                show()
 
 
 def warm_up(engine, index: int = 0, *, stream: TextIO | None = None, quiet: bool = False):
