@@ -458,6 +458,10 @@ def test_cli_records_info_errors(capsys):
     assert "unknown built-in record 'nowhere'" in err
     assert main(["records", "info", "builtin:evt-mola-2012", "--component", "7"]) == 2
     assert "no component '7'" in capsys.readouterr().err
+    # a bare name that is neither a file nor a catalogue entry: where the names are
+    assert main(["records", "info", "elcentr"]) == 2
+    err = capsys.readouterr().err
+    assert "elcentr: file not found, nor a built-in record (pound-mc records list)" in err
 
 
 def _bad_record_files(tmp_path) -> dict[str, Path]:

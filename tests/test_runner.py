@@ -229,6 +229,35 @@ def test_ctrl_c_stops_between_chunks(study_file, reference, tmp_path):
     _assert_identical(reference, resumed.path)
 
 
+def test_an_unknown_option_shows_its_command_usage(study_file, tmp_path, capsys):
+    # the program's usage ("usage: pound-mc [-h] [--version] COMMAND ...") named no option
+    with pytest.raises(SystemExit) as exit_info:
+        main(["run", str(study_file), "--out", str(tmp_path / "o"), "--bogus"])
+    err = capsys.readouterr().err
+    assert exit_info.value.code == 2
+    assert (
+        "usage: pound-mc run " in err
+        and "pound-mc run: error: unrecognized arguments: --bogus" in err
+    )
+    assert not (tmp_path / "o").exists()
+
+
+def test_out_naming_a_file_says_so(study_file, tmp_path, capsys):
+    # "cannot write: File exists"
+    taken = tmp_path / "results"
+    taken.write_text("mine")
+    assert main(["run", str(study_file), "--out", str(taken), "--no-progress"]) == 2
+    assert f"{taken}: is a file, not a folder: give --out a folder" in capsys.readouterr().err
+    assert taken.read_text() == "mine"
+
+
+def test_run_summary_counts_in_the_singular(make_study, tmp_path, capsys):
+    # "1 simulations, 1 of 1 chunks run"
+    one = make_study(grid=None, sampling={"n": 1})
+    assert main(["run", str(one), "--out", str(tmp_path), "--no-progress", "--no-plot"]) == 0
+    assert "1 simulation, 1 of 1 chunk run in " in capsys.readouterr().out
+
+
 def test_changed_study_refused_unless_fresh(study_file, tmp_path):
     out = tmp_path / "changed"
     run_study(load_study(study_file), out, chunk_size=16, max_chunks=1, progress=False)

@@ -170,9 +170,11 @@ def test_seed_the_dataset_cannot_store_is_refused(tmp_path, capsys, table):
 
 def test_a_relation_given_to_a_law_without_damping_says_so(tmp_path, capsys):
     # the message listed the law's relations: "unknown value 'jankowski2008'; allowed: "
-    text = _replace('model = "jankowski"', 'model = "hertz"').replace(
-        "e = 0.65", 'relation = "jankowski2008"'
-    ).replace('"contact.e" = { material = "concrete" }\n', "")
+    text = (
+        _replace('model = "jankowski"', 'model = "hertz"')
+        .replace("e = 0.65", 'relation = "jankowski2008"')
+        .replace('"contact.e" = { material = "concrete" }\n', "")
+    )
     assert _refused(tmp_path, capsys, text) == (
         "STUDY: contact.relation: the 'hertz' law has no damping and takes no relation; remove it"
     )

@@ -45,7 +45,10 @@ def command_function(name: str):
 def main(argv: list[str] | None = None) -> int:
     """Run the command line; returns the exit status (2 for bad input)."""
     parser = build_parser()
-    args = parser.parse_args(argv)
+    args, extra = parser.parse_known_args(argv)
+    if extra:  # with the command's own usage, not the program's
+        command_parser = getattr(args, "command_parser", None) or parser
+        command_parser.error(f"unrecognized arguments: {' '.join(extra)}")
     try:
         status = command_function(args.handler)(args)
     except InputError as exc:

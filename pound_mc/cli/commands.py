@@ -135,7 +135,7 @@ def _command(sub: argparse._SubParsersAction, command: str, **keywords) -> argpa
     """
     keywords.setdefault("description", DESCRIPTIONS.get(command))
     parser = sub.add_parser(command.split()[-1], **keywords)
-    parser.set_defaults(handler=command)
+    parser.set_defaults(handler=command, command_parser=parser)  # its own usage in errors
     return parser
 
 

@@ -13,6 +13,7 @@ from matplotlib.figure import Figure
 
 from pound_mc.analysis.plot import save
 from pound_mc.analysis.style import output_path
+from pound_mc.errors import InputError
 from pound_mc.motions import (
     BUILTIN_RECORDS,
     G,
@@ -60,9 +61,14 @@ def info_command(args) -> int:
     """``pound-mc records info``: PGA, duration and step of a record."""
     source = _resolve(args.source)
     seed = args.seed if source.lower().startswith("synthetic:") else None
-    trace = load_record(
-        source, demean=not args.raw, units=args.units, component=args.component, seed=seed
-    )
+    try:
+        trace = load_record(
+            source, demean=not args.raw, units=args.units, component=args.component, seed=seed
+        )
+    except InputError as exc:  # a name that is neither a file nor a built-in record
+        if str(exc.message) == "file not found" and ":" not in source:
+            exc.message = "file not found, nor a built-in record (pound-mc records list)"
+        raise
     if args.plot:
         output_path(args.plot, key="--plot", suffix=".png")
     info = record_info(trace)

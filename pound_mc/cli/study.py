@@ -26,6 +26,7 @@ from pound_mc.study.distributed import _import_distributed, run_study_distribute
 from pound_mc.study.engine import StudyEngine
 from pound_mc.study.runner import (
     chunk_ranges,
+    count_text,
     default_chunk_size,
     memory_estimate,
     plan_text,
@@ -92,14 +93,15 @@ def run_command(args) -> int:
         return 130
     if not report.complete:
         print(
-            f"interrupted after {report.chunks_run} chunks: finished chunks are kept under "
+            f"interrupted after {count_text(report.chunks_run, 'chunk')}: finished chunks are "
+            f"kept under "
             f"{Path(args.out) / study.name}; run the same command again to resume",
             file=sys.stderr,
         )
         return 130
     print(
-        f"{report.n_simulations:,} simulations, {report.chunks_run} of {report.chunks_total} "
-        f"chunks run in {report.seconds:.1f} s"
+        f"{count_text(report.n_simulations, 'simulation')}, {report.chunks_run} of "
+        f"{count_text(report.chunks_total, 'chunk')} run in {report.seconds:.1f} s"
         + (f" after {report.warmup_seconds:.1f} s of compiling" if report.warmup_compiled else "")
         + (f" ({report.rate:,.0f} simulations/s)" if report.chunks_run else "")
         + f"; {time.perf_counter() - t0:.1f} s with the dataset"

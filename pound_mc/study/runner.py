@@ -83,6 +83,7 @@ __all__ = [
     "local_executor",
     "plan_text",
     "chunk_ranges",
+    "count_text",
     "default_chunk_size",
     "output_lock",
     "memory_estimate",
@@ -229,7 +230,7 @@ def _atomic_write_text(path: Path, text: str, stage: str = "text") -> None:
     _atomic_write_bytes(path, text.encode(), stage)
 
 
-def _count(n: int, noun: str) -> str:
+def count_text(n: int, noun: str) -> str:
     """``1 chunk``, ``3 chunks``."""
     return f"{n:,} {noun}{'s' * (n != 1)}"
 
@@ -242,13 +243,13 @@ def plan_text(study, chunk_size: int | None = None, seconds_per_simulation: floa
     for key, values in study.grid.items():
         names = study.grid_labels.get(key)
         span = ", ".join(names) if names else f"{values.min():g} .. {values.max():g}"
-        lines.append(f"  grid      : {key} = {_count(values.size, 'value')} {span}")
+        lines.append(f"  grid      : {key} = {count_text(values.size, 'value')} {span}")
     lines.append(f"  sampling  : n = {study.n}, method {study.method}, seed {study.sampling_seed}")
     for v in study.variables:
         lines.append(f"    {v.key}: {v.source}")
     n = study.n_simulations
     lines.append(
-        f"  simulations: {n:,} in {_count(len(chunk_ranges(n, chunk_size)), 'chunk')} of "
+        f"  simulations: {n:,} in {count_text(len(chunk_ranges(n, chunk_size)), 'chunk')} of "
         f"{min(chunk_size, n):,}"
     )
     if seconds_per_simulation is not None:
@@ -278,6 +279,9 @@ def output_lock(out_dir: Path, name: str):
             fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
         except OSError as exc:
             where = exc.filename or path
+            if Path(out_dir).exists() and not Path(out_dir).is_dir():
+                raise OutputError("is a file, not a folder: give --out a folder",
+                                  file=str(out_dir)) from None  # fmt: skip
             raise OutputError(f"cannot write: {exc.strerror or exc}", file=str(where)) from None
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
@@ -670,7 +674,7 @@ def _resumed_chunk_size(work: Path, chunk_size: int) -> int:
         return chunk_size
     size, count = sizes.most_common(1)[0]
     print(
-        f"{work} holds {_count(count, 'finished chunk')} of {size:,} simulations: going on "
+        f"{work} holds {count_text(count, 'finished chunk')} of {size:,} simulations: going on "
         f"with that chunk size ({chunk_size:,} applies to a fresh run, --fresh)",
         file=sys.stderr,
         flush=True,
