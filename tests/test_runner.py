@@ -1,6 +1,7 @@
 """Study runner: reproducibility, resume, change detection, Ctrl-C, ``check``."""
 
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -266,6 +267,15 @@ def test_changed_study_refused_unless_fresh(study_file, tmp_path):
         run_study(load_study(study_file), out, chunk_size=16, progress=False)
     rc = main(["run", str(study_file), "--out", str(out), "--no-progress", "--no-plot"])
     assert rc == 2
+    # which keys changed (the message said "the study file" alone)
+    edited = STUDY.replace("seed = 11", "seed = 12").replace("n = 8", "n = 4")
+    study_file.write_text(edited + "# a comment\n")
+    with pytest.raises(InputError, match=re.escape("(study.seed: 11 -> 12, sampling.n: 8 -> 4)")):
+        run_study(load_study(study_file), out, chunk_size=16, progress=False)
+    study_file.write_text(STUDY + "# a comment\n")
+    with pytest.raises(InputError, match=re.escape("the study file (comments or layout only)")):
+        run_study(load_study(study_file), out, chunk_size=16, progress=False)
+    study_file.write_text(STUDY.replace("seed = 11", "seed = 12"))
     report = run_study(load_study(study_file), out, chunk_size=16, fresh=True, progress=False)
     assert report.complete and report.chunks_run == report.chunks_total
     with xr.open_dataset(report.path) as ds:

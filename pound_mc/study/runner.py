@@ -57,6 +57,7 @@ import signal
 import sys
 import threading
 import time
+import tomllib
 import zipfile
 from collections.abc import Callable, Iterable, Iterator
 from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
@@ -318,8 +319,43 @@ def _remove_parts(out_dir: Path, name: str) -> None:
         path.unlink(missing_ok=True)
 
 
-def _changed_inputs(old: dict, inputs: dict) -> list[str]:
-    """The inputs whose hash differs from the earlier run's (``manifest.json``)."""
+def _flat(table: dict, prefix: str = "") -> dict:
+    """``{"contact.gap_m": 0.01, ...}`` of a TOML document (arrays of tables by index)."""
+    out = {}
+    for key, value in table.items():
+        name = f"{prefix}{key}"
+        if isinstance(value, list) and value and all(isinstance(v, dict) for v in value):
+            value = {f"[{k}]": v for k, v in enumerate(value)}
+            out.update(_flat(value, name))
+        elif isinstance(value, dict):
+            out.update(_flat(value, f"{name}."))
+        else:
+            out[name] = value
+    return out
+
+
+def _changed_keys(before: str, now: str, most: int = 3) -> str:
+    """`` (sampling.n: 4 -> 8)``: the keys whose values differ between two study texts."""
+    try:
+        old, new = _flat(tomllib.loads(before)), _flat(tomllib.loads(now))
+    except tomllib.TOMLDecodeError:
+        return ""
+    keys = [k for k in dict.fromkeys([*old, *new]) if old.get(k, _GONE) != new.get(k, _GONE)]
+    if not keys:
+        return " (comments or layout only)"
+    shown = [f"{k}: {old.get(k, '(none)')!r} -> {new.get(k, '(none)')!r}" for k in keys[:most]]
+    more = f" and {len(keys) - most} more" if len(keys) > most else ""
+    return f" ({', '.join(shown)}{more})".replace("'(none)'", "(none)")
+
+
+_GONE = object()
+
+
+def _changed_inputs(old: dict, inputs: dict, text: str | None = None) -> list[str]:
+    """The inputs whose hash differs from the earlier run's (``manifest.json``).
+
+    ``text``: the study's text now, told against the manifest's (if it holds one) key by key.
+    """
     before = old.get("inputs")
     if not isinstance(before, dict):  # a manifest of an older version: the study hash only
         before = {"study": old.get("study_hash")}
@@ -327,6 +363,8 @@ def _changed_inputs(old: dict, inputs: dict) -> list[str]:
     for key, value in inputs.items():
         if before.get(key) != value:
             what = "the study file" if key == "study" else key
+            if key == "study" and text is not None and isinstance(old.get("study_text"), str):
+                what += _changed_keys(old["study_text"], text)
             changed.append(what + (" (not in the earlier run)" if key not in before else ""))
     changed += [f"{key} (no longer read)" for key in before if key not in inputs]
     if old.get("pound_mc_version") != __version__:
@@ -371,7 +409,7 @@ def _check_manifest(work: Path, study, fresh: bool) -> None:
                 "--fresh to discard them and start again",
                 file=str(manifest),
             ) from None
-        changed = _changed_inputs(old, inputs)
+        changed = _changed_inputs(old, inputs, study.text)
         if changed:
             raise InputError(
                 f"changed since the results in {work} were started: {'; '.join(changed)}; "
@@ -393,6 +431,7 @@ def _check_manifest(work: Path, study, fresh: bool) -> None:
                     "shape": list(study.shape),
                     "pound_mc_version": __version__,
                     "inputs": inputs,
+                    "study_text": study.text,  # to say which keys a changed study changed
                 },
                 indent=1,
             ),
