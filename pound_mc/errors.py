@@ -7,6 +7,7 @@ exit status 2; a traceback is reserved for bugs.
 
 from __future__ import annotations
 
+import difflib
 from collections.abc import Iterable
 
 
@@ -106,3 +107,9 @@ def named_by(exc: InputError, file, *, table: str = "record") -> InputError:
         inner += [key] if key else []
         key = f"{table}.source"
     return InputError(": ".join([*inner, exc.message]), file=file, key=key)
+
+
+def did_you_mean(key: str, allowed: Iterable[str]) -> str:
+    """`` (did you mean 'damping_ratio'?)`` for a misspelt ``key``, else an empty string."""
+    close = difflib.get_close_matches(str(key), [str(a) for a in allowed], n=1, cutoff=0.6)
+    return f" (did you mean {close[0]!r}?)" if close else ""

@@ -168,6 +168,27 @@ def test_seed_the_dataset_cannot_store_is_refused(tmp_path, capsys, table):
     assert study_from_text(_replace("seed = 7", "seed = 18446744073709551615")).seed == 2**64 - 1
 
 
+def test_misspelt_keys_get_a_hint(tmp_path, capsys):
+    # close to an allowed key: named with it; a sampled variable's key: the key is blamed,
+    # not the missing 'distribution' ("needs 'material' or 'distribution' ..., got None")
+    text = _replace("damping_ratio = 0.05\nmass_kg = 1.0e6\n\n[right]",
+                    "damping_ration = 0.05\nmass_kg = 1.0e6\n\n[right]")  # fmt: skip
+    assert _refused(tmp_path, capsys, text).startswith(
+        "STUDY: left.damping_ration: unknown key (did you mean 'damping_ratio'?); allowed: "
+    )
+    text = _replace('"contact.beta" = { material = "concrete" }',
+                    '"contact.beta" = { dist = "uniform", low = 1e9, high = 2e9 }')  # fmt: skip
+    assert _refused(tmp_path, capsys, text) == (
+        "STUDY: sampling.vary.contact.beta.dist: unknown key; a sampled variable takes "
+        "'material' or 'distribution'"
+    )
+    text = _replace('"contact.beta" = { material = "concrete" }',
+                    '"contact.beta" = { distrib = "uniform", low = 1e9, high = 2e9 }')  # fmt: skip
+    assert "contact.beta.distrib: unknown key (did you mean 'distribution'?)" in _refused(
+        tmp_path, capsys, text
+    )
+
+
 def test_a_relation_given_to_a_law_without_damping_says_so(tmp_path, capsys):
     # the message listed the law's relations: "unknown value 'jankowski2008'; allowed: "
     text = (

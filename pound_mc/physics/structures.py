@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from pound_mc._docstring import fill
-from pound_mc.errors import InputError
+from pound_mc.errors import InputError, did_you_mean
 
 __all__ = [
     "Building",
@@ -422,7 +422,8 @@ def _unknown(spec: dict, allowed: set, *, file, prefix: str) -> None:
     extra = sorted(set(spec) - allowed)
     if extra:
         raise InputError(
-            f"unknown key(s) {', '.join(extra)}; allowed: {', '.join(sorted(allowed))}",
+            f"unknown key(s) {', '.join(extra)}{did_you_mean(extra[0], allowed)}; allowed: "
+            f"{', '.join(sorted(allowed))}",
             file=file,
             key=prefix + extra[0],
         )

@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from pound_mc.errors import InputError, InputErrors
+from pound_mc.errors import InputError, InputErrors, did_you_mean
 from pound_mc.integrators import METHODS
 from pound_mc.motions import UNITS, builtin_catalogue, suites, synthetic
 from pound_mc.physics import contact
@@ -237,7 +237,9 @@ def check_table(
     for key in sorted(set(data) - set(table.keys), key=str):
         errors.append(
             InputError(
-                f"unknown key; allowed: {', '.join(table.keys)}", file=file, key=prefix + key
+                f"unknown key{did_you_mean(key, table.keys)}; allowed: {', '.join(table.keys)}",
+                file=file,
+                key=prefix + key,
             )
         )
     out: dict = {}

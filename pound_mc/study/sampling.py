@@ -35,7 +35,7 @@ import numpy as np
 from scipy import stats
 from scipy.stats import qmc
 
-from pound_mc.errors import InputError
+from pound_mc.errors import InputError, did_you_mean
 from pound_mc.physics import materials
 from pound_mc.scene.schema import Field, Table, check_table
 
@@ -194,7 +194,10 @@ def _material_variable(key: str, spec: dict, where: str, file, errors: list):
     if extra:
         errors.append(
             InputError(
-                f"unknown keys {sorted(extra)}; allowed {sorted(allowed)}", file=file, key=where
+                f"unknown keys {sorted(extra)}{did_you_mean(min(extra), allowed)}; allowed "
+                f"{sorted(allowed)}",
+                file=file,
+                key=where,
             )
         )
         return None
@@ -275,6 +278,19 @@ def parse_variable(key: str, spec, *, file=None) -> tuple[RandomVariable | None,
             return None, errors
         spec = {"distribution": "uniform", "low": bounds[0], "high": bounds[1]}
     kind = spec.get("distribution")
+    known = {"distribution", "material", "uniform"}
+    known.update(k for table in VARY_TABLES.values() for k in table.keys)
+    unknown = [k for k in spec if k not in known]
+    if kind is None and unknown:  # { dist = "uniform", ... }: the key, not a missing value
+        errors.append(
+            InputError(
+                f"unknown key{did_you_mean(unknown[0], ['distribution', 'material'])}; a "
+                "sampled variable takes 'material' or 'distribution'",
+                file=file,
+                key=f"{where}.{unknown[0]}",
+            )
+        )
+        return None, errors
     if kind not in DISTRIBUTIONS:
         errors.append(
             InputError(
