@@ -9,6 +9,7 @@ must say so in one line: an input error, never a traceback.
 """
 
 import os
+import re
 import tomllib
 from pathlib import Path
 
@@ -20,6 +21,8 @@ from test_analysis import CHROMIUM, screenshot
 
 import pound_mc  # noqa: F401  (registers ds.pound)
 from pound_mc.analysis import profiles, risk
+from pound_mc.analysis.plot import spectrum_panels
+from pound_mc.analysis.report import report_html
 from pound_mc.analysis.risk_chart import fragility_panels
 from pound_mc.analysis.style import axis_label
 from pound_mc.cli import main
@@ -310,6 +313,67 @@ def test_worst_and_to_dataframe(datasets):
     counts = ds.pound.status_counts()
     assert counts.index.tolist() == ["ok", "unstable", "not_converged", "inaccurate"]
     assert int(counts.sum()) == ds["status"].size
+
+
+# -- the charts ``run`` draws: each study's headline charts ----------------------------------
+#: PNG files ``pound-mc run`` writes for the small version of each shipped study (after
+#: ``<name>_small_``): a gap axis draws the probability against the gap with the rules and the
+#: required gap, several contacts the peak force per contact, an intensity axis the fragility.
+RUN_CHARTS = {
+    "benchmark": {"spectrum"},
+    "inelastic_spectrum": {"spectrum", "inelastic"},
+    "jankowski_spectrum": {"spectrum"},  # one panel per material: test below
+    "materials": {"spectrum", "required_gap"},
+    "quickstart": {"required_gap", "fragility"},
+    "separation_gap": {"spectrum", "required_gap"},
+    "shear_spectrum": {"spectrum", "required_gap", "contacts"},
+}
+
+
+@pytest.mark.parametrize("study", STUDIES, ids=[p.stem for p in STUDIES])
+def test_run_draws_the_charts_each_study_is_for(study, datasets, capsys):
+    assert study.stem in RUN_CHARTS, f"say which charts run draws for {study.name}"
+    path = datasets(study)  # run with --no-plot: its charts are drawn here
+    name = path.stem
+    assert not list(path.parent.glob(f"{name}_*.png"))
+    capsys.readouterr()
+    # the same run again: every chunk is done, so it writes the dataset and draws the charts
+    assert main(["run", str(path.parent / study.name), "--out", str(path.parent)]) == 0
+    said = re.findall(r"^wrote .*/(\S+\.png)$", capsys.readouterr().out, re.M)
+    found = sorted(p.name for p in path.parent.glob(f"{name}_*.png"))
+    expected = sorted(f"{name}_{chart}.png" for chart in RUN_CHARTS[study.stem])
+    assert found == sorted(said) == expected
+
+
+def test_a_material_axis_the_spectrum_would_hold_gets_a_panel_per_material(datasets):
+    path = datasets(next(p for p in STUDIES if p.stem == "jankowski_spectrum"))
+    with xr.open_dataset(path) as ds:
+        ds.load()
+    # T1 on the horizontal axis, one line per T2: the material is the third grid axis
+    assert _grid(ds) == ["left_period_s", "right_period_s", "contact_material"]
+    names = [str(n) for n in ds["material"].values]
+    assert len(names) == 3  # steel, timber, ceramics of the cut-down study
+    fig = spectrum_panels(ds)
+    panels = [ax for ax in fig.axes if ax.get_visible()]
+    assert len(panels) == len(names)
+    median = pooled_median_mn(ds)
+    for k, (ax, material) in enumerate(zip(panels, names, strict=True)):
+        assert f"contact_material = {material})" in ax.get_title()
+        assert len(ax.lines) == ds.sizes["right_period_s"]
+        for j, line in enumerate(ax.lines):
+            np.testing.assert_array_equal(line.get_xdata(), ds["left_period_s"].values)
+            want = median.isel(right_period_s=j, contact_material=k).values
+            np.testing.assert_allclose(line.get_ydata(), want)
+    # the report draws the same panels
+    assert "one panel per material" in report_html(ds, history=False)
+    # a material axis on the chart's line axis (materials.toml: gap, material): one chart
+    materials = datasets(next(p for p in STUDIES if p.stem == "materials"))
+    with xr.open_dataset(materials) as mds:
+        mds.load()
+    (ax,) = spectrum_panels(mds).axes
+    labels = [line.get_label() for line in ax.lines]
+    assert labels == [str(n) for n in mds["material"].values]
+    assert "one panel per material" not in report_html(mds, history=False)
 
 
 # -- inelastic SDOF buildings: which profiles apply, lines per building variant, --sel -------

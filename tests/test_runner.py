@@ -288,6 +288,7 @@ def test_cli_run_writes_dataset_and_chart(study_file, tmp_path, capsys):
     text = capsys.readouterr()
     assert "simulations/s" in text.out
     assert (out / "small.nc").is_file() and (out / "small_spectrum.png").is_file()
+    assert (out / "small_required_gap.png").is_file()  # two gaps on the grid
     assert "sim/s" in text.err or "it/s" in text.err  # tqdm's rate
 
 

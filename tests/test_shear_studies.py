@@ -41,7 +41,9 @@ def shear_run(tmp_path_factory):
 
 def test_shear_study_runs_with_a_contact_dimension(shear_run):
     _, out, ds = shear_run
-    assert (out / "shear_small_spectrum.png").is_file()
+    # the pooled spectrum, the probability against the gap, the peak force per contact
+    charts = ("spectrum", "required_gap", "contacts")
+    assert sorted(out.glob("*.png")) == sorted(out / f"shear_small_{c}.png" for c in charts)
     assert ds.sizes["contact"] == 3
     np.testing.assert_array_equal(ds["contact"].values, [1, 2, 3])
     np.testing.assert_allclose(ds["contact_elevation"].values, [3.0, 6.0, 9.0])

@@ -5,6 +5,10 @@ Each function draws on the Axes given (``ax=``) or on a new :class:`matplotlib.f
 show it and tests can read the plotted data back from its artists.  Colours, units and labels
 come from :mod:`pound_mc.analysis.style`; the charts of the physics (restitution relations,
 the drop test) are in :mod:`pound_mc.analysis.physics_charts`.
+
+Longer than 600 lines because the spectrum, probability and distribution charts (and the
+spectrum's panels) share one set of selection helpers (horizontal and line axes, held axes,
+nearest values, records) that the other chart modules import from here.
 """
 
 from __future__ import annotations
@@ -48,6 +52,7 @@ __all__ = [
     "restitution_ranges_chart",
     "droptest_chart",
     "spectrum_chart",
+    "spectrum_panels",
     "probability_chart",
     "distribution_chart",
     "spectrum_quantiles",
@@ -253,6 +258,55 @@ def spectrum_chart(
     )
     if line is not None:
         ax.get_legend().set_title(axis_label(ds, line), prop={"size": 8})
+    return save(fig, path)
+
+
+@chart_doc
+def spectrum_panels(
+    ds: xr.Dataset,
+    path: str | Path | None = None,
+    *,
+    by: str = MATERIAL_DIM,
+    ax: Sequence[Axes] | None = None,
+) -> Figure:
+    """Impact force spectrum with one panel per value of ``by`` where the chart would hold it.
+
+    :func:`spectrum_chart` draws its first grid axis against its second and holds every other
+    grid axis at its first value.  Where ``by`` (default the material axis) is such a held axis
+    (``studies/jankowski_spectrum.toml``: T1, one line per T2, four materials), this draws one
+    spectrum panel per value of ``by``, so that none is left out; otherwise it is
+    :func:`spectrum_chart` itself.  ``pound-mc run`` and ``pound-mc report`` draw the spectrum
+    with it.
+
+    Parameters
+    ----------
+    %(ds)s
+    %(path)s
+    by : str
+        Grid dimension with one panel per value when the spectrum chart would hold it.
+    ax : sequence of matplotlib.axes.Axes, optional
+        One per value of ``by`` (default a new figure, two panels a row).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        ``axes[k]``: the spectrum chart at the ``k``-th value of ``by`` (its lines, title and
+        legend), in the order of ``by``; spare Axes of a new figure's last row are hidden.
+    """
+    _, _, held = _spectrum_selection(ds)
+    if by not in held:
+        return spectrum_chart(ds, path, ax=ax)
+    n = ds.sizes[by]
+    if ax is None:
+        ncols = min(n, 2)
+        nrows = -(-n // ncols)
+        fig, axes = new_axes(None, (8.4 * ncols, 4.6 * nrows), nrows=nrows, ncols=ncols)
+        for spare in axes[n:]:
+            spare.set_visible(False)
+    else:
+        fig, axes = new_axes(ax, (8.4, 4.6), ncols=n)
+    for k in range(n):
+        spectrum_chart(ds, sel={by: ds[by].values[k]}, ax=axes[k])
     return save(fig, path)
 
 

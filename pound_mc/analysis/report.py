@@ -182,13 +182,16 @@ def _figures(ds: xr.Dataset, base_dir, history: bool, forces: bool = True) -> li
     """
     figures = []
     if forces and plot._grid_dims(ds):
+        panels = plot.MATERIAL_DIM in plot._spectrum_selection(ds)[2]
         figures.append(
             _figure_html(
                 "spectrum",
-                plot.spectrum_chart(ds),
+                plot.spectrum_panels(ds),
                 "Impact force spectrum: median peak impact force (line) and the 5-95 % range "
                 "(band) over the records and samples together, against the first grid axis, "
-                "one line per value of the second; runs that do not pound count as 0.",
+                "one line per value of the second"
+                + (", one panel per material" if panels else "")
+                + "; runs that do not pound count as 0.",
             )
         )
     sides = yielding_sides(ds) if forces and plot._grid_dims(ds) else []

@@ -15,7 +15,8 @@ from pathlib import Path
 import xarray as xr
 
 from pound_mc.analysis.inelastic_chart import inelastic_chart, yielding_sides
-from pound_mc.analysis.plot import distribution_chart, spectrum_chart
+from pound_mc.analysis.plot import CONTACT_DIM, GAP_DIM, distribution_chart, spectrum_panels
+from pound_mc.analysis.profiles import contacts_chart
 from pound_mc.analysis.risk_chart import fragility_panels, required_gap_chart
 from pound_mc.errors import InputError
 from pound_mc.integrators import METHODS
@@ -138,15 +139,18 @@ def status_warnings(path: Path) -> list[str]:
 
 
 def _charts(study, path: Path, out: Path) -> list[Path]:
-    """The charts ``run`` draws: the spectrum, or with an intensity axis two risk charts.
+    """The charts ``run`` draws, chosen from what the dataset holds.
 
-    Without an intensity axis and with yielding buildings
-    (:func:`~pound_mc.analysis.inelastic_chart.yielding_sides`), also the inelastic spectrum
+    Without an intensity axis: the impact force spectrum, one panel per material where the
+    material is a grid axis the spectrum would otherwise hold at its first value
+    (:func:`~pound_mc.analysis.plot.spectrum_panels`), and with yielding buildings
+    (:func:`~pound_mc.analysis.inelastic_chart.yielding_sides`) also the inelastic spectrum
     (ductility demand and peak force, :func:`~pound_mc.analysis.inelastic_chart.inelastic_chart`).
-
-    With an intensity axis: the required gap against the rules (when the gap is on the grid)
-    and the fragility curves.  A study without ``[grid]`` has no axis to draw a spectrum
-    against: its chart is the distribution of the peak force over the samples.
+    With two or more gaps on the grid: the pounding probability against the gap with the
+    separation rules and the required gap (``_required_gap.png``); with an intensity axis the
+    fragility curves; with more than one contact (shear buildings) the peak force per contact
+    (``_contacts.png``).  A study without ``[grid]`` has no axis to draw a spectrum against: its
+    chart is the distribution of the peak force over the samples.
     """
     written = []
     with xr.open_dataset(path) as ds:
@@ -157,17 +161,20 @@ def _charts(study, path: Path, out: Path) -> list[Path]:
             return written
         if study.intensity_key is None:
             written.append(out / f"{study.name}_spectrum.png")
-            spectrum_chart(ds, written[-1])
+            spectrum_panels(ds, written[-1])
             sides = yielding_sides(ds)
             if sides:
                 written.append(out / f"{study.name}_inelastic.png")
                 inelastic_chart(ds, written[-1], side=sides[0])
-            return written
-        if "contact.gap_m" in study.grid and len(study.grid["contact.gap_m"]) > 1:
+        if GAP_DIM in ds.dims and ds.sizes[GAP_DIM] > 1:
             written.append(out / f"{study.name}_required_gap.png")
             required_gap_chart(ds, written[-1], base_dir=study.path.parent)
-        written.append(out / f"{study.name}_fragility.png")
-        fragility_panels(ds, written[-1])
+        if study.intensity_key is not None:
+            written.append(out / f"{study.name}_fragility.png")
+            fragility_panels(ds, written[-1])
+        if CONTACT_DIM in ds.dims and ds.sizes[CONTACT_DIM] > 1 and "contact_peak_force" in ds:
+            written.append(out / f"{study.name}_contacts.png")
+            contacts_chart(ds, written[-1])
     return written
 
 
