@@ -19,6 +19,7 @@ from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
 
+import matplotlib.pyplot as plt
 import numpy as np
 import xarray as xr
 from matplotlib.axes import Axes
@@ -198,8 +199,6 @@ def pyplot_figures(on: bool = True, *, unless_set: bool = False) -> Iterator[Non
 def new_figure(figsize: tuple[float, float]) -> Figure:
     """A new figure with constrained layout: pyplot's inside :func:`pyplot_figures`."""
     if _PYPLOT.get():
-        import matplotlib.pyplot as plt  # only where a person looks at the chart
-
         return plt.figure(figsize=figsize, layout="constrained")
     return Figure(figsize=figsize, layout="constrained")
 
