@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 import json
+import re
 
 import numpy as np
 import pytest
 import xarray as xr
+from matplotlib.backends.backend_agg import FigureCanvasAgg
 from scipy import optimize, stats
 
 from pound_mc.analysis.fragility import fit_fragility, fragility_probability
@@ -202,7 +204,12 @@ def test_chart_draws_the_fit(tmp_path):
     assert np.allclose(curve.get_ydata(), stats.norm.cdf(np.log(x / fit.theta) / fit.beta))
     assert np.array_equal(points.get_xdata(), STRIPES)
     assert np.array_equal(points.get_ydata(), n_event / n_total)
+    # every stripe has 40 simulations: each point says its events, the legend says "of 40"
+    assert [t.get_text() for t in ax.texts] == [f"{z}" for z in n_event]
+    assert "the 40 simulations" in points.get_label()
+    ax = fragility_chart(fit, totals=True)
     assert [t.get_text() for t in ax.texts] == [f"{z}/40" for z in n_event]
+    ax = fragility_chart(fit, im_label="PGA [g]", event_label="pounding")
     band = ax.collections[0].get_paths()[0].vertices
     lower, upper = fit.band(x)
     assert np.isclose(band[:, 1].min(), min(lower.min(), upper.min()))
@@ -287,10 +294,11 @@ def test_intervals_without_discarded_resamples_are_unchanged():
     assert upper.tolist() == [0.1301267210115875, 0.6134600750611734, 0.9804727358478391]
 
 
-def _stripe_dataset(*columns):
+def _stripe_dataset(*columns, pga=QS_PGA):
     # a study dataset as pound-mc run writes it, reduced to what the fragility reads: 88
-    # records x 1 sample at PGA 0.1, 0.2, 0.4 g and two gaps with the counts above
+    # records x 1 sample at PGA 0.1, 0.2, 0.4 g (or ``pga``) and a gap per column of counts
     counts = np.stack(columns or [QS_100MM, HALF_SEPARATED], axis=1)  # (pga_g, contact_gap_m)
+    gaps = [0.1, 0.2, 0.3, 0.4][: counts.shape[1]]
     impacts = (np.arange(88)[:, None, None, None] < counts[None, :, :, None]).astype(np.int64)
     dims = ("record", "pga_g", "contact_gap_m", "sample")
     return xr.Dataset(
@@ -300,8 +308,8 @@ def _stripe_dataset(*columns):
             "status": (dims, np.zeros_like(impacts)),
         },
         coords={
-            "pga_g": ("pga_g", QS_PGA, {"units": "g", "long_name": "peak ground acceleration"}),
-            "contact_gap_m": ("contact_gap_m", [0.1, 0.2], {"units": "m", "long_name": "gap"}),
+            "pga_g": ("pga_g", pga, {"units": "g", "long_name": "peak ground acceleration"}),
+            "contact_gap_m": ("contact_gap_m", gaps, {"units": "m", "long_name": "gap"}),
         },
     )
 
@@ -342,5 +350,49 @@ def test_no_fit_panels_label_their_stripes():
     ds = _stripe_dataset(QS_100MM, np.array([0, 0, 4]))
     fig = fragility_panels(ds, n_boot=50)
     labels = [[t.get_text() for t in ax.texts] for ax in fig.axes[:2]]
-    assert labels[0] == ["0/88", "2/88", "48/88"] and labels[1] == ["0/88", "0/88", "4/88"]
+    # 88 simulations in every stripe: the events at each point, "of 88" once in the legend
+    assert labels[0] == ["0", "2", "48"] and labels[1] == ["0", "0", "4"]
+    assert any("the 88 simulations" in t.get_text() for t in fig.legends[0].get_texts())
     assert fig.axes[1].get_title().replace("\n", " ").endswith("add stripes near it")
+
+
+def test_panels_share_the_stripes_range_and_keep_their_counts_apart():
+    """The quickstart's panels (PGA 0.05-0.8 g, 88 simulations a stripe): the 200 mm panel ran
+    to 1.8 g (its curve's reach) where the others stopped at 0.8 g; a count ("0/88") ran under
+    the next point and crowded ones were stacked above the wrong points; theta had no unit; the
+    title's "1000 bootstrap replicates" read against the panels' "25 of 1025 resamples left
+    out".  Counts as the quickstart's 50, 200 and 300 mm gaps."""
+    pga = np.array([0.05, 0.1, 0.2, 0.4, 0.8])
+    columns = (np.array([0, 4, 54, 88, 88]), np.array([0, 0, 0, 4, 54]), np.array([0, 0, 0, 0, 16]))
+    fig = fragility_panels(_stripe_dataset(*columns, pga=pga), n_boot=200)
+    panels = [ax for ax in fig.axes if ax.get_visible()]
+    assert len(panels) == 3
+    # one intensity range, the stripes', though the middle fit alone would reach further
+    wide = fit_fragility(pga, columns[1], np.full(5, 88), n_boot=0)
+    assert wide.theta * np.exp(2.5 * wide.beta) > 1.05 * pga[-1]
+    assert [ax.get_xlim() for ax in panels] == [(0.0, 1.05 * pga[-1])] * 3
+    assert f"theta = {wide.theta:.3g} g, beta" in panels[1].get_title()
+    # the counts: the events at each point, none over another count or over a point, inside
+    FigureCanvasAgg(fig).draw()
+    renderer = fig.canvas.get_renderer()
+    radius = 3.0 * fig.dpi / 72.0  # the points' markers (ms 5 and 6) [px]
+    for ax, z in zip(panels, columns, strict=True):
+        assert [t.get_text() for t in ax.texts] == [str(v) for v in z]
+        boxes = [t.get_window_extent(renderer) for t in ax.texts]
+        points = ax.transData.transform(np.c_[pga, z / 88])
+        for k, box in enumerate(boxes):
+            assert ax.bbox.x0 <= box.x0 and box.x1 <= ax.bbox.x1, (ax.get_title(), z[k])
+            assert ax.bbox.y0 <= box.y0 and box.y1 <= ax.bbox.y1, (ax.get_title(), z[k])
+            assert not any(box.overlaps(other) for other in boxes[k + 1 :]), z[k]
+            near = [
+                (box.x0 - radius < px < box.x1 + radius)
+                and (box.y0 - radius < py < box.y1 + radius)
+                for px, py in points
+            ]
+            assert not any(near), (ax.get_title(), z[k])
+    # the title's bootstrap fits are what the panels' notes count: drawn - left out
+    assert "200 bootstrap fits" in fig.get_suptitle()
+    notes = [re.search(r"(\d+) of (\d+) bootstrap resamples left out", ax.get_title())
+             for ax in panels[:2]]  # fmt: skip
+    assert all(notes)
+    assert [int(m[2]) - int(m[1]) for m in notes] == [200, 200]

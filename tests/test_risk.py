@@ -300,6 +300,77 @@ def test_required_gap_chart_draws_the_dataset(glob_dataset):
         np.testing.assert_allclose(ln.get_ydata(), p.isel(sa_g=j).values)
 
 
+def _gap_dataset(counts, gaps, pga, n=50):
+    # a study dataset reduced to what the required gap reads: n records x 1 sample, impacts in
+    # the first counts[pga, gap] records
+    counts = np.asarray(counts)
+    impacts = (np.arange(n)[:, None, None, None] < counts[None, :, :, None]).astype(np.int64)
+    dims = ("record", "pga_g", "contact_gap_m", "sample")
+    return xr.Dataset(
+        {
+            "impacts": (dims, impacts),
+            "peak_force": (dims, impacts * 1e6),
+            "status": (dims, np.zeros_like(impacts)),
+        },
+        coords={
+            "pga_g": ("pga_g", pga, {"units": "1",
+                      "long_name": "record peak ground acceleration in units of g"}),
+            "contact_gap_m": ("contact_gap_m", gaps, {"units": "m", "long_name": "gap"}),
+        },
+        attrs={"study_name": "gaps"},
+    )  # fmt: skip
+
+
+def test_required_gap_chart_says_what_each_line_needs():
+    """The quickstart's chart left its 0.8 g line (P = 0.18 at the widest gap) without a mark
+    or a word, drew 15 vertical rule lines in 5 colours (DDC "under the SRSS lines"), printed
+    no required gap, and called the interpolated gap "the smallest gap with P <= 0.1"."""
+    gaps, pga = [0.02, 0.05, 0.1, 0.2], [0.1, 0.4, 0.8]
+    counts = [[30, 3, 0, 0], [50, 40, 10, 2], [50, 50, 40, 20]]  # of 50; 0.8 g: 0.4 at 200 mm
+    ds = _gap_dataset(counts, gaps, pga)
+    rules = {"ABS": np.array([0.03, 0.12, 0.25]), "SRSS": np.array([0.01, 0.09, 0.18]),
+             "DDC": 0.06}  # fmt: skip
+    fig = required_gap_chart(ds, probability=0.1, rules=rules)
+    ax = fig.axes[0]
+    found = ds.pound.required_gap(probability=0.1, rules=False)
+    assert np.isfinite(found["required_gap"].values[:2]).all()
+    assert np.isnan(found["required_gap"].values[2])
+    # the probability lines first, labelled by intensity, as the probability chart draws them
+    lines = ax.lines[:3]
+    assert [ln.get_label() for ln in lines] == ["0.1 g", "0.4 g", "0.8 g"]
+    p = np.asarray(counts) / 50
+    for ln, row in zip(lines, p, strict=True):
+        np.testing.assert_allclose(ln.get_ydata(), row)
+    # a note for the line that never comes down to the target, none for the others
+    notes = [t.get_text() for t in ax.texts if t.get_text()]
+    assert len(notes) == 1 and notes[0].startswith("0.8 g: P = 0.4 > 0.1")
+    assert "no required gap" in notes[0]
+    # the rules: marks on each line at its own gap (inside the gaps studied), no vertical lines
+    for marker, gap_mm in (("x", [30, 120, 250]), ("+", [10, 90, 180]), ("o", [60] * 3)):
+        marks = [ln for ln in ax.lines if ln.get_marker() == marker and ln not in lines]
+        inside = [(g, i) for i, g in enumerate(gap_mm) if 20 <= g <= 200]
+        assert [float(m.get_xdata()[0]) for m in marks] == [g for g, _ in inside], marker
+        for m, (g, i) in zip(marks, inside, strict=True):
+            assert float(m.get_ydata()[0]) == pytest.approx(np.interp(g, [20, 50, 100, 200], p[i]))
+    assert all(len(ln.get_xdata()) == len(gaps) for ln in lines)
+    assert not [ln for ln in ax.lines if len(set(np.atleast_1d(ln.get_xdata()))) == 1
+                and len(ln.get_xdata()) == 2]  # fmt: skip
+    # the legend: a table of the gaps [mm] per line, each entry once
+    texts = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert len(texts) == len(set(texts))
+    assert "ABS" in texts[0] and "SRSS" in texts[0] and "DDC" in texts[0]
+    rows = {t.split()[0] + " g": t for t in texts[1:4]}
+    for k, name in enumerate(("0.1 g", "0.4 g")):
+        gap = float(found["required_gap"].values[k]) * 1e3
+        assert rows[name].split()[2] == (f"{gap:.3g}" if gap < 100 else f"{gap:.0f}")
+    assert "none (P = 0.4 at 200)" in rows["0.8 g"]
+    assert rows["0.1 g"].split()[-3:] == ["30", "10", "60"]
+    assert rows["0.8 g"].split()[-3:] == ["250", "180", "60"]
+    # the title says what the diamonds are: the interpolated crossing, not a grid gap
+    assert "straight between the gaps studied" in ax.get_title()
+    assert "smallest gap" not in ax.get_title()
+
+
 @pytest.mark.slow
 def test_quickstart_chart_draws_its_dataset(tmp_path):
     # the README's main job end to end: the written charts, and the required-gap chart's

@@ -1,11 +1,12 @@
 """Charts of the risk outputs: fragility panels and the required gap on the probability chart.
 
 :func:`fragility_panels` draws :func:`~pound_mc.analysis.fragility_chart.fragility_chart` for
-each combination of the grid axes other than the intensity (e.g. one panel per gap);
-:func:`required_gap_chart` is :func:`~pound_mc.analysis.plot.probability_chart` (pounding
-probability against gap, one line per intensity, the separation rules marked) with the target
-probability and the required gap of each line (:func:`pound_mc.analysis.risk.required_gap`)
-and its confidence interval.
+each combination of the grid axes other than the intensity (e.g. one panel per gap), over one
+range of the intensity; :func:`required_gap_chart` is
+:func:`~pound_mc.analysis.plot.probability_chart` (pounding probability against gap, one line
+per intensity) with the target probability, the required gap of each line
+(:func:`pound_mc.analysis.risk.required_gap`) and its confidence interval, the separation rules'
+gaps marked on each line, and a legend that tables these gaps.
 """
 
 from __future__ import annotations
@@ -19,12 +20,26 @@ import numpy as np
 import xarray as xr
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
 
 from pound_mc.analysis.fragility import fit_fragility
 from pound_mc.analysis.fragility_chart import fragility_chart, stripe_counts
-from pound_mc.analysis.plot import _hold, _line_label, probability_chart, save
+from pound_mc.analysis.plot import (
+    _hold,
+    _line_label,
+    _reduce_rule,
+    probability_chart,
+    rule_gaps,
+    save,
+)
 from pound_mc.analysis.risk import GAP_DIM, _counts, _intensity_dim, required_gap
-from pound_mc.analysis.style import axis_label, chart_doc, legend_outside, new_axes, value_text
+from pound_mc.analysis.style import (
+    _name_and_units,
+    axis_label,
+    chart_doc,
+    new_axes,
+    value_text,
+)
 from pound_mc.errors import InputError
 
 __all__ = ["fragility_panels", "required_gap_chart"]
@@ -63,8 +78,11 @@ def fragility_panels(
     Returns
     -------
     matplotlib.figure.Figure
-        A panel without a fit says why; one whose bootstrap left resamples out (they have no
-        fit) says how many, and has no band when more than half were.
+        Every panel spans the intensities from 0 to 1.05 times the largest stripe, and gives
+        theta in the intensity's units.  A panel without a fit says why; one whose bootstrap
+        left resamples out (they have no fit) says how many, and has no band when more than
+        half were.  The stripes' counts are the events alone when every stripe of every panel
+        has the same number of simulations (the legend says it), else ``events/simulations``.
     """
     dim = _intensity_dim(ds, im)
     n_event, n_total = _counts(ds, event)
@@ -81,7 +99,14 @@ def fragility_panels(
     own = ax is None
     legend = None
     x = np.asarray(ds[dim].values, dtype=float)
-    im_label = axis_label(ds, dim)
+    im_name, im_units = _name_and_units(ds[dim].attrs, dim)
+    im_units = "" if im_units in ("", "1") else im_units  # the fit is in the stored units
+    im_label = f"{im_name} [{im_units or '-'}]"
+    unit = f" {im_units}" if im_units else ""
+    x_max = 1.05 * float(x.max())  # every panel over the stripes' range
+    counted = np.unique(n_total.values[n_total.values > 0])
+    totals = counted.size != 1  # one number of simulations everywhere: said once, in the legend
+    percent = 95  # the level of fit_fragility's intervals (read from the fits)
     for ax, combo in zip(axes, combos, strict=False):
         where = {**held, **dict(zip(free, combo, strict=True))}
         z = n_event.isel(where).transpose(dim).values
@@ -95,16 +120,32 @@ def fragility_panels(
             ax.set_title(f"{title}\n" + textwrap.fill(f"no fit: {why}", 60), fontsize=7)
             ax.set_xlabel(im_label)
             ax.set_ylabel(f"P({event} | IM)")
+            ax.set_xlim(0.0, x_max)
             ax.set_ylim(-0.02, 1.02)
-            stripe_counts(ax, x, z, n)
+            ax.grid(alpha=0.3)
+            stripe_counts(ax, x, z, n, totals=totals)
             continue
-        fragility_chart(fit, ax=ax, im_label=im_label, event_label=event, legend=False)
-        head = f"{title}\ntheta = {fit.theta:.3g}, beta = {fit.beta:.3g}"
+        fragility_chart(
+            fit,
+            ax=ax,
+            im_label=im_label,
+            event_label=event,
+            legend=False,
+            im_units=im_units,
+            x_max=x_max,
+            totals=totals,
+        )
+        percent = round(100 * fit.ci)
+        head = f"{title}\ntheta = {fit.theta:.3g}{unit}, beta = {fit.beta:.3g}"
+        if fit.theta > x_max:
+            head += " (theta beyond the stripes)"
         note = f"\n{textwrap.fill(fit.bootstrap_note, 64)}" if fit.bootstrap_note else ""
         ax.set_title(head + note, fontsize=8)
         if not legend:
             handles, labels = ax.get_legend_handles_labels()
-            generic = [label.split(":")[0] for label in labels]  # the fit's numbers: per panel
+            # the fit's numbers are per panel (in its title): the legend names the curve only
+            generic = [label.split(":")[0] if label.startswith("lognormal") else label
+                       for label in labels]  # fmt: skip
             if own:
                 legend = fig.legend(
                     handles, generic, loc="outside lower center", ncols=3, fontsize=8
@@ -114,12 +155,48 @@ def fragility_panels(
     for ax in axes[len(combos) :]:
         ax.set_visible(False)
     if own:  # a figure of its own: the title over the panels (not on a caller's figure)
+        boot = (
+            f"; bands: {percent} % of {n_boot} bootstrap fits (a resample without a fit is "
+            "left out and another drawn)"
+            if n_boot
+            else "; no bootstrap"
+        )
         fig.suptitle(
             f"Fragility ({ds.attrs.get('study_name', '')}): P({event}) over records and "
-            f"samples, lognormal fit by maximum likelihood, {n_boot} bootstrap replicates",
+            f"samples, lognormal fit by maximum likelihood{boot}",
             fontsize=9,
         )
     return save(fig, path)
+
+
+#: Marks of the separation rules' gaps on each probability line: black, and unlike the lines'
+#: own (filled) markers; DDC's ring around SRSS's plus stays readable when the two gaps agree.
+RULE_MARKS = {
+    "ABS": {"marker": "x", "ms": 7},
+    "SRSS": {"marker": "+", "ms": 9},
+    "DDC": {"marker": "o", "ms": 9, "mfc": "none"},
+}
+
+
+def _mm(value: float) -> str:
+    """A gap [mm] as the table of :func:`required_gap_chart` writes it."""
+    return f"{value:.0f}" if value >= 100 else f"{value:.3g}"
+
+
+def _gap_text(gap: float, lo: float, hi: float, gaps_mm: np.ndarray) -> str:
+    """A gap and its interval [mm] as text, ``"48.1 (46.9-58)"``.
+
+    The narrowest gap studied is written ``<=20`` (the gap may be less), an open end
+    ``112 to >300``.
+    """
+
+    def one(value):
+        if not np.isfinite(value):
+            return f">{_mm(gaps_mm[-1])}"
+        return f"\u2264{_mm(value)}" if value <= gaps_mm[0] else _mm(value)
+
+    dash = " to " if not np.isfinite(hi) else "\u2013"  # "112 to >200", not "112->200"
+    return f"{one(gap)} ({one(lo)}{dash}{one(hi)})"
 
 
 @chart_doc
@@ -134,7 +211,7 @@ def required_gap_chart(
     base_dir=None,
     ax: Axes | None = None,
 ) -> Figure:
-    """Pounding probability against gap, the rules, the target and the required gap per line.
+    """Pounding probability against gap, the target, each line's required gap and the rules.
 
     Parameters
     ----------
@@ -142,59 +219,210 @@ def required_gap_chart(
         A study dataset with two or more gaps on its grid.
     %(path)s
     probability : float, default 0.1
-        Target probability (a horizontal line); each line's required gap is marked on it with
-        its Wilson confidence interval.
+        Target probability (a horizontal line); each line's required gap (where the line,
+        joined linearly between the gaps studied, comes down to it) is marked on it with its
+        Wilson confidence interval.  The lines still above the target at the widest gap are
+        named in a note, with an arrow to each one's end.
     line, sel, rules, base_dir, ax
-        As :func:`pound_mc.analysis.plot.probability_chart` (all records pooled).
+        As :func:`pound_mc.analysis.plot.probability_chart` (all records pooled); the rules'
+        gaps are marked on each line (:data:`RULE_MARKS`) where they lie within the gaps
+        studied, not drawn as vertical lines.
 
     Returns
     -------
     matplotlib.figure.Figure
         ``fig.axes[0]``: the probability lines first (as the probability chart), then the
-        rules, then the target line and one errorbar marker per line with a required gap.
+        target line, one errorbar marker per line with a required gap and the rules' marks.
+        The legend is a table: per line, its required gap [mm] with the interval (or "none")
+        and the rules' gaps [mm]; ``ax.texts`` hold the notes of the lines without a gap.
     """
     if GAP_DIM not in ds.dims:
         raise InputError("does not apply: the required gap needs a study with the gap on its grid")
-    fig = probability_chart(ds, None, line=line, sel=sel, rules=rules, base_dir=base_dir, ax=ax)
+    fig = probability_chart(ds, None, line=line, sel=sel, rules=None, ax=ax)
     ax = ax if ax is not None else fig.axes[0]
+    headline = ax.get_title().split("\n")[0]
     found = required_gap(ds, probability, rules=False)
-    ax.axhline(probability, color="grey", lw=0.9, ls="--", label=f"target {probability:g}")
     rest = list(found["required_gap"].dims)
     sel = dict(sel or {})
     line = line if line is not None else (rest[0] if rest else None)
     sel.pop(line, None)
     hold = _hold(ds, [d for d in rest if d != line], sel)
-    labels = {"pounding probability": hold}
+    labels = {"pounding probability": (hold, None)}
     if line is not None:
-        labels = {value_text(ds, line, i): {**hold, line: i} for i in range(ds.sizes[line])}
+        labels = {value_text(ds, line, i): ({**hold, line: i}, i) for i in range(ds.sizes[line])}
     drawn = [ln for ln in ax.lines if ln.get_label() in labels]
-    first = True
+    ruled = {}  # rule -> its gap [mm] per line index (or one for every line)
+    for name, value in rule_gaps(ds, rules, base_dir=base_dir).items():
+        arr = _reduce_rule(value, ds, line, None, hold) * 1e3
+        if arr.size != 1 and (line is None or arr.size != ds.sizes[line]):
+            raise ValueError(
+                f"separation rule {name}: {arr.size} gaps, expected 1 or one per value of {line!r}"
+            )
+        ruled[name] = arr
+    ax.axhline(probability, color="grey", lw=0.9, ls="--", label=f"target {probability:g}")
+    level = round(100 * found.attrs["ci"])
+    gaps_mm = np.asarray(ds[GAP_DIM].values, dtype=float) * 1e3
+    cells, short, diamonds = {}, [], False  # per line: its table cells; lines without a gap
     for ln in drawn:
-        where = labels.get(ln.get_label())
-        if where is None:
-            continue
-        gap = float(found["required_gap"].isel(where))
-        if not np.isfinite(gap):
-            continue
-        lo, hi = found["required_gap_ci"].isel(where).values
-        err = [[(gap - lo) * 1e3], [(hi - gap) * 1e3 if np.isfinite(hi) else 0.0]]
-        ax.errorbar(
-            [gap * 1e3],
-            [probability],
-            xerr=err,
-            fmt="D",
-            color=ln.get_color(),
-            ms=6,
-            capsize=3,
-            label=f"required gap at P = {probability:g} (Wilson {found.attrs['ci']:g} CI)"
-            if first
-            else None,
-        )
-        first = False
-    legend_outside(ax, title=axis_label(ds, line) if line is not None else None)
-    if first:  # no line reaches the target within the grid's gaps: say so, not a silent chart
-        marks = f"no gap of the grid brings P to {probability:g} or less: widen the gap range"
+        where, i = labels[ln.get_label()]
+        xs, ys = np.asarray(ln.get_xdata(), float), np.asarray(ln.get_ydata(), float)
+        gap = float(found["required_gap"].isel(where)) * 1e3
+        if np.isfinite(gap):
+            lo, hi = found["required_gap_ci"].isel(where).values * 1e3
+            ax.errorbar(
+                [gap],
+                [probability],
+                xerr=[[gap - lo], [hi - gap if np.isfinite(hi) else 0.0]],
+                fmt="D",
+                color=ln.get_color(),
+                ms=6,
+                capsize=3,
+                label="required gap (bars: its Wilson interval)",
+            )
+            diamonds = True
+            cell = _gap_text(gap, lo, hi, gaps_mm)
+        elif np.isfinite(ys[-1]) and ys[-1] > probability:
+            cell = f"none (P = {ys[-1]:.2g} at {_mm(gaps_mm[-1])})"
+            short.append((ln, xs[-1], ys[-1]))
+        else:  # no simulations counted at some gap
+            cell = "none"
+        rules_row = []
+        for name, arr in ruled.items():
+            value = float(arr[0] if arr.size == 1 else arr[i])
+            rules_row.append(_mm(value) if np.isfinite(value) else "-")
+            if np.isfinite(value) and xs[0] <= value <= xs[-1] and np.all(np.isfinite(ys)):
+                ax.plot(
+                    [value],
+                    [np.interp(value, xs, ys)],
+                    ls="none",
+                    color="black",
+                    mew=1.3,
+                    zorder=4,
+                    label=f"{name} rule's gap on each line",
+                    **RULE_MARKS.get(name, {"marker": "*"}),
+                )
+        cells[ln] = (ln.get_label(), cell, *rules_row)
+    _short_note(ax, short, probability)
+    # the legend as a table: a header row (no handle), then per line its gaps, aligned in a
+    # monospaced font
+    header = ("", f"P = {probability:g} at [mm]", *(f"{name}" for name in ruled))
+    second = ("", f"({level} % interval)", *(["[mm]"] * len(ruled)))
+    widths = [
+        max(len(row[k]) for row in (header, second, *cells.values())) for k in range(len(header))
+    ]
+
+    def row_text(row):
+        first = [f"{row[0]:<{widths[0]}}", f"{row[1]:<{widths[1]}}"]
+        return "  ".join(first + [f"{c:>{w}}" for c, w in zip(row[2:], widths[2:], strict=True)])
+
+    rows = {id(ln): row_text(row) for ln, row in cells.items()}
+    handles, texts = [], []
+    for handle, text in zip(*ax.get_legend_handles_labels(), strict=True):
+        if text not in texts or id(handle) in rows:  # a rule's mark once, not once per line
+            handles.append(handle)
+            texts.append(rows.get(id(handle), text))
+    if cells:
+        head = Line2D([], [], ls="none")
+        handles, texts = [head, *handles], [row_text(header) + "\n" + row_text(second), *texts]
+    ax.legend(
+        handles,
+        texts,
+        loc="upper left",
+        bbox_to_anchor=(1.02, 1.0),
+        borderaxespad=0.0,
+        fontsize=8,
+        title=axis_label(ds, line) if line is not None else None,
+        title_fontsize=8,
+        frameon=False,
+    )
+    for text in ax.get_legend().get_texts()[: len(cells) + 1 if cells else 0]:
+        text.set_family("monospace")
+    if not diamonds:  # no line reaches the target within the grid's gaps: say so
+        marks = f"no gap studied brings P to {probability:g} or less: widen the gap range"
     else:
-        marks = f"diamonds: smallest gap with P <= {probability:g} (bars: Wilson interval)"
-    ax.set_title(ax.get_title() + "\n" + marks, fontsize=8)
+        marks = (
+            f"diamonds: the gap at which each line (straight between the gaps studied) falls "
+            f"to P = {probability:g}"
+        )
+    if ruled:
+        marks += (
+            "\nblack marks: the separation rules' gaps on each line (median over records and "
+            "samples)"
+        )
+    ax.set_title(headline + "\n" + marks, fontsize=8)
     return save(fig, path)
+
+
+#: Where the note of :func:`_short_note` may go: anchor (axes fraction), alignment; in order
+#: of preference (ties keep the first).  ``None`` as height: just above the target line.
+_NOTE_PLACES = (
+    ((0.98, 0.97), "right", "top"), ((0.98, 0.5), "right", "center"),
+    ((0.98, None), "right", "bottom"), ((0.5, 0.97), "center", "top"),
+    ((0.5, 0.5), "center", "center"), ((0.5, None), "center", "bottom"),
+    ((0.02, 0.97), "left", "top"), ((0.02, 0.5), "left", "center"),
+)  # fmt: skip
+_NOTE_SIZE = 7.5  # [pt]
+
+
+def _short_note(ax: Axes, short, probability: float) -> None:
+    """One note for the lines still above the target at the widest gap, arrows to their ends.
+
+    ``short``: ``(line, widest gap [mm], its probability)`` each.  The note goes where it
+    covers the fewest points along the lines drawn (:data:`_NOTE_PLACES`).
+    """
+    if not short:
+        return
+    widest = _mm(short[0][1])
+    names = ", ".join(ln.get_label() for ln, _, _ in short)
+    ends = ", ".join(f"{y:.2g}" for _, _, y in short)
+    text = (
+        f"{names}: P = {ends} > {probability:g} even\nat the widest gap studied ({widest} mm):\n"
+        "no required gap, widen the gap range"
+    )
+    to_axes = ax.transData + ax.transAxes.inverted()
+    box = ax.get_position()
+    size_pt = (
+        np.array([box.width * ax.figure.get_figwidth(), box.height * ax.figure.get_figheight()])
+        * 72
+    )
+    lines = text.split("\n")  # the box's size in axes fractions, estimated
+    w, h = (np.array([0.55 * max(map(len, lines)), 1.25 * len(lines)]) * _NOTE_SIZE + 8) / size_pt
+    points = []  # along every line drawn, densely
+    for ln in ax.lines:
+        xy = np.c_[np.asarray(ln.get_xdata(), float), np.asarray(ln.get_ydata(), float)]
+        xy = xy[np.all(np.isfinite(xy), axis=1)]
+        for a, b in zip(xy[:-1], xy[1:], strict=True):
+            points.append(a + np.linspace(0, 1, 40)[:, None] * (b - a))
+    points = to_axes.transform(np.concatenate(points)) if points else np.empty((0, 2))
+    target = float(to_axes.transform([[0.0, probability]])[0, 1])
+
+    def covered(place):
+        (x, y), ha, va = place
+        y = target + 0.04 if y is None else y
+        x0 = x - {"left": 0.0, "center": 0.5, "right": 1.0}[ha] * w
+        y0 = y - {"bottom": 0.0, "center": 0.5, "top": 1.0}[va] * h
+        inside = (points[:, 0] > x0) & (points[:, 0] < x0 + w)
+        return int(np.sum(inside & (points[:, 1] > y0) & (points[:, 1] < y0 + h)))
+
+    (x, y), ha, va = min(_NOTE_PLACES, key=covered)
+    y = target + 0.04 if y is None else y
+    note = ax.annotate(
+        text,
+        (x, y),
+        xycoords="axes fraction",
+        ha=ha,
+        va=va,
+        fontsize=_NOTE_SIZE,
+        bbox={"boxstyle": "round,pad=0.4", "fc": "white", "ec": "0.4", "alpha": 0.95},
+        zorder=5,
+    )
+    for _, x_end, y_end in short:  # from the note's edge nearest the line's end
+        end = to_axes.transform([[x_end, y_end]])[0]
+        ax.annotate(
+            "",
+            (x_end, y_end),
+            xytext=(0.97 if ha == "right" else 0.5, 0.0 if end[1] < y else 1.0),
+            textcoords=note,
+            arrowprops={"arrowstyle": "->", "color": "0.3", "lw": 1.0, "shrinkB": 4},
+            zorder=5,
+        )
