@@ -10,7 +10,16 @@ matplotlib.use("Agg")
 sys.path.insert(0, str(Path(__file__).parent))
 os.environ.setdefault("MPLBACKEND", "Agg")
 
+import matplotlib.pyplot as plt  # noqa: E402  (after the backend is chosen)
 import studies  # noqa: E402  (found through the path set above)
+
+
+@pytest.fixture(autouse=True)
+def _close_pyplot_figures():
+    """Close the pyplot figures a test opened (``ds.pound.plot`` without ``ax`` or ``path``
+    draws on one, as a notebook user wants): they would pile up in the worker."""
+    yield
+    plt.close("all")
 
 
 @pytest.hookimpl(optionalhook=True)
