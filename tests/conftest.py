@@ -11,6 +11,7 @@ sys.path.insert(0, str(Path(__file__).parent))
 os.environ.setdefault("MPLBACKEND", "Agg")
 
 import matplotlib.pyplot as plt  # noqa: E402  (after the backend is chosen)
+
 import studies  # noqa: E402  (found through the path set above)
 
 
