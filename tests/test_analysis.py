@@ -115,7 +115,12 @@ def test_probability_chart_plots_the_pounding_probability_and_rules(ds, tiny):
     assert [ln.get_color() for ln in srss] == [ln.get_color() for ln in data]
     assert ax.get_xlabel() == "initial separation gap [mm]"
     assert ax.get_ylabel() == "pounding probability [-]"
+    assert "vertical lines: gaps the separation rules ask for" in ax.get_title()
     np.testing.assert_allclose(ds.pound.probability().values, ds["pounding_probability"].values)
+    # without rules the title promised vertical lines all the same
+    bare = ds.pound.plot.probability(rules=None)
+    assert len(bare.lines) == len(data) and "vertical lines" not in bare.get_title()
+    assert bare.get_title().endswith("no separation rules drawn")
 
 
 def test_probability_rules_from_attributes_and_from_separation(ds, tiny):

@@ -566,9 +566,11 @@ def probability_chart(
         note = "no gap axis: against the first grid axis"
     elif CONTACT_DIM in ds.dims:
         note = "shear buildings: no separation rules (they assume SDOF buildings)"
-    else:
+    elif drawn:
         over = "records and samples" if record is None and ds.sizes["record"] > 1 else "samples"
         note = f"vertical lines: gaps the separation rules ask for (median over {over})"
+    else:
+        note = "no separation rules drawn"
     finish_axes(
         ax,
         xlabel=axis_label(ds, x),
