@@ -364,8 +364,14 @@ def test_a_material_axis_the_spectrum_would_hold_gets_a_panel_per_material(datas
             np.testing.assert_array_equal(line.get_xdata(), ds["left_period_s"].values)
             want = median.isel(right_period_s=j, contact_material=k).values
             np.testing.assert_allclose(line.get_ydata(), want)
-    # the report draws the same panels
+    # the report draws the same panels, and so does `plot --kind spectrum` without --sel
     assert "one panel per material" in report_html(ds, history=False)
+    fig = draw(path, "spectrum", out=path.with_name("plot_spectrum.png"))
+    assert [ax.get_title() for ax in fig.axes if ax.get_visible()] == [
+        ax.get_title() for ax in panels
+    ]
+    one = draw(path, "spectrum", out=path.with_name("one.png"), sel={"contact_material": "timber"})
+    assert len(one.axes) == 1 and "contact_material = timber" in one.axes[0].get_title()
     # a material axis on the chart's line axis (materials.toml: gap, material): one chart
     materials = datasets(next(p for p in STUDIES if p.stem == "materials"))
     with xr.open_dataset(materials) as mds:

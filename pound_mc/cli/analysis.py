@@ -181,6 +181,8 @@ def draw(path: str | Path, kind: str, *, out=None, sel=None, record=None, sample
         if kind not in ("history", "restitution") and not bool(counted(ds, event).any()):
             counts = ", ".join(f"{n} {s}" for s, n in ds.pound.status_counts().items() if n)
             raise InputError(f"nothing to draw: no simulation ended with status ok ({counts})")
+        if kind == "spectrum" and not sel and record is None and kwargs.get("line") is None:
+            return plot.spectrum_panels(ds, out)  # as run draws it: a panel per material
         if kind == "spectrum":
             return plot.spectrum_chart(
                 ds,
