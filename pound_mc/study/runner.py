@@ -165,7 +165,7 @@ def chunk_ranges(n: int, chunk_size: int) -> list[tuple[int, int]]:
 
 @contextmanager
 def _stop_between_chunks():
-    """Turn the first Ctrl-C into a request to stop after the chunk in flight.
+    """Turn the first Ctrl-C into a request to stop after the chunks in flight.
 
     Yields a :class:`threading.Event` that is set on SIGINT; a second Ctrl-C raises
     :class:`KeyboardInterrupt` at once.  Outside the main thread nothing is installed.
@@ -180,7 +180,7 @@ def _stop_between_chunks():
             raise KeyboardInterrupt
         stop.set()
         print(
-            "\nCtrl-C: stopping after the chunk in flight (press again to abort at once)",
+            "\nCtrl-C: stopping after the chunks in flight (press again to abort at once)",
             file=sys.stderr,
         )
 
