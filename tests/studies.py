@@ -12,6 +12,7 @@ edit it with ``str.replace``.
 
 The ``make_study`` and ``make_shear_study`` fixtures of ``conftest.py`` write these texts to
 ``tmp_path``; module-scoped fixtures call ``write_study`` with their own directory.
+``counted_dataset`` builds the reduced result datasets of the fragility and required-gap tests.
 """
 
 import copy
@@ -19,6 +20,9 @@ import json
 import math
 import re
 from pathlib import Path
+
+import numpy as np
+import xarray as xr
 
 # Two SDOF buildings (T = 0.5 s and 1.0 s, 5 % damping, 1,000 t) on the first 4 s of the
 # built-in El Centro record (its strong motion, peak at 2.2 s) scaled to 0.3 g,
@@ -183,3 +187,26 @@ def dump_toml(data: dict) -> str:
         else:
             blocks.append("\n".join(_table(name, table)))
     return "\n\n".join(blocks) + "\n"
+
+
+def counted_dataset(counts, pga, gaps, n: int, pga_attrs: dict, attrs=None):
+    """A study dataset reduced to what the fragility and the required gap read.
+
+    ``n`` records x 1 sample on a ``(pga_g, contact_gap_m)`` grid; the first
+    ``counts[pga, gap]`` records pound (one impact of 1 MN), the others do not; every status ok.
+    """
+    counts = np.asarray(counts)
+    impacts = (np.arange(n)[:, None, None, None] < counts[None, :, :, None]).astype(np.int64)
+    dims = ("record", "pga_g", "contact_gap_m", "sample")
+    return xr.Dataset(
+        {
+            "impacts": (dims, impacts),
+            "peak_force": (dims, impacts * 1e6),
+            "status": (dims, np.zeros_like(impacts)),
+        },
+        coords={
+            "pga_g": ("pga_g", pga, pga_attrs),
+            "contact_gap_m": ("contact_gap_m", gaps, {"units": "m", "long_name": "gap"}),
+        },
+        attrs=attrs or {},
+    )

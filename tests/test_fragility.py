@@ -7,7 +7,6 @@ import re
 
 import numpy as np
 import pytest
-import xarray as xr
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from scipy import optimize, stats
 
@@ -18,6 +17,7 @@ from pound_mc.analysis.risk import fragility
 from pound_mc.analysis.risk_chart import fragility_panels
 from pound_mc.cli import main
 from pound_mc.errors import InputError
+from studies import counted_dataset
 
 STRIPES = np.array([0.1, 0.2, 0.3, 0.4, 0.6, 0.8, 1.0])
 
@@ -299,19 +299,8 @@ def _stripe_dataset(*columns, pga=QS_PGA):
     # records x 1 sample at PGA 0.1, 0.2, 0.4 g (or ``pga``) and a gap per column of counts
     counts = np.stack(columns or [QS_100MM, HALF_SEPARATED], axis=1)  # (pga_g, contact_gap_m)
     gaps = [0.1, 0.2, 0.3, 0.4][: counts.shape[1]]
-    impacts = (np.arange(88)[:, None, None, None] < counts[None, :, :, None]).astype(np.int64)
-    dims = ("record", "pga_g", "contact_gap_m", "sample")
-    return xr.Dataset(
-        {
-            "impacts": (dims, impacts),
-            "peak_force": (dims, impacts * 1e6),
-            "status": (dims, np.zeros_like(impacts)),
-        },
-        coords={
-            "pga_g": ("pga_g", pga, {"units": "g", "long_name": "peak ground acceleration"}),
-            "contact_gap_m": ("contact_gap_m", gaps, {"units": "m", "long_name": "gap"}),
-        },
-    )
+    return counted_dataset(counts, pga, gaps, 88,
+                           {"units": "g", "long_name": "peak ground acceleration"})  # fmt: skip
 
 
 def test_dataset_cli_and_chart_say_what_was_discarded(tmp_path, capsys):

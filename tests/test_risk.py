@@ -19,6 +19,7 @@ from pound_mc.motions.intensity import sa_g
 from pound_mc.study.definition import grid_values, load_study, study_from_text
 from pound_mc.study.engine import StudyEngine
 from pound_mc.study.runner import run_study
+from studies import counted_dataset
 
 SCENE = """
 [left]
@@ -303,22 +304,8 @@ def test_required_gap_chart_draws_the_dataset(glob_dataset):
 def _gap_dataset(counts, gaps, pga, n=50):
     # a study dataset reduced to what the required gap reads: n records x 1 sample, impacts in
     # the first counts[pga, gap] records
-    counts = np.asarray(counts)
-    impacts = (np.arange(n)[:, None, None, None] < counts[None, :, :, None]).astype(np.int64)
-    dims = ("record", "pga_g", "contact_gap_m", "sample")
-    return xr.Dataset(
-        {
-            "impacts": (dims, impacts),
-            "peak_force": (dims, impacts * 1e6),
-            "status": (dims, np.zeros_like(impacts)),
-        },
-        coords={
-            "pga_g": ("pga_g", pga, {"units": "1",
-                      "long_name": "record peak ground acceleration in units of g"}),
-            "contact_gap_m": ("contact_gap_m", gaps, {"units": "m", "long_name": "gap"}),
-        },
-        attrs={"study_name": "gaps"},
-    )  # fmt: skip
+    pga_attrs = {"units": "1", "long_name": "record peak ground acceleration in units of g"}
+    return counted_dataset(counts, pga, gaps, n, pga_attrs, attrs={"study_name": "gaps"})
 
 
 def test_required_gap_chart_says_what_each_line_needs():
