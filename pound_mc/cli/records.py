@@ -61,14 +61,12 @@ def info_command(args) -> int:
     """``pound-mc records info``: PGA, duration and step of a record."""
     source = _resolve(args.source)
     seed = args.seed if source.lower().startswith("synthetic:") else None
-    try:
-        trace = load_record(
-            source, demean=not args.raw, units=args.units, component=args.component, seed=seed
-        )
-    except InputError as exc:  # a name that is neither a file nor a built-in record
-        if str(exc.message) == "file not found" and ":" not in source:
-            exc.message = "file not found, nor a built-in record (pound-mc records list)"
-        raise
+    if ":" not in source and not Path(source).exists():  # neither a file nor a built-in name
+        raise InputError("file not found, nor a built-in record (pound-mc records list)",
+                         file=source)  # fmt: skip
+    trace = load_record(
+        source, demean=not args.raw, units=args.units, component=args.component, seed=seed
+    )
     if args.plot:
         output_path(args.plot, key="--plot", suffix=".png")
     info = record_info(trace)

@@ -95,8 +95,7 @@ def run_command(args) -> int:
     if not report.complete:
         print(
             f"interrupted after {count_text(report.chunks_run, 'chunk')}: finished chunks are "
-            f"kept under "
-            f"{Path(args.out) / study.name}; run the same command again to resume",
+            f"kept under {Path(args.out) / study.name}; run the same command again to resume",
             file=sys.stderr,
         )
         return 130

@@ -340,15 +340,17 @@ def _changed_keys(before: str, now: str, most: int = 3) -> str:
         old, new = _flat(tomllib.loads(before)), _flat(tomllib.loads(now))
     except tomllib.TOMLDecodeError:
         return ""
-    keys = [k for k in dict.fromkeys([*old, *new]) if old.get(k, _GONE) != new.get(k, _GONE)]
+    keys = [k for k in dict.fromkeys([*old, *new])
+            if k not in old or k not in new or old[k] != new[k]]  # fmt: skip
     if not keys:
         return " (comments or layout only)"
-    shown = [f"{k}: {old.get(k, '(none)')!r} -> {new.get(k, '(none)')!r}" for k in keys[:most]]
+
+    def value(table, key):
+        return repr(table[key]) if key in table else "(none)"
+
+    shown = [f"{k}: {value(old, k)} -> {value(new, k)}" for k in keys[:most]]
     more = f" and {len(keys) - most} more" if len(keys) > most else ""
-    return f" ({', '.join(shown)}{more})".replace("'(none)'", "(none)")
-
-
-_GONE = object()
+    return f" ({', '.join(shown)}{more})"
 
 
 def _changed_inputs(old: dict, inputs: dict, text: str | None = None) -> list[str]:
