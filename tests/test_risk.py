@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import xarray as xr
+from matplotlib.backends.backend_agg import FigureCanvasAgg
 
 import pound_mc  # noqa: F401  (registers ds.pound)
 from pound_mc.analysis.fragility import fit_fragility
@@ -306,6 +307,24 @@ def _gap_dataset(counts, gaps, pga, n=50):
     # the first counts[pga, gap] records
     pga_attrs = {"units": "1", "long_name": "record peak ground acceleration in units of g"}
     return counted_dataset(counts, pga, gaps, n, pga_attrs, attrs={"study_name": "gaps"})
+
+
+def test_no_gap_note_keeps_clear_of_a_line_that_stays_at_one():
+    # P = 1 at every gap (a gap grid too narrow: shear_spectrum.toml): the note was put in the
+    # top right corner, its edge on the line and over its last point
+    ds = _gap_dataset([[50, 50, 50, 50]], [0.0, 0.01, 0.02, 0.04], [0.5])
+    fig = required_gap_chart(ds, probability=0.1, rules=None)
+    canvas = FigureCanvasAgg(fig)
+    canvas.draw()
+    ax = fig.axes[0]
+    (note,) = [t for t in ax.texts if t.get_text().startswith("0.5 g: P = 1 > 0.1")]
+    box = note.get_window_extent(renderer=canvas.get_renderer())  # the text [px]
+    line = ax.lines[0]
+    xs = np.linspace(0.0, 40.0, 200)  # along the line, in chart units [mm]
+    on_line = ax.transData.transform(np.c_[xs, np.interp(xs, line.get_xdata(), line.get_ydata())])
+    # below the line with room for the box's pad and the markers (the text's top was 0.6 px
+    # under the line, its box across it)
+    assert box.y1 < on_line[:, 1].min() - 10
 
 
 def test_required_gap_chart_says_what_each_line_needs():

@@ -362,6 +362,8 @@ _NOTE_PLACES = (
     ((0.02, 0.97), "left", "top"), ((0.02, 0.5), "left", "center"),
 )  # fmt: skip
 _NOTE_SIZE = 7.5  # [pt]
+#: Margin around the note [axes fraction] within which a line's point counts as covered.
+_NOTE_CLEARANCE = 0.03
 
 
 def _short_note(ax: Axes, short, probability: float) -> None:
@@ -401,8 +403,10 @@ def _short_note(ax: Axes, short, probability: float) -> None:
         y = target + 0.04 if y is None else y
         x0 = x - {"left": 0.0, "center": 0.5, "right": 1.0}[ha] * w
         y0 = y - {"bottom": 0.0, "center": 0.5, "top": 1.0}[va] * h
-        inside = (points[:, 0] > x0) & (points[:, 0] < x0 + w)
-        return int(np.sum(inside & (points[:, 1] > y0) & (points[:, 1] < y0 + h)))
+        # a point just outside the box still meets it: markers and line widths have a size
+        m = _NOTE_CLEARANCE
+        inside = (points[:, 0] > x0 - m) & (points[:, 0] < x0 + w + m)
+        return int(np.sum(inside & (points[:, 1] > y0 - m) & (points[:, 1] < y0 + h + m)))
 
     (x, y), ha, va = min(_NOTE_PLACES, key=covered)
     y = target + 0.04 if y is None else y
