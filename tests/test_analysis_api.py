@@ -61,6 +61,7 @@ def test_every_plot_method_draws_on_the_axes_given(small):
     n_gaps = ds.sizes["contact_gap_m"]
     for name, n, kwargs in (
         ("spectrum", 1, {}),
+        ("spectrum_panels", 1, {}),  # no material axis: the one chart
         ("probability", 1, {"rules": None}),
         ("required_gap", 1, {"rules": None}),
         ("distribution", 2, {}),
@@ -75,6 +76,8 @@ def test_every_plot_method_draws_on_the_axes_given(small):
         # and on a figure of its own: the Axes it made
         own = np.atleast_1d(getattr(ds.pound.plot, name)(**kwargs))
         assert all(isinstance(a, Axes) for a in own), name
+        # a panel each, without the spare Axes a grid hides (its last row)
+        assert len(own) == n and all(a.get_visible() for a in own), name
     with pytest.raises(ValueError, match=f"draws {n_gaps} panel"):  # an Axes per panel
         ds.pound.plot.fragility(ax=_axes(n_gaps - 1), n_boot=20)
     # a grid of more Axes than panels (plt.subplots(2, 3) for 5 gaps) was refused: the spare

@@ -13,6 +13,7 @@ import re
 import tomllib
 from pathlib import Path
 
+import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 import pytest
@@ -370,6 +371,10 @@ def test_a_material_axis_the_spectrum_would_hold_gets_a_panel_per_material(datas
     assert [ax.get_title() for ax in fig.axes if ax.get_visible()] == [
         ax.get_title() for ax in panels
     ]
+    # and so does the accessor, on a pyplot figure (a notebook shows it)
+    axes = ds.pound.plot.spectrum_panels()
+    assert [ax.get_title() for ax in axes] == [ax.get_title() for ax in panels]
+    assert axes[0].figure.number in plt.get_fignums()
     one = draw(path, "spectrum", out=path.with_name("one.png"), sel={"contact_material": "timber"})
     assert len(one.axes) == 1 and "contact_material = timber" in one.axes[0].get_title()
     # a material axis on the chart's line axis (materials.toml: gap, material): one chart
@@ -379,6 +384,7 @@ def test_a_material_axis_the_spectrum_would_hold_gets_a_panel_per_material(datas
     (ax,) = spectrum_panels(mds).axes
     labels = [line.get_label() for line in ax.lines]
     assert labels == [str(n) for n in mds["material"].values]
+    assert [line.get_label() for line in mds.pound.plot.spectrum_panels().lines] == labels
     assert "one panel per material" not in report_html(mds, history=False)
 
 

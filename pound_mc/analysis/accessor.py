@@ -11,6 +11,7 @@ Registered on ``import pound_mc``::
     ds.pound.fragility(im="sa_g")              # lognormal fragility per other grid axis
     ds.pound.required_gap(probability=0.1)     # gap for a target probability, and the rules
     ds.pound.plot.spectrum(ax=ax)              # draws on ax, returns the Axes
+    ds.pound.plot.spectrum_panels()            # a panel per material (jankowski_spectrum)
     ds.pound.worst("peak_force")               # the simulation with the largest peak force
     ds.pound.to_dataframe()                    # one row per simulation
     ds.pound.plot.history(left_period_s=0.5, contact_gap_m=0.01, sample=3)
@@ -37,6 +38,7 @@ from pound_mc.analysis.plot import (
     restitution_chart,
     save,
     spectrum_chart,
+    spectrum_panels,
 )
 from pound_mc.analysis.plot_numerics import time_history_chart
 from pound_mc.analysis.profiles import contacts_chart, profile_chart
@@ -157,12 +159,16 @@ def scene_at(
 
 
 def _axes_of(fig, ax):
-    """What a plot method returns: the Axes it drew on (one), or an array of them (panels)."""
-    if ax is not None:  # those given, less the spare ones a chart hid
+    """What a plot method returns: the Axes it drew on (one), or an array of them (panels).
+
+    Those given, or the new figure's less its colour bars; either less the spare ones a chart
+    hid (the last row of a panel grid).
+    """
+    if ax is not None:
         axes = np.asarray([ax] if isinstance(ax, Axes) else list(ax), dtype=object).ravel()
-        axes = np.asarray([a for a in axes if a.get_visible()], dtype=object)
     else:
-        axes = np.asarray([a for a in fig.axes if a.get_label() != "<colorbar>"], dtype=object)
+        axes = [a for a in fig.axes if a.get_label() != "<colorbar>"]
+    axes = np.asarray([a for a in axes if a.get_visible()], dtype=object)
     return axes[0] if axes.size == 1 else axes
 
 
@@ -214,7 +220,20 @@ class PoundPlot:
 
         ``record="pooled"`` (default: every record and sample together), ``"median"`` (the
         median over records of each record's quantiles), ``"each"`` (a line per record) or one
-        record's index or name.
+        record's index or name.  Grid axes other than ``x`` and ``line`` are held at their
+        first value (the title names it); :meth:`spectrum_panels` draws a panel per material.
+        """,
+    )
+    spectrum_panels = _chart_method(
+        "spectrum_panels",
+        spectrum_panels,
+        "np.ndarray",
+        """Impact force spectrum with a panel per material (``plot.spectrum_panels``).
+
+        What ``pound-mc run`` and ``pound-mc report`` draw: where the spectrum chart would hold
+        the material axis (``studies/jankowski_spectrum.toml``), one panel per material (``by``:
+        another grid axis), returned as an array of Axes; otherwise the one chart of
+        :meth:`spectrum` and its Axes.
         """,
     )
     probability = _chart_method(
