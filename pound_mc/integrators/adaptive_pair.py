@@ -57,7 +57,7 @@ from pound_mc.integrators.outputs import (
     finish,
     finish_impacts,
     impact_log,
-    log_impact,
+    log_impact_in,
     log_max,
     peak_only,
 )
@@ -584,7 +584,8 @@ def adaptive_pair(
     kpot = 0.8 * cd
     # restitution set per impact (Table 2 at the onset velocity; ``xi0`` holds its quantile)
     per_impact = settings.rest_v.size > 0
-    _, vlog, _ = impact_log(1)
+    # the impact-velocity log in a list that is never reassigned (outputs.log_impact_in)
+    logs = [impact_log(1)[1]]
     nlog = 0
     v_ep = e_ep = peak_e = math.nan
     ramp_0 = RAMP_START_POT if pot else RAMP_START
@@ -892,7 +893,7 @@ def adaptive_pair(
                     if pending and dm > IMPACT_MIN_PENETRATION_M:
                         impacts += 1.0  # the episode is an impact
                         pending = False
-                        vlog, nlog = log_impact(vlog, nlog, v_ep)
+                        nlog = log_impact_in(logs, nlog, v_ep)
                 if not lean:
                     # peak floor displacements over the sub-step (Hermite)
                     pk0 = _track_floor(f0 * q0, f0 * v0, f0 * nq0, f0 * nv0, hs, pk0)
@@ -955,6 +956,7 @@ def adaptive_pair(
     cout[0, C_IMPACTS] = impacts
     cout[0, C_MAX_PENETRATION] = maxpen
     cout[0, C_IMPULSE] = impulse
+    vlog = logs[0]
     cout[0, C_MAX_IMPACT_VELOCITY] = log_max(vlog, nlog)
     peaks = np.empty(2)
     peaks[0] = pk0
