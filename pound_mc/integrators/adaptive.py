@@ -324,11 +324,12 @@ def _locate_switch(q, v, q1, v1, a0, a1, psi, psi_t, clo, chi, gap, phase, hs, p
 
 @jit(inline=True)
 def _contact_peaks(q, v, q1, v1, a0, a1, psi, gap, beta, cd, zhd, phase, model, fc0, fc, cimp,
-                   cout, pending, hs, t, peak_f, peak_t, ep, vlog, nlog, peak_e):  # fmt: skip
+                   cout, pending, hs, t, peak_f, peak_t, ep, logs, nlog, peak_e):  # fmt: skip
     """Peak force per contact (Hermite on F with its rate), penetration and impulse.
 
     Returns the run's peak force and its time, raised where this sub-step holds a new one, and
-    the impact-velocity log with its count (``ep``, ``peak_e``: see ``outputs.impact_log``).
+    the count of the impact-velocity log ``logs[0]`` (``outputs.log_impact_in``; ``ep``,
+    ``peak_e``: see ``outputs.impact_log``).
     """
     for c in range(gap.size):
         cout[c, outputs.C_IMPULSE] += cimp[c]
@@ -355,11 +356,11 @@ def _contact_peaks(q, v, q1, v1, a0, a1, psi, gap, beta, cd, zhd, phase, model, 
         if pending[c] and dm > outputs.IMPACT_MIN_PENETRATION_M:
             cout[c, outputs.C_IMPACTS] += 1.0  # the episode is an impact
             pending[c] = False
-            vlog, nlog = outputs.log_impact(vlog, nlog, ep[c, outputs.EP_V0])
+            nlog = outputs.log_impact_in(logs, nlog, ep[c, outputs.EP_V0])
             cout[c, outputs.C_MAX_IMPACT_VELOCITY] = max(
                 cout[c, outputs.C_MAX_IMPACT_VELOCITY], ep[c, outputs.EP_V0]
             )
-    return peak_f, peak_t, vlog, nlog
+    return peak_f, peak_t, nlog
 
 
 @jit(inline=True)
@@ -476,6 +477,7 @@ def adaptive(
     pending = np.zeros(nc, dtype=np.bool_)  # an episode not yet counted as an impact
     zhd = np.zeros(nc)
     ep, vlog, peak_e = outputs.impact_log(nc)
+    logs = [vlog]  # never reassigned in the loop (outputs.log_impact_in)
     nlog = 0
     peaks = np.zeros(nf)
     dc0 = np.empty(nc)
@@ -618,9 +620,9 @@ def adaptive(
                 e_in += de_in
                 e_d += de_d
                 w_c += dw_c
-                peak_f, peak_t, vlog, nlog = _contact_peaks(
+                peak_f, peak_t, nlog = _contact_peaks(
                     q, v, q1, v1, a0, a1, psi, gap, beta, cd, zhd, phase, model, fc0, fc, cimp,
-                    cout, pending, hs, i * dt_rec + s, peak_f, peak_t, ep, vlog, nlog, peak_e,
+                    cout, pending, hs, i * dt_rec + s, peak_f, peak_t, ep, logs, nlog, peak_e,
                 )  # fmt: skip
                 # floor peaks over the sub-step; xf0, xfd0 move on to its end
                 if not lean:
@@ -669,7 +671,7 @@ def adaptive(
             stored_energy += stored(model, rowdot(psi, c, q) - gap[c], beta[c])
     outputs.finish(out, cout, peaks, side, phase, q, v, omega, e0, e_in, e_d, w_c, stored_energy,
                    peak_f, peak_t, steps, status)  # fmt: skip
-    outputs.finish_impacts(out, cout, vlog, nlog, peak_e[0])
+    outputs.finish_impacts(out, cout, logs[0], nlog, peak_e[0])
     _alive(owned)
 
 

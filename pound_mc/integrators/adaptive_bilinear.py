@@ -212,7 +212,8 @@ def adaptive_bilinear(
     zhd = e_in = e_d = w_c = w_p = e_h = 0.0
     peak_f = peak_t = impacts = impulse = 0.0
     pending = False
-    _, vlog, _ = outputs.impact_log(1)  # onset velocity of every impact
+    # onset velocity of every impact, in a list never reassigned (outputs.log_impact_in)
+    logs = [outputs.impact_log(1)[1]]
     nlog = 0
     v_ep = math.nan
     maxpen = -_INF
@@ -416,7 +417,7 @@ def adaptive_bilinear(
                     if pending and dm > outputs.IMPACT_MIN_PENETRATION_M:
                         impacts += 1.0
                         pending = False
-                        vlog, nlog = outputs.log_impact(vlog, nlog, v_ep)
+                        nlog = outputs.log_impact_in(logs, nlog, v_ep)
                 for j in range(2):
                     peaks[j] = _track_floor(ff[j] * q[j], ff[j] * v[j], ff[j] * (nq[j] + sh[j]),
                                             ff[j] * nv[j], hh, peaks[j])  # fmt: skip
@@ -484,6 +485,7 @@ def adaptive_bilinear(
                     phase, model, hx, hd, hf)  # fmt: skip
     cout[0, outputs.C_PEAK_FORCE], cout[0, outputs.C_IMPACTS] = peak_f, impacts
     cout[0, outputs.C_MAX_PENETRATION], cout[0, outputs.C_IMPULSE] = maxpen, impulse
+    vlog = logs[0]
     cout[0, outputs.C_MAX_IMPACT_VELOCITY] = outputs.log_max(vlog, nlog)
     ph = np.full(1, phase, dtype=np.int64)
     stored_energy = 0.0

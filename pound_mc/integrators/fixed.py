@@ -250,14 +250,14 @@ def newmark_rates(q, v, a, qn, h, vn, an):
 
 @jit(inline=True)
 def contact_events(model, relation, method, psi, qe, ve, gap, xi, beta, cd, zhd, was_in, pending,
-                   dpen, ddpen, fn, cout, settings, meff, ep, vlog, nlog):  # fmt: skip
+                   dpen, ddpen, fn, cout, settings, meff, ep, logs, nlog):  # fmt: skip
     """Contact bookkeeping at the end of a step (coordinates ``qe``, velocities ``ve``).
 
     Opens an episode where a contact closes (its damping set: per impact from the rate at the
     last step point before contact where ``settings.rest_v`` is set), counts it as an impact
     once it is deep enough (its onset velocity logged), keeps the penetrations, the lagged
-    force of ``newmark-explicit`` and the deepest penetration.  Returns the impact-velocity
-    log and its count.
+    force of ``newmark-explicit`` and the deepest penetration.  Returns the count of the
+    impact-velocity log ``logs[0]`` (``outputs.log_impact_in``).
     """
     per_impact = settings.rest_v.size > 0
     for c in range(gap.size):
@@ -278,7 +278,7 @@ def contact_events(model, relation, method, psi, qe, ve, gap, xi, beta, cd, zhd,
         if pending[c] and d1 > outputs.IMPACT_MIN_PENETRATION_M:
             cout[c, outputs.C_IMPACTS] += 1.0
             pending[c] = False
-            vlog, nlog = outputs.log_impact(vlog, nlog, ep[c, outputs.EP_V0])
+            nlog = outputs.log_impact_in(logs, nlog, ep[c, outputs.EP_V0])
             cout[c, outputs.C_MAX_IMPACT_VELOCITY] = max(cout[c, outputs.C_MAX_IMPACT_VELOCITY],
                                                          ep[c, outputs.EP_V0])  # fmt: skip
         was_in[c] = d1 > 0.0
@@ -289,7 +289,7 @@ def contact_events(model, relation, method, psi, qe, ve, gap, xi, beta, cd, zhd,
             fn[c] = force(model, d1, dd1, beta[c], cd[c], zhd[c], phase_of(d1, dd1))
         if d1 > cout[c, outputs.C_MAX_PENETRATION]:
             cout[c, outputs.C_MAX_PENETRATION] = d1
-    return vlog, nlog
+    return nlog
 
 
 @jit(inline=True)
@@ -386,6 +386,7 @@ def fixed(
     qprev = np.empty(n)
     fprev = np.zeros(nc)
     ep, vlog, peak_e = impact_start(settings, xi, beta, meff, cd, zhd)
+    logs = [vlog]  # never reassigned in the loop (outputs.log_impact_in)
     nlog = 0
     no_load = np.zeros(0)
     e0 = mechanical_energy(q, v, omega)
@@ -462,10 +463,10 @@ def fixed(
                 status = outputs.STATUS_NOT_CONVERGED
             newmark_rates(q, v, a, qn, h, vn, an)
         # contact bookkeeping at n+1
-        vlog, nlog = contact_events(model, relation, method, psi,
+        nlog = contact_events(model, relation, method, psi,
                                     qn if method != CENTRAL_DIFFERENCE else q, vn, gap, xi, beta,
                                     cd, zhd, was_in, pending, dpen, ddpen, fn, cout, settings,
-                                    meff, ep, vlog, nlog)  # fmt: skip
+                                    meff, ep, logs, nlog)  # fmt: skip
         if method != CENTRAL_DIFFERENCE:
             # energies (trapezoidal); contact work with the force acting over the step
             pin1, pd1 = powers(vn, ag1, omega, zeta, gamma)
@@ -492,4 +493,4 @@ def fixed(
     stored_energy, phase = final_contacts(model, dpen, beta)
     outputs.finish(out, cout, peaks, side, phase, q, v, omega, e0, e_in, e_d, w_c, stored_energy,
                    peak_f, peak_t, steps, status)  # fmt: skip
-    outputs.finish_impacts(out, cout, vlog, nlog, peak_e[0])
+    outputs.finish_impacts(out, cout, logs[0], nlog, peak_e[0])

@@ -223,6 +223,7 @@ def newmark_hysteretic(
     outputs.reset_contacts(cout)
     ikhat, zw2, g = newmark_matrices(omega, zeta, h, psi)
     ep, vlog, peak_e = impact_start(settings, xi, beta, meff, cd, zhd)
+    logs = [vlog]  # never reassigned in the loop (outputs.log_impact_in)
     nlog = 0
     pin_prev, pd_prev, pc_prev = initial_state(model, psi, q, v, gap, beta, cd, zhd, dpen,
                                                ddpen, fc, was_in, ag[0], omega, zeta, gamma,
@@ -273,9 +274,9 @@ def newmark_hysteretic(
             xa = abs(rowdot(phi, f, an) + ag1)
             if xa > peak_acc[f]:
                 peak_acc[f] = xa
-        vlog, nlog = contact_events(model, relation, method, psi, qn, vn, gap, xi, beta, cd,
+        nlog = contact_events(model, relation, method, psi, qn, vn, gap, xi, beta, cd,
                                     zhd, was_in, pending, dpen, ddpen, fn, cout, settings, meff,
-                                    ep, vlog, nlog)  # fmt: skip
+                                    ep, logs, nlog)  # fmt: skip
         pin1, pd1 = powers(vn, ag1, omega, zeta, gamma)
         pc1 = contact_power(fn, ddpen)
         pp1 = 0.0
@@ -296,5 +297,5 @@ def newmark_hysteretic(
     # the plastic load's work enters the balance as a negative damping work
     outputs.finish(out, cout, peaks, side, phase, q, v, omega, e0, e_in, e_d - w_p, w_c,
                    stored_energy, peak_f, peak_t, steps, status)  # fmt: skip
-    outputs.finish_impacts(out, cout, vlog, nlog, peak_e[0])
+    outputs.finish_impacts(out, cout, logs[0], nlog, peak_e[0])
     storey_outputs(out, store, peak_u, drift, peak_acc, side, e_h, sout)

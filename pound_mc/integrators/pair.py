@@ -64,7 +64,7 @@ def newmark_pair(
     # restitution set per impact (Table 2 at the onset velocity; ``xi`` holds its quantile);
     # before the first onset the range at the lowest measured velocity
     per_impact = settings.rest_v.size > 0
-    _, vlog, _ = outputs.impact_log(1)
+    logs = [outputs.impact_log(1)[1]]  # never reassigned in the loop (outputs.log_impact_in)
     nlog = 0
     v_ep = e_ep = peak_e = math.nan
     if per_impact:
@@ -136,7 +136,7 @@ def newmark_pair(
             if pending and d1 > outputs.IMPACT_MIN_PENETRATION_M:
                 impacts += 1.0
                 pending = False
-                vlog, nlog = outputs.log_impact(vlog, nlog, v_ep)
+                nlog = outputs.log_impact_in(logs, nlog, v_ep)
             was_in = d1 > 0.0
             dpen = d1
             ddpen = dd1
@@ -172,6 +172,7 @@ def newmark_pair(
     cout[0, outputs.C_IMPACTS] = impacts
     cout[0, outputs.C_MAX_PENETRATION] = maxpen
     cout[0, outputs.C_IMPULSE] = impulse
+    vlog = logs[0]
     cout[0, outputs.C_MAX_IMPACT_VELOCITY] = outputs.log_max(vlog, nlog)
     peaks = np.empty(2)
     peaks[0] = pk0
