@@ -351,28 +351,51 @@ def _stage(q0, q1, v0, v1, ag, k0, ww0, g0, k1, ww1, g1, ps0, ps1, gp, b, cd, zh
     d = ps0 * q0 + ps1 * q1 - gp
     dd = ps0 * v0 + ps1 * v1
     fc = laws.force(model, d, dd, b, cd, zhd, phase)
+    a0, a1 = _accel(q0, q1, v0, v1, ag, k0, ww0, g0, k1, ww1, g1, ps0, ps1, fc)
+    return fc, dd, a0, a1
+
+
+@jit(inline=True)
+def _accel(q0, q1, v0, v1, ag, k0, ww0, g0, k1, ww1, g1, ps0, ps1, fc):
+    """Modal accelerations at one state under contact force ``fc`` [N] (:func:`_stage`)."""
     a0 = k0 * v0 - ww0 * q0 - g0 * ag
     a1 = k1 * v1 - ww1 * q1 - g1 * ag
     if fc != 0.0:
         a0 -= fc * ps0
         a1 -= fc * ps1
-    return fc, dd, a0, a1
+    return a0, a1
 
 
 @jit(inline=True)
-def _stage_pot(q0, q1, u0, u1, ag, k0, ww0, g0, k1, ww1, g1, ps0, ps1, gp, b, cd, kpot):
+def _roots(q0, q1, ps0, ps1, gp):
+    """Penetration ``d`` [m] at ``q`` with ``sqrt(d)`` and ``d^0.25`` (both 0 where ``d <= 0``).
+
+    Jankowski's approach phase needs both roots at every state it evaluates; a state's are
+    taken once and passed on (:func:`_rk4_pot`), the square roots' latency being most of the
+    phase's time.
+    """
+    d = ps0 * q0 + ps1 * q1 - gp
+    sd = 0.0
+    qd = 0.0
+    if d > 0.0:
+        sd = math.sqrt(d)
+        qd = math.sqrt(sd)
+    return d, sd, qd
+
+
+@jit(inline=True)
+def _stage_pot(q0, q1, u0, u1, roots, ag, k0, ww0, g0, k1, ww1, g1, ps0, ps1, b, cd, kpot):
     """Jankowski approach phase at state ``(q, u)``: force, rate, ``v``, ``u'``, damping force.
 
     ``u = v + psi D(delta)`` with ``D = 0.8 c0 delta^1.25``, whose rate is the damping force
     ``c0 delta^0.25 delta_dot`` of the law (seed eq. (1.1)): ``u' = `` the accelerations without it.
+    ``roots``: :func:`_roots` at ``q``.
     """
-    d = ps0 * q0 + ps1 * q1 - gp
+    d, sd, qd = roots
     pot = 0.0
     fel = 0.0
     cq = 0.0
     if d > 0.0:
-        sd = math.sqrt(d)
-        qd = math.sqrt(sd)
         pot = kpot * d * qd
         fel = b * d * sd
         cq = cd * qd
@@ -386,26 +409,31 @@ def _stage_pot(q0, q1, u0, u1, ag, k0, ww0, g0, k1, ww1, g1, ps0, ps1, gp, b, cd
 
 
 @jit(inline=True)
-def _potential(q0, q1, ps0, ps1, gp, kpot, b):
-    """``D(delta) = 0.8 c0 delta^1.25`` and the stored energy ``0.4 beta delta^2.5`` (0 open)."""
-    d = ps0 * q0 + ps1 * q1 - gp
+def _potential(roots, kpot, b):
+    """``D(delta) = 0.8 c0 delta^1.25`` and the stored energy ``0.4 beta delta^2.5`` (0 open).
+
+    ``roots``: :func:`_roots` at the state.
+    """
+    d, sd, qd = roots
     if not d > 0.0:
         return 0.0, 0.0
-    sd = math.sqrt(d)
-    return kpot * d * math.sqrt(sd), 0.4 * b * d * d * sd
+    return kpot * d * qd, 0.4 * b * d * d * sd
 
 
 @jit(inline=True)
 def _rk4_pot(
     q0, q1, v0, v1, s, hs, ag0, slope, k0, ww0, g0, k1, ww1, g1, zw2_0, zw2_1, ps0, ps1, gp,
-    b, cd, kpot,
+    b, cd, kpot, roots0,
 ):  # fmt: skip
     """:func:`_rk4_pair` for Jankowski's approach phase, in ``(q, u = v + psi D(delta))``.
 
     The damping force is the rate of ``D``: its impulse over the step is the change of ``D``
     (exact), and ``u`` sees only the elastic force, which is smooth enough for RK4 from onset.
+    ``roots0``: :func:`_roots` at the start (the end's of the sub-step before, or of a first
+    attempt, are these very values); the end's are returned last, after the outputs of
+    :func:`_rk4_pair`.
     """
-    pot0, en0 = _potential(q0, q1, ps0, ps1, gp, kpot, b)
+    pot0, en0 = _potential(roots0, kpot, b)
     u0 = v0 + ps0 * pot0
     u1 = v1 + ps1 * pot0
     h6 = hs / 6.0
@@ -417,9 +445,14 @@ def _rk4_pot(
         fac = 0.0 if stage == 0 else (hs if stage == 3 else 0.5 * hs)
         wgt = 1.0 if stage == 0 or stage == 3 else 2.0
         ag = ag0 + slope * (s + fac)
+        wq0 = q0 + fac * kq0
+        wq1 = q1 + fac * kq1
+        # the first stage's state is the start's (q + 0 k: its penetration the same wherever
+        # positive, and not used elsewhere)
+        roots = roots0 if stage == 0 else _roots(wq0, wq1, ps0, ps1, gp)
         fel, fdamp, dd, wv0, wv1, au0, au1, pot = _stage_pot(
-            q0 + fac * kq0, q1 + fac * kq1, u0 + fac * ku0, u1 + fac * ku1, ag, k0, ww0, g0,
-            k1, ww1, g1, ps0, ps1, gp, b, cd, kpot,
+            wq0, wq1, u0 + fac * ku0, u1 + fac * ku1, roots, ag, k0, ww0, g0, k1, ww1, g1,
+            ps0, ps1, b, cd, kpot,
         )  # fmt: skip
         fc = fel + fdamp
         if stage == 0:
@@ -439,14 +472,15 @@ def _rk4_pot(
         imp += wgt * fel
     nq0 = q0 + h6 * sq0
     nq1 = q1 + h6 * sq1
-    pot1, en1 = _potential(nq0, nq1, ps0, ps1, gp, kpot, b)
+    roots1 = _roots(nq0, nq1, ps0, ps1, gp)
+    pot1, en1 = _potential(roots1, kpot, b)
     nv0 = u0 + h6 * su0 - ps0 * pot1
     nv1 = u1 + h6 * su1 - ps1 * pot1
     # the contact's work: the elastic force's is the change of its stored energy (exact), the
     # damping force's by parts
     w_c = en1 - en0 + (ps0 * nv0 + ps1 * nv1) * pot1 - (ps0 * v0 + ps1 * v1) * pot0 - h6 * w_d
     return (nq0, nq1, nv0, nv1, h6 * e_in, h6 * e_d, w_c, h6 * imp + (pot1 - pot0), fc_start,
-            acc0, acc1)  # fmt: skip
+            acc0, acc1, roots1)  # fmt: skip
 
 
 @jit(inline=True)
@@ -580,6 +614,9 @@ def adaptive_pair(
     in_contact = False
     fsal = False
     fc_end = ae0 = ae1 = 0.0
+    # _roots of the state, valid while ``rooted`` (the last sub-step was an approach's)
+    roots = (0.0, 0.0, 0.0)
+    rooted = False
     pot = model == _JANKOWSKI
     kpot = 0.8 * cd
     # restitution set per impact (Table 2 at the onset velocity; ``xi0`` holds its quantile)
@@ -804,6 +841,7 @@ def adaptive_pair(
                     t_onset = i * dt_rec + s
                     in_contact = True
                     fsal = False
+                    rooted = False
                 else:
                     k_grid += 1
             else:
@@ -829,20 +867,34 @@ def adaptive_pair(
                 have, fs0, as0, as1 = fsal, fc_end, ae0, ae1
                 t_ev = _INF
                 kind = 0
+                pot_step = pot and phase == 1
+                if pot_step and not rooted:
+                    roots = _roots(q0, q1, ps0, ps1, gp)
+                roots1 = roots
                 for attempt in range(2):
-                    if pot and phase == 1:
-                        (nq0, nq1, nv0, nv1, de_in, de_d, dw_c, cimp, fc0, ac0, ac1) = _rk4_pot(
+                    if pot_step:
+                        (nq0, nq1, nv0, nv1, de_in, de_d, dw_c, cimp, fc0, ac0, ac1,
+                         roots1) = _rk4_pot(
                             q0, q1, v0, v1, s, hs, ag0, slope, k0, ww0, g0, k1, ww1, g1, zw2_0,
-                            zw2_1, ps0, ps1, gp, b, cd, kpot,
+                            zw2_1, ps0, ps1, gp, b, cd, kpot, roots,
                         )  # fmt: skip
                     else:
                         (nq0, nq1, nv0, nv1, de_in, de_d, dw_c, cimp, fc0, ac0, ac1) = _rk4_pair(
                             q0, q1, v0, v1, s, hs, ag0, slope, k0, ww0, g0, k1, ww1, g1, zw2_0,
                             zw2_1, ps0, ps1, gp, b, cd, zhd, phase, model, have, fs0, as0, as1,
                         )  # fmt: skip
-                    fc1, _, ae0, ae1 = _stage(nq0, nq1, nv0, nv1, ag0 + slope * (s + hs), k0,
-                                              ww0, g0, k1, ww1, g1, ps0, ps1, gp, b, cd, zhd,
-                                              phase, model)  # fmt: skip
+                    ag_end = ag0 + slope * (s + hs)
+                    if pot_step and roots1[0] > 0.0:
+                        # laws.force (_jankowski_k, approach) from the roots _rk4_pot took at
+                        # the end: beta d sqrt(d) + c0 d^0.25 dd, the same operations
+                        d_e, sd_e, qd_e = roots1
+                        fc1 = b * d_e * sd_e + cd * qd_e * (ps0 * nv0 + ps1 * nv1)
+                        ae0, ae1 = _accel(nq0, nq1, nv0, nv1, ag_end, k0, ww0, g0, k1, ww1, g1,
+                                          ps0, ps1, fc1)  # fmt: skip
+                    else:
+                        fc1, _, ae0, ae1 = _stage(nq0, nq1, nv0, nv1, ag_end, k0, ww0, g0, k1,
+                                                  ww1, g1, ps0, ps1, gp, b, cd, zhd, phase,
+                                                  model)  # fmt: skip
                     fc_end = fc1
                     d0 = ps0 * q0 + ps1 * q1 - gp
                     d1 = ps0 * nq0 + ps1 * nq1 - gp
@@ -899,6 +951,9 @@ def adaptive_pair(
                     pk0 = _track_floor(f0 * q0, f0 * v0, f0 * nq0, f0 * nv0, hs, pk0)
                     pk1 = _track_floor(f1 * q1, f1 * v1, f1 * nq1, f1 * nv1, hs, pk1)
                 q0, q1, v0, v1 = nq0, nq1, nv0, nv1
+                # the roots at the end start the next approach sub-step (_rk4_pot)
+                roots = roots1
+                rooted = pot_step
                 s += hs
                 # the force and accelerations at the end start the next sub-step (first same as
                 # last) unless the force law switched there
