@@ -640,13 +640,17 @@ def adaptive_pair(
     tail_min = TAIL_MIN_POT if pot else TAIL_MIN
     loc_k = LOCAL_PERIOD_SHARE * math.sqrt(me) / substeps
     loc_c = LOCAL_DAMPING_SHARE * me / substeps
-    kp4 = _period_screen(model, b, loc_k)
-    kc4 = _damping_screen(model, b, cd, loc_c)
     status = STATUS_OK
     store = hx.shape[0] > 0
     mode = int(pre[PRE_MODE]) if pre.size > 0 else 0
     # the peak force alone: no energies and no floor peaks (neither moves the state)
     lean = mode == PRE_RESUME_PEAK or mode == PRE_RESUME_ONSET
+    # the screen of the local bounds (_contact_bound) covers their tightness at _FINE, which
+    # only ``same_fine`` needs: a lean run (the check's own run) reports none, and its screen
+    # covers the bounds themselves, the larger share (every bound is slack there, bit for bit)
+    share = 1.0 if lean else _FINE
+    kp4 = _period_screen(model, b, loc_k, share)
+    kc4 = _damping_screen(model, b, cd, loc_c, share)
     # past the outputs and their ``same`` slot: where the check's run may start (the state at
     # the last onset before which the check's run is this one, PRE_RESUME_ONSET)
     onsets = out.size > N_OUT + 1
@@ -665,7 +669,7 @@ def adaptive_pair(
         s, k_grid, peak_f = pre[ONSET_S], int(pre[ONSET_GRID]), pre[ONSET_PEAK]
         cd, zhd = pre[ONSET_CD], pre[ONSET_ZHD]
         kpot = 0.8 * cd
-        kc4 = _damping_screen(model, b, cd, loc_c)
+        kc4 = _damping_screen(model, b, cd, loc_c, share)
     i = i_first
     while i < npts - 1:
         if fresh and not in_contact:
@@ -841,7 +845,7 @@ def adaptive_pair(
                         cd, zhd, e_ep = laws.episode_damping(settings, model, relation, xi0, v0c, b,
                                                         me, cd, zhd)  # fmt: skip
                         kpot = 0.8 * cd
-                        kc4 = _damping_screen(model, b, cd, loc_c)
+                        kc4 = _damping_screen(model, b, cd, loc_c, share)
                     else:
                         zhd = laws.episode_zeta(model, relation, xi0, v0c, zhd)
                     hc, same_fine = _episode_substep(
@@ -977,7 +981,7 @@ def adaptive_pair(
                             cd, zhd, e_ep = laws.episode_damping(settings, model, relation, xi0,
                                                                  v0c, b, me, cd, zhd)  # fmt: skip
                             kpot = 0.8 * cd
-                            kc4 = _damping_screen(model, b, cd, loc_c)
+                            kc4 = _damping_screen(model, b, cd, loc_c, share)
                         else:
                             zhd = laws.episode_zeta(model, relation, xi0, v0c, zhd)
                         hc, same_fine = _episode_substep(
@@ -1048,25 +1052,27 @@ def _episode_substep(hc, dur, same_fine):
 
 
 @jit(inline=True)
-def _period_screen(model, b, loc_k):
-    """``kp4`` of :func:`_contact_bound`: ``(_FINE loc_k)^4 / (0.4 b)^2`` (Jankowski), else -1.
+def _period_screen(model, b, loc_k, share):
+    """``kp4`` of :func:`_contact_bound`: ``(share loc_k)^4 / (0.4 b)^2`` (Jankowski), else -1.
 
-    The local period bound at ``_FINE`` of Jankowski's law, ``_FINE loc_k d / sqrt(0.4 b
-    d^2.5)``, is at least ``hs`` where ``d hs^4 <= (_FINE loc_k)^4 / (0.4 b)^2``.
+    The local period bound at ``share`` (``_FINE``, or 1 where its tightness at ``_FINE`` is
+    not needed) of Jankowski's law, ``share loc_k d / sqrt(0.4 b d^2.5)``, is at least ``hs``
+    where ``d hs^4 <= (share loc_k)^4 / (0.4 b)^2``.
     """
     if model != _JANKOWSKI:
         return -1.0
-    k = _FINE * loc_k
+    k = share * loc_k
     k *= k
     return _SCREEN_MARGIN * k * k / ((0.4 * b) * (0.4 * b))
 
 
 @jit(inline=True)
-def _damping_screen(model, b, cd, loc_c):
-    """``kc4`` of :func:`_contact_bound`: ``(_FINE loc_c / c0)^4`` (Jankowski), else -1.
+def _damping_screen(model, b, cd, loc_c, share):
+    """``kc4`` of :func:`_contact_bound`: ``(share loc_c / c0)^4`` (Jankowski), else -1.
 
-    The approach's damping rate ``c0 d^0.25`` times ``hs`` is at most ``_FINE loc_c`` where
-    ``d hs^4 <= (_FINE loc_c / c0)^4``; without damping (``c0 = 0``) it never binds.
+    The approach's damping rate ``c0 d^0.25`` times ``hs`` is at most ``share loc_c`` where
+    ``d hs^4 <= (share loc_c / c0)^4`` (``share`` as :func:`_period_screen`); without damping
+    (``c0 = 0``) it never binds.
     """
     if model != _JANKOWSKI:
         return -1.0
@@ -1074,7 +1080,7 @@ def _damping_screen(model, b, cd, loc_c):
         return _INF
     if not b <= _SCREEN_CANCEL * cd:
         return -1.0
-    k = _FINE * loc_c / cd
+    k = share * loc_c / cd
     k *= k
     return _SCREEN_MARGIN * k * k
 
@@ -1095,7 +1101,9 @@ def _contact_bound(hs, d, dd, model, b, cd, zhd, phase, loc_k, loc_c, kp4, kc4):
     shorten ``hs``: they are those bounds times ``_FINE`` exactly, and until one shortens it
     both runs evaluate them at the same points.  ``kp4`` and ``kc4``
     (:func:`_period_screen`, :func:`_damping_screen`): where ``d hs^4`` at the deepest point is
-    below them (and the penetration below 1 m), neither bound can bind or be tight at ``_FINE``.
+    below them (and the penetration below 1 m), neither bound can bind or be tight at ``_FINE``
+    (screens at share 1, a lean run's: neither can bind; the tightness returned is then False,
+    which that run does not use).
     """
     hs0 = hs
     tight = False
