@@ -53,6 +53,7 @@ from pound_mc.integrators.adaptive_pair import (
     _exact_root_pair,
     _rk4_pair,
     _rk4_pot,
+    _roots,
     _stage,
     _store_pair,
     _track_floor,
@@ -525,9 +526,10 @@ def _contact_substep(qs, v, nq, nv, a_end, s, hs, ag0, slope, w_b, zw2, g, ps, g
         ww0 = w_b[0] * w_b[0]
         ww1 = w_b[1] * w_b[1]
         if pot and phase == 1:
-            (nq[0], nq[1], nv[0], nv[1], de[0], de[1], de[2], de[3], fc0, ac0, ac1) = _rk4_pot(
+            (nq[0], nq[1], nv[0], nv[1], de[0], de[1], de[2], de[3], fc0, ac0, ac1, _) = _rk4_pot(
                 qs[0], qs[1], v[0], v[1], s, hh, ag0, slope, -zw2[0], ww0, g[0], -zw2[1], ww1,
                 g[1], zw2[0], zw2[1], ps[0], ps[1], gpe, b, cd, kpot,
+                _roots(qs[0], qs[1], ps[0], ps[1], gpe),
             )  # fmt: skip
         else:
             (nq[0], nq[1], nv[0], nv[1], de[0], de[1], de[2], de[3], fc0, ac0, ac1) = _rk4_pair(
