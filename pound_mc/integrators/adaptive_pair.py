@@ -344,7 +344,7 @@ def _quiet_close(run, e_in, e_d, en0, q0, q1, v0, v1, km, h):
     return e_in, e_d, end, _quiet_start()
 
 
-@jit(inline=True)
+@jit(inline=True, llvm_inline=True)
 def _stage(q0, q1, v0, v1, ag, k0, ww0, g0, k1, ww1, g1, ps0, ps1, gp, b, cd, zhd, phase,
            model):  # fmt: skip
     """Contact force [N], penetration rate [m/s] and modal accelerations at one state."""
@@ -364,7 +364,7 @@ def _stage(q0, q1, v0, v1, ag, k0, ww0, g0, k1, ww1, g1, ps0, ps1, gp, b, cd, zh
     return fc, dd, a0, a1
 
 
-@jit(inline=True)
+@jit(inline=True, llvm_inline=True)
 def _accel(q0, q1, v0, v1, ag, k0, ww0, g0, k1, ww1, g1, ps0, ps1, fc):
     """Modal accelerations at one state under contact force ``fc`` [N] (:func:`_stage`)."""
     a0 = k0 * v0 - ww0 * q0 - g0 * ag
@@ -375,7 +375,7 @@ def _accel(q0, q1, v0, v1, ag, k0, ww0, g0, k1, ww1, g1, ps0, ps1, fc):
     return a0, a1
 
 
-@jit(inline=True)
+@jit(inline=True, llvm_inline=True)
 def _roots(q0, q1, ps0, ps1, gp):
     """Penetration ``d`` [m] at ``q`` with ``sqrt(d)`` and ``d^0.25`` (both 0 where ``d <= 0``).
 
@@ -392,7 +392,7 @@ def _roots(q0, q1, ps0, ps1, gp):
     return d, sd, qd
 
 
-@jit(inline=True)
+@jit(inline=True, llvm_inline=True)
 def _stage_pot(q0, q1, u0, u1, roots, ag, k0, ww0, g0, k1, ww1, g1, ps0, ps1, b, cd, kpot):
     """Jankowski approach phase at state ``(q, u)``: force, rate, ``v``, ``u'``, damping force.
 
@@ -417,7 +417,7 @@ def _stage_pot(q0, q1, u0, u1, roots, ag, k0, ww0, g0, k1, ww1, g1, ps0, ps1, b,
     return fel, fdamp, dd, v0, v1, au0, au1, pot
 
 
-@jit(inline=True)
+@jit(inline=True, llvm_inline=True)
 def _potential(roots, kpot, b):
     """``D(delta) = 0.8 c0 delta^1.25`` and the stored energy ``0.4 beta delta^2.5`` (0 open).
 
@@ -429,7 +429,7 @@ def _potential(roots, kpot, b):
     return kpot * d * qd, 0.4 * b * d * d * sd
 
 
-@jit(inline=True)
+@jit(inline=True, llvm_inline=True)
 def _rk4_pot(
     q0, q1, v0, v1, s, hs, ag0, slope, k0, ww0, g0, k1, ww1, g1, zw2_0, zw2_1, ps0, ps1, gp,
     b, cd, kpot, roots0,
@@ -492,7 +492,7 @@ def _rk4_pot(
             acc0, acc1, roots1)  # fmt: skip
 
 
-@jit(inline=True)
+@jit(inline=True, llvm_inline=True)
 def _rk4_pair(
     q0, q1, v0, v1, s, hs, ag0, slope, k0, ww0, g0, k1, ww1, g1, zw2_0, zw2_1, ps0, ps1, gp,
     b, cd, zhd, phase, model, have, fcs, as0, as1,
@@ -1085,7 +1085,7 @@ def _damping_screen(model, b, cd, loc_c, share):
     return _SCREEN_MARGIN * k * k
 
 
-@jit(inline=True)
+@jit(inline=True, llvm_inline=True)
 def _contact_bound(hs, d, dd, model, b, cd, zhd, phase, loc_k, loc_c, kp4, kc4):
     """``hs`` [s] bounded by the contact's local period and damping time at penetration ``d``.
 

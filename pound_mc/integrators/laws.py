@@ -107,7 +107,7 @@ def force_rate(model, d, dd, ddd, beta, c0, zeta, phase):
     return _hd_rate(d, dd, ddd, beta, c0, zeta, phase)
 
 
-@jit(inline=True)
+@jit(inline=True, llvm_inline=True)
 def substep_peaks(model, f0, f1, d0, d1, dd0, dd1, ddd0, ddd1, hs, peak, beta, c0, zeta, phase):
     """Largest force and penetration over a contact sub-step of length ``hs`` [s].
 

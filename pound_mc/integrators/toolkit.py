@@ -157,7 +157,7 @@ def coefficients(w, z, h):
     return out
 
 
-@jit
+@jit(llvm_inline=True)
 def hermite_max(y0, yp0, y1, yp1, h):
     """Largest interior local maximum of the cubic Hermite interpolant on ``[0, h]``.
 
@@ -206,7 +206,7 @@ def turning_screen(d0, dd0, d1, dd1, hh):
     return False, 0.0
 
 
-@jit
+@jit(llvm_inline=True)
 def hermite_root(y0, yp0, y1, yp1, h):
     """First root in ``(0, h]`` of the cubic Hermite interpolant.
 
