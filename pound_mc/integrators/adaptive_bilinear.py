@@ -37,7 +37,6 @@ import math
 import numpy as np
 
 from pound_mc._jit import jit
-from pound_mc.errors import InputError
 from pound_mc.integrators import outputs
 from pound_mc.integrators.adaptive_pair import (
     ONSET_TOL,
@@ -69,7 +68,7 @@ from pound_mc.integrators.toolkit import (
     step_size,
 )
 
-__all__ = ["adaptive_bilinear", "branch_supported", "refuse_unsupported", "BOUC_WEN_NEEDS_NEWMARK"]
+__all__ = ["adaptive_bilinear", "branch_supported", "bilinear_pair_steps"]
 
 _INF = math.inf
 _TWELFTH = 1.0 / 12.0
@@ -89,30 +88,21 @@ def branch_supported(post_yield_ratio: float, damping_ratio: float) -> bool:
     return post_yield_ratio > damping_ratio * damping_ratio
 
 
-#: Why ``adaptive`` refuses Bouc-Wen storeys (key ``integrator.method``), and what to set.
-BOUC_WEN_NEEDS_NEWMARK = (
-    "hysteresis = 'bouc-wen' runs with method = 'newmark' (or 'newmark-explicit'); set it and "
-    "a step dt_s (1e-3 s or less)"
-)
-
-
-def refuse_unsupported(store, zeta) -> None:
-    """Raise :class:`~pound_mc.errors.InputError` for a branch ``adaptive`` cannot step.
+def bilinear_pair_steps(store, zeta) -> bool:
+    """Whether this kernel's exact branch steps run a yielding SDOF pair.
 
     ``store``: the storey table (row ``j``: building ``j``), ``zeta``: the damping ratios.
-    Bouc-Wen storeys are not piecewise linear: they run with ``newmark``.
+    Bouc-Wen storeys are not piecewise linear, and a yielding branch at ``alpha <= z^2`` is not
+    an underdamped oscillator (:func:`branch_supported`): both run with the error-controlled
+    steps of :mod:`pound_mc.integrators.adaptive_rk` instead.
     """
+    store = np.asarray(store, dtype=float)
     if np.any(store[:, S_BW] > 0.0):
-        raise InputError(BOUC_WEN_NEEDS_NEWMARK, key="integrator.method")
-    for j, side in enumerate(("left", "right")):
-        alpha = store[j, S_ALPHA]
-        if math.isfinite(store[j, S_YIELD]) and not branch_supported(alpha, zeta[j]):
-            raise InputError(
-                f"method 'adaptive' needs post_yield_ratio above damping_ratio^2 "
-                f"({zeta[j] ** 2:g}), got {alpha:g}; raise it or set integrator.method = "
-                "'newmark' and a step dt_s (1e-3 s or less)",
-                key=f"{side}.post_yield_ratio",
-            )
+        return False
+    return all(
+        not math.isfinite(store[j, S_YIELD]) or branch_supported(store[j, S_ALPHA], zeta[j])
+        for j in range(2)
+    )
 
 
 @jit

@@ -44,8 +44,9 @@ from pound_mc.integrators.accuracy import (
     substep_check_due,
 )
 from pound_mc.integrators.adaptive import adaptive
-from pound_mc.integrators.adaptive_bilinear import adaptive_bilinear, refuse_unsupported
+from pound_mc.integrators.adaptive_bilinear import adaptive_bilinear, bilinear_pair_steps
 from pound_mc.integrators.adaptive_pair import adaptive_pair
+from pound_mc.integrators.adaptive_rk import adaptive_rk
 from pound_mc.integrators.fixed import CENTRAL_DIFFERENCE, NEWMARK, NEWMARK_EXPLICIT, fixed
 from pound_mc.integrators.hysteretic import N_STOREY_COLUMNS, newmark_hysteretic
 from pound_mc.integrators.outputs import (
@@ -176,48 +177,56 @@ def _run_fixed(
               q, v, out, cout, hx, hd, hf)  # fmt: skip
 
 
-def _check_inelastic(settings, pair: bool = False, store=None, zeta=None) -> None:
-    """Refuse what the inelastic kernels do not do, naming the key.
-
-    ``pair``: an SDOF pair (``adaptive`` runs it where
-    :func:`~pound_mc.integrators.adaptive_bilinear.refuse_unsupported` lets it).
-    """
-    if settings.method == ADAPTIVE and pair:
-        refuse_unsupported(store, zeta)
-        if settings.rest_v.size > 0:
-            raise InputError(
-                "restitution = 'velocity' with yielding buildings runs with method = 'newmark'",
-                key="integrator.method",
-            )
-    elif settings.method not in (NEWMARK, NEWMARK_EXPLICIT):
+def _check_inelastic(settings) -> None:
+    """Refuse what the inelastic kernels do not do, naming the key."""
+    if settings.method not in (ADAPTIVE, NEWMARK, NEWMARK_EXPLICIT):
         raise InputError(
-            "buildings with hysteresis other than 'elastic' run with method = 'newmark' (or "
-            "'newmark-explicit'), or 'adaptive' for two SDOF buildings; set it and a step "
-            "dt_s (1e-3 s or less)",
+            "buildings with hysteresis other than 'elastic' run with method = 'adaptive' (the "
+            "default), 'newmark' or 'newmark-explicit'",
             key="integrator.method",
         )
 
 
-def _inelastic_run(storeys, sout, pair=False):
+def _inelastic_run(storeys, sout, kernel):
     """A run of an inelastic kernel with the storeys bound (the signature of ``_RUNS``).
 
-    ``sout`` (storeys x 2) receives each storey's peak and final drift [m].  ``pair``:
-    ``adaptive`` on a bilinear SDOF pair, else the inelastic ``newmark``.
+    ``sout`` (storeys x 2) receives each storey's peak and final drift [m].  ``kernel``:
+    ``"pair"`` (``adaptive`` on a bilinear SDOF pair, exact steps per branch), ``"rk"``
+    (``adaptive`` on any other yielding scene, :mod:`~pound_mc.integrators.adaptive_rk`) or
+    ``"newmark"`` (the inelastic fixed-step kernel).
     """
     dmat = np.ascontiguousarray(storeys[0], dtype=np.float64)
     store = np.ascontiguousarray(storeys[1], dtype=np.float64).reshape(-1, N_STOREY_COLUMNS)
 
     def run(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi, settings, q, v,
             out, cout, hx, hd, hf, pre):  # fmt: skip
-        if pair:
+        if kernel == "pair":
             _run_adaptive_bilinear(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff,
                                    beta, xi, settings, q, v, out, cout, hx, hd, hf, store,
                                    sout)  # fmt: skip
-            return
-        _run_inelastic(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi,
-                       settings, q, v, out, cout, hx, hd, hf, dmat, store, sout)  # fmt: skip
+        elif kernel == "rk":
+            _run_adaptive_rk(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi,
+                             settings, q, v, out, cout, hx, hd, hf, dmat, store,
+                             sout)  # fmt: skip
+        else:
+            _run_inelastic(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi,
+                           settings, q, v, out, cout, hx, hd, hf, dmat, store, sout)  # fmt: skip
 
     return run
+
+
+@jit
+def _run_adaptive_rk(
+    ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi, settings,
+    q, v, out, cout, hx, hd, hf, dmat, store, sout,
+):  # fmt: skip
+    """One run of error-controlled ``adaptive``; a step bound that cannot end fails."""
+    if _endless(ag, dt_rec, settings):
+        fail(out, cout, STATUS_NOT_CONVERGED)
+        sout[:] = np.nan
+        return
+    adaptive_rk(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi, settings,
+                q, v, out, cout, hx, hd, hf, dmat, store, sout)  # fmt: skip
 
 
 @jit
@@ -356,7 +365,7 @@ def run_kernel(
                                restitution=restitution)  # fmt: skip
     pair = _is_sdof_pair(omega, gap, phi)
     if storeys is not None:
-        _check_inelastic(settings, pair, np.asarray(storeys[1]), np.asarray(zeta))
+        _check_inelastic(settings)
     n = omega.size
     nc = gap.size
     nf = phi.shape[0]
@@ -375,7 +384,11 @@ def run_kernel(
     if storeys is not None:
         if storey_out is None:
             storey_out = np.empty((np.size(storeys[1]) // N_STOREY_COLUMNS, 2))
-        run = _inelastic_run(storeys, storey_out, run is _run_adaptive_pair)
+        kernel = "newmark"
+        if settings.method == ADAPTIVE:
+            steps = pair and settings.rest_v.size == 0
+            kernel = "pair" if steps and bilinear_pair_steps(storeys[1], zeta) else "rk"
+        run = _inelastic_run(storeys, storey_out, kernel)
     run(
         np.ascontiguousarray(ag, dtype=f8), f8(dt_rec),
         np.ascontiguousarray(omega, dtype=f8), np.ascontiguousarray(zeta, dtype=f8),

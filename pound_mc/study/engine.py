@@ -37,7 +37,6 @@ from pound_mc.integrators.accuracy import (
     flag_inaccurate,
     substep_check_due,
 )
-from pound_mc.integrators.adaptive_bilinear import BOUC_WEN_NEEDS_NEWMARK, branch_supported
 from pound_mc.integrators.outputs import STATUS_OK
 from pound_mc.integrators.threads import numba_threads
 from pound_mc.motions import G, load_record, record_arrays
@@ -218,49 +217,12 @@ class StudyEngine:
         self.per_scene = self.inelastic or (
             self.mdof and any(key.split(".", 1)[0] in ("left", "right") for key in self._varied)
         )
-        if self.inelastic and self._base["integrator.method"] == "adaptive":
-            self._check_branches()
 
     def _where(self, key: str) -> str:
         """A key as the study file gives it: ``grid.KEY``, ``sampling.vary.KEY`` or ``KEY``."""
         if key in self.study.grid:
             return f"grid.{key}"
         return f"sampling.vary.{key}" if any(v.key == key for v in self.study.variables) else key
-
-    def _check_branches(self) -> None:
-        """Refuse, before any simulation, a yielding SDOF ``adaptive`` cannot step.
-
-        The kernels refuse it at the first such simulation, after earlier chunks were written:
-        a grid or sampled ``damping_ratio`` or ``post_yield_ratio`` with ``alpha <= zeta^2``
-        (:func:`~pound_mc.integrators.adaptive_bilinear.branch_supported`), or Bouc-Wen storeys.
-        """
-        index = np.arange(self.study.n_simulations)
-        varied = self.varied(index)
-        for side in ("left", "right"):
-            building = getattr(self.scene, side)
-            if building.model != "sdof" or not building.inelastic:
-                continue
-            if building.hysteresis == "bouc-wen":
-                raise InputError(BOUC_WEN_NEEDS_NEWMARK, file=self.study.path,
-                                 key="integrator.method")  # fmt: skip
-            zeta = varied.get(f"{side}.damping_ratio", building.damping_ratio)
-            alpha = varied.get(f"{side}.post_yield_ratio", building.post_yield_ratio)
-            zeta, alpha = np.broadcast_arrays(np.atleast_1d(np.asarray(zeta, float)),
-                                              np.atleast_1d(np.asarray(alpha, float)))  # fmt: skip
-            bad = ~branch_supported(alpha, zeta)
-            if bad.any():
-                k = int(np.argmax(bad))
-                key = f"{side}.damping_ratio" if f"{side}.damping_ratio" in varied else \
-                    f"{side}.post_yield_ratio"  # fmt: skip
-                raise InputError(
-                    f"method 'adaptive' needs {side}.post_yield_ratio above "
-                    f"{side}.damping_ratio^2; {int(bad.sum())} of {bad.size} simulations have "
-                    f"it at or below (post_yield_ratio {alpha[k]:g}, damping_ratio {zeta[k]:g}): "
-                    "raise it, or set integrator.method = 'newmark' and a step dt_s (1e-3 s or "
-                    "less)",
-                    file=self.study.path,
-                    key=self._where(key),
-                )
 
     def _intensities(self) -> None:
         """Each record's own PGA and Sa, and the factors that scale it to the intensity axis."""

@@ -1,0 +1,546 @@
+"""``adaptive`` for every building: error-controlled Runge-Kutta steps with located events.
+
+The kernel of yielding buildings of any structure (SDOF or shear buildings, walls, rows,
+floor-to-floor and slab-on-column contacts), any storey law of
+:mod:`~pound_mc.integrators.storey_laws` (bilinear at any post-yield ratio from 0, Bouc-Wen)
+and any contact law and restitution.  The state is that of
+:mod:`pound_mc.integrators.hysteretic`: the modes of the *initial elastic* buildings, loaded
+by the yielding storeys' plastic drifts,
+
+``q'' + 2 zeta omega q' + omega^2 q = -gamma a_g - sum_c F_c psi_c + sum_s D_s f_s``,
+``f_s = (1 - alpha_s) k_s (u_s - z_s)``,
+
+with ``u = D q`` the storey drifts and ``z`` the hysteretic drift of each yielding storey,
+carried as a state variable (``z' = g(z, u') u'``, :mod:`~pound_mc.integrators.storey_laws`).
+
+Steps (Dormand & Prince 1980, the 5(4) pair with its first-same-as-last stage, as SciPy's
+``RK45``) are chosen by the embedded error estimate: the error of every floor's displacement
+and velocity is held under :func:`tolerance` of the response's scale (the largest floor
+displacement so far, or the static displacement of the record's peak in the most flexible
+mode), every yielding storey's ``z`` under it times its yield drift, and every closed contact's
+penetration under it times the episode's deepest penetration, so that short contacts and
+near-yield storeys take the steps they need and quiet spells long ones.  Every step ends on
+the record's samples (the ground acceleration has kinks there) and is no longer than
+``dt_s``.  Every switch is located inside the step that holds it, on the cubic Hermite
+interpolant of the quantity and its rate, and the step is taken again up to it: contact onset
+(grazing ones included), approach -> restitution, separation and restitution -> approach, and
+each storey's branch (yield, unloading).  Inside every step the right-hand side is smooth.
+
+Peak force, penetration, floor displacements and storey drifts are continuous-time maxima
+(cubic Hermite on each step); floor accelerations are maxima over the steps' ends.  The
+energies (input, damping, contact work, the plastic load's work and the hysteretic
+dissipation) are integrated with the state, at its order.
+
+Longer than 600 lines because the step, its error norm, the event location and the outputs of
+every structure meet in one compiled loop, each in a helper of its own below.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from pound_mc._jit import jit
+from pound_mc.integrators import outputs
+from pound_mc.integrators.adaptive import (
+    _ONSET,
+    _SEPARATION,
+    _TO_RESTITUTION,
+    _contact_peaks,
+    _locate_switch,
+    _open_contact,
+    _store_history,
+)
+from pound_mc.integrators.hysteretic import S_ALPHA, S_BW, S_K, S_YIELD, storey_outputs
+from pound_mc.integrators.laws import contact_forces, stored
+from pound_mc.integrators.storey_laws import (
+    LAW_BILINEAR,
+    LAW_BOUC_WEN,
+    initial_branch,
+    storey_event,
+    storey_switch,
+    z_rate,
+)
+from pound_mc.integrators.toolkit import (
+    accel,
+    hermite_max,
+    hermite_root,
+    mechanical_energy,
+    powers,
+    row_spans,
+    rowdot,
+    track_floors,
+)
+
+__all__ = ["adaptive_rk", "tolerance", "RTOL_DEFAULT"]
+
+# Dormand-Prince 5(4) tableau (Dormand & Prince 1980; Hairer, Norsett & Wanner, Table 5.2)
+_C = np.array([0.0, 1.0 / 5.0, 3.0 / 10.0, 4.0 / 5.0, 8.0 / 9.0, 1.0, 1.0])
+_A = np.array([
+    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+    [1.0 / 5.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+    [3.0 / 40.0, 9.0 / 40.0, 0.0, 0.0, 0.0, 0.0],
+    [44.0 / 45.0, -56.0 / 15.0, 32.0 / 9.0, 0.0, 0.0, 0.0],
+    [19372.0 / 6561.0, -25360.0 / 2187.0, 64448.0 / 6561.0, -212.0 / 729.0, 0.0, 0.0],
+    [9017.0 / 3168.0, -355.0 / 33.0, 46732.0 / 5247.0, 49.0 / 176.0, -5103.0 / 18656.0, 0.0],
+    [35.0 / 384.0, 0.0, 500.0 / 1113.0, 125.0 / 192.0, -2187.0 / 6784.0, 11.0 / 84.0],
+])  # fmt: skip
+#: Fifth-order weights (the last row of ``_A``: first same as last).
+_B = np.array([35.0 / 384.0, 0.0, 500.0 / 1113.0, 125.0 / 192.0, -2187.0 / 6784.0,
+               11.0 / 84.0, 0.0])  # fmt: skip
+#: Fifth- less fourth-order weights: the embedded error estimate.
+_E = np.array([71.0 / 57600.0, 0.0, -71.0 / 16695.0, 71.0 / 1920.0, -17253.0 / 339200.0,
+               22.0 / 525.0, -1.0 / 40.0])  # fmt: skip
+#: Relative tolerance of the embedded error at the default 16 ``substeps``; it scales as
+#: ``(16 / substeps)^2``, so that the accuracy check's run (twice the sub-steps) is held to a
+#: quarter of it.
+RTOL_DEFAULT = 1e-9
+_SUBSTEPS_DEFAULT = 16.0
+#: Step growth after an accepted step is at most this factor, and a rejected step shrinks by
+#: at least ``_SHRINK_MIN``; safety factor of the step-size rule ``h (1 / err)^(1/5)``.
+_GROW_MAX, _SHRINK_MIN, _SAFETY = 5.0, 0.2, 0.9
+#: Energy rates integrated with the state: input, damping, contact, plastic load, hysteretic.
+_N_RATES = 5
+#: Rejected steps allowed per record interval before the run is not converged.
+_MAX_REJECTS = 10_000
+
+
+@jit(inline=True)
+def tolerance(substeps):
+    """Relative tolerance of the embedded error estimate for ``substeps`` (module docstring)."""
+    r = _SUBSTEPS_DEFAULT / max(substeps, 1)
+    return RTOL_DEFAULT * r * r
+
+
+@jit
+def _deriv(y, ag, n, omega, zeta, gamma, psi, gap, beta, cd, zhd, phase, model, hd_, hk, hal,
+           huy, hbw, hlaw, branch, fc, rate, dy, er):  # fmt: skip
+    """Right-hand side at state ``y = (q, v, z)`` and ground acceleration ``ag`` into ``dy``.
+
+    ``er`` receives the energy rates (input, damping, contact, plastic load, hysteretic),
+    ``fc`` the contact forces.
+    """
+    q = y[:n]
+    v = y[n : 2 * n]
+    a = dy[n : 2 * n]
+    contact_forces(q, v, psi, gap, beta, cd, zhd, phase, model, fc, rate)
+    accel(q, v, ag, omega, zeta, gamma, psi, fc, a)
+    pin, pd = powers(v, ag, omega, zeta, gamma)
+    pc = 0.0
+    for c in range(fc.size):
+        if fc[c] != 0.0:
+            pc += fc[c] * rate[c]
+    pp = 0.0
+    peh = 0.0
+    for s in range(hk.size):
+        u = 0.0
+        du = 0.0
+        for j in range(n):
+            u += hd_[s, j] * q[j]
+            du += hd_[s, j] * v[j]
+        z = y[2 * n + s]
+        kp = (1.0 - hal[s]) * hk[s]
+        fs = kp * (u - z)
+        if fs != 0.0:
+            for j in range(n):
+                a[j] += hd_[s, j] * fs
+        zd = z_rate(hlaw[s], branch[s], z, du, huy[s], hbw[s])
+        dy[2 * n + s] = zd
+        pp += fs * du  # the plastic load's power sum_j P_j v_j, storey by storey
+        peh += kp * z * (du - zd)
+    for j in range(n):
+        dy[j] = v[j]
+    er[0] = pin
+    er[1] = pd
+    er[2] = pc
+    er[3] = pp
+    er[4] = peh
+
+
+@jit
+def _dp_step(y, k, ek, fk, hs, ag0, slope, s, n, omega, zeta, gamma, psi, gap, beta, cd, zhd,
+             phase, model, hd_, hk, hal, huy, hbw, hlaw, branch, rate, ys, y1, de,
+             cimp):  # fmt: skip
+    """One Dormand-Prince step of ``hs`` from ``y`` (``k[0]``, ``ek[0]``, ``fk[0]``: its rates).
+
+    Fills the stages ``k[1:]`` (``k[6]`` the rates at the end), the new state ``y1``, the
+    energy increments ``de`` and the contact impulses ``cimp``.
+    """
+    m = y.size
+    for st in range(1, 7):
+        for i in range(m):
+            acc = 0.0
+            for r in range(st):
+                acc += _A[st, r] * k[r, i]
+            ys[i] = y[i] + hs * acc
+        _deriv(ys, ag0 + slope * (s + _C[st] * hs), n, omega, zeta, gamma, psi, gap, beta, cd,
+               zhd, phase, model, hd_, hk, hal, huy, hbw, hlaw, branch, fk[st], rate, k[st],
+               ek[st])  # fmt: skip
+    for i in range(m):
+        y1[i] = ys[i]  # stage 7 is evaluated at the fifth-order solution (first same as last)
+    for r in range(_N_RATES):
+        acc = 0.0
+        for st in range(6):
+            acc += _B[st] * ek[st, r]
+        de[r] = hs * acc
+    for c in range(cimp.size):
+        acc = 0.0
+        for st in range(6):
+            acc += _B[st] * fk[st, c]
+        cimp[c] = hs * acc
+
+
+@jit
+def _error(k, hs, n, phi, psi, phase, hn, xscale, vscale, huy, dscale, rtol, err_q, err_v):
+    """Embedded error of a step relative to the tolerance (<= 1: accepted)."""
+    for j in range(n):
+        eq = 0.0
+        ev = 0.0
+        for st in range(7):
+            eq += _E[st] * k[st, j]
+            ev += _E[st] * k[st, n + j]
+        err_q[j] = hs * eq
+        err_v[j] = hs * ev
+    worst = 0.0
+    for f in range(phi.shape[0]):
+        ex = abs(rowdot(phi, f, err_q)) / (rtol * xscale)
+        evf = abs(rowdot(phi, f, err_v)) / (rtol * vscale)
+        worst = max(worst, ex, evf)
+    for s in range(hn):
+        ez = 0.0
+        for st in range(7):
+            ez += _E[st] * k[st, 2 * n + s]
+        worst = max(worst, abs(hs * ez) / (rtol * huy[s]))
+    for c in range(phase.size):
+        if phase[c] != 0:
+            worst = max(worst, abs(rowdot(psi, c, err_q)) / (rtol * dscale[c]))
+    return worst
+
+
+@jit(inline=True)
+def _storey_rates(y, dy, n, hd_, s):
+    """Drift rate and its rate of yielding storey ``s`` at a state and its rates."""
+    du = 0.0
+    dda = 0.0
+    for j in range(n):
+        du += hd_[s, j] * y[n + j]
+        dda += hd_[s, j] * dy[n + j]
+    return du, dda
+
+
+@jit
+def _first_event(y, y1, k0, k6, hs, n, psi, psi_t, clo, chi, gap, phase, hd_, huy, hlaw,
+                 branch, pw0, pw1):  # fmt: skip
+    """Earliest switch in a step: ``(time, contact, storey, kind)``; ``(inf, -1, -1, 0)``: none.
+
+    Contacts by :func:`~pound_mc.integrators.adaptive._locate_switch`, plus a grazing onset
+    (the penetration rises above 0 and falls back inside the step); storeys by
+    :func:`~pound_mc.integrators.storey_laws.storey_event`.
+    """
+    q = y[:n]
+    v = y[n : 2 * n]
+    q1 = y1[:n]
+    v1 = y1[n : 2 * n]
+    t_ev, c_ev, kind = _locate_switch(q, v, q1, v1, k0[n : 2 * n], k6[n : 2 * n], psi, psi_t,
+                                      clo, chi, gap, phase, hs, pw0, pw1)  # fmt: skip
+    for c in range(gap.size):
+        if phase[c] != 0:
+            continue
+        d0 = pw0[c] - gap[c]
+        d1 = pw1[c] - gap[c]
+        if d0 <= 0.0 and d1 <= 0.0:
+            dd0 = rowdot(psi, c, v)
+            dd1 = rowdot(psi, c, v1)
+            if dd0 > 0.0 and dd1 < 0.0:
+                hm, tm = hermite_max(d0, dd0, d1, dd1, hs)
+                if hm > 0.0:
+                    te = hermite_root(d0, dd0, hm, 0.0, tm)
+                    if te < t_ev:
+                        t_ev, c_ev, kind = te, c, _ONSET
+    s_ev = -1
+    for s in range(huy.size):
+        du0, dda0 = _storey_rates(y, k0, n, hd_, s)
+        du1, dda1 = _storey_rates(y1, k6, n, hd_, s)
+        te = storey_event(hlaw[s], branch[s], y[2 * n + s], y1[2 * n + s], du0, du1, dda0, dda1,
+                          huy[s], hs)  # fmt: skip
+        if te < t_ev:
+            t_ev = te
+            s_ev = s
+            c_ev = -1
+            kind = 0
+    return t_ev, c_ev, s_ev, kind
+
+
+@jit(inline=True)
+def _storey_peaks(dmat, q1, v1, hs, u0, du0, peak_u):
+    """Continuous-time peak |drift| of every storey over a step (cubic Hermite); moves on."""
+    for s in range(u0.size):
+        u1 = rowdot(dmat, s, q1)
+        du1 = rowdot(dmat, s, v1)
+        m = abs(u1)
+        if m > peak_u[s]:
+            peak_u[s] = m
+        if (du0[s] > 0.0) != (du1 > 0.0):
+            hm, _ = hermite_max(u0[s], du0[s], u1, du1, hs)
+            if hm > peak_u[s]:
+                peak_u[s] = hm
+            hm, _ = hermite_max(-u0[s], -du0[s], -u1, -du1, hs)
+            if hm > peak_u[s]:
+                peak_u[s] = hm
+        u0[s] = u1
+        du0[s] = du1
+
+
+@jit(inline=True)
+def _floor_accels(phi, a1, ag1, peak_acc):
+    """Peak absolute floor accelerations at a step's end [m/s^2]."""
+    for f in range(phi.shape[0]):
+        xa = abs(rowdot(phi, f, a1) + ag1)
+        if xa > peak_acc[f]:
+            peak_acc[f] = xa
+
+
+@jit(inline=True)
+def _yielding(store, dmat, n):
+    """The yielding storeys' drift rows and constants, and their laws (``storey_laws``)."""
+    ns = store.shape[0]
+    hn = 0
+    for s in range(ns):
+        if math.isfinite(store[s, S_YIELD]) and math.isfinite(store[s, S_K]):
+            hn += 1
+    hd_ = np.empty((hn, n))
+    hk = np.empty(hn)
+    hal = np.empty(hn)
+    huy = np.empty(hn)
+    hbw = np.empty(hn)
+    hlaw = np.empty(hn, dtype=np.int64)
+    r = 0
+    for s in range(ns):
+        if math.isfinite(store[s, S_YIELD]) and math.isfinite(store[s, S_K]):
+            for j in range(n):
+                hd_[r, j] = dmat[s, j]
+            hk[r] = store[s, S_K]
+            hal[r] = store[s, S_ALPHA]
+            huy[r] = store[s, S_YIELD]
+            hbw[r] = store[s, S_BW]
+            hlaw[r] = LAW_BOUC_WEN if store[s, S_BW] > 0.0 else LAW_BILINEAR
+            r += 1
+    return hd_, hk, hal, huy, hbw, hlaw
+
+
+@jit
+def adaptive_rk(
+    ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi, settings,
+    q, v, out, cout, hx, hd, hf, dmat, store, sout,
+):  # fmt: skip
+    """Run one simulation with error-controlled ``adaptive`` steps (module docstring).
+
+    Arguments as :func:`~pound_mc.integrators.hysteretic.newmark_hysteretic`: ``dmat`` the
+    storeys' drift rows in modal coordinates, ``store`` the storey table, ``sout`` the storeys'
+    peak and final drifts.  Longer than 150 lines because the loop keeps its scalar state
+    (energies, clocks, step size) in locals across accepted, rejected and cut steps.
+    """
+    model = settings.model
+    relation = settings.relation
+    substeps = settings.substeps
+    n = q.size
+    nc = gap.size
+    nf = phi.shape[0]
+    npts = ag.size
+    ns = store.shape[0]
+    cd = 2.0 * xi * np.sqrt(beta * meff)
+    rtol = tolerance(substeps)
+    hd_, hk, hal, huy, hbw, hlaw = _yielding(store, dmat, n)
+    hn = hk.size
+    branch = np.zeros(hn, dtype=np.int64)
+    m = 2 * n + hn
+    y = np.empty(m)
+    for j in range(n):
+        y[j] = q[j]
+        y[n + j] = v[j]
+    for s in range(hn):
+        y[2 * n + s] = rowdot(hd_, s, q)  # at rest or elastic: no plastic drift
+    k = np.zeros((7, m))
+    ek = np.zeros((7, _N_RATES))
+    fk = np.zeros((7, nc))
+    ys = np.empty(m)
+    y1 = np.empty(m)
+    de = np.empty(_N_RATES)
+    cimp = np.zeros(nc)
+    phase = np.zeros(nc, dtype=np.int64)
+    pending = np.zeros(nc, dtype=np.bool_)
+    zhd = np.zeros(nc)
+    ep, vlog, peak_e = outputs.impact_log(nc)
+    logs = [vlog]  # never reassigned in the loop (outputs.log_impact_in)
+    nlog = 0
+    peaks = np.zeros(nf)
+    phi_t = np.ascontiguousarray(phi.T)
+    psi_t = np.ascontiguousarray(psi.T)
+    flo, fhi = row_spans(phi_t)
+    clo, chi = row_spans(psi_t)
+    xf0 = np.empty(nf)
+    xfd0 = np.empty(nf)
+    for f in range(nf):
+        xf0[f] = rowdot(phi, f, q)
+        xfd0[f] = rowdot(phi, f, v)
+    xb = np.empty(nf)
+    xdb = np.empty(nf)
+    pw0 = np.empty(nc)
+    pw1 = np.empty(nc)
+    rate = np.zeros(nc)
+    err_q = np.empty(n)
+    err_v = np.empty(n)
+    u0 = np.empty(ns)
+    du0 = np.empty(ns)
+    for s in range(ns):
+        u0[s] = rowdot(dmat, s, q)
+        du0[s] = rowdot(dmat, s, v)
+    peak_u = np.zeros(ns)
+    peak_acc = np.zeros(nf)
+    dscale = np.full(nc, 1e-12)
+    # scales of the error norm: the static displacement and velocity of the record's peak in
+    # the most flexible mode, raised to the response's own peaks as they come
+    agmax = 0.0
+    for i in range(npts):
+        agmax = max(agmax, abs(ag[i]))
+    wmin = np.inf
+    wmax = 0.0
+    for j in range(n):
+        wmin = min(wmin, omega[j])
+        wmax = max(wmax, omega[j])
+    xscale = max(agmax / (wmin * wmin), 1e-12)
+    vscale = max(agmax / wmin, 1e-12)
+    e_in = 0.0
+    e_d = 0.0
+    w_c = 0.0
+    w_p = 0.0
+    e_h = 0.0
+    e0 = mechanical_energy(q, v, omega)
+    _deriv(y, ag[0], n, omega, zeta, gamma, psi, gap, beta, cd, zhd, phase, model, hd_, hk, hal,
+           huy, hbw, hlaw, branch, fk[0], rate, k[0], ek[0])  # fmt: skip
+    for s in range(hn):
+        du, dda = _storey_rates(y, k[0], n, hd_, s)
+        branch[s] = initial_branch(hlaw[s], du, dda)
+    _deriv(y, ag[0], n, omega, zeta, gamma, psi, gap, beta, cd, zhd, phase, model, hd_, hk, hal,
+           huy, hbw, hlaw, branch, fk[0], rate, k[0], ek[0])  # fmt: skip
+    h_try = min(settings.dt_s, dt_rec, 0.05 * 2.0 * math.pi / wmax)
+    peak_f = 0.0
+    peak_t = 0.0
+    steps = 0
+    status = outputs.STATUS_OK
+    store_h = hx.shape[0] > 0
+    outputs.reset_contacts(cout)
+    for i in range(npts - 1):
+        if store_h:
+            _store_history(i, y[:n], y[n : 2 * n], phi, psi, gap, beta, cd, zhd, phase, model,
+                           hx, hd, hf)  # fmt: skip
+        ag0 = ag[i]
+        slope = (ag[i + 1] - ag[i]) / dt_rec
+        s = 0.0
+        rejects = 0
+        while s < dt_rec * (1.0 - 1e-12):
+            room = dt_rec - s
+            hs = min(h_try, settings.dt_s)
+            if hs >= room or room - hs < 1e-3 * hs:
+                hs = room
+            _dp_step(y, k, ek, fk, hs, ag0, slope, s, n, omega, zeta, gamma, psi, gap, beta, cd,
+                     zhd, phase, model, hd_, hk, hal, huy, hbw, hlaw, branch, rate, ys, y1, de,
+                     cimp)  # fmt: skip
+            err = _error(k, hs, n, phi, psi, phase, hn, xscale, vscale, huy, dscale, rtol, err_q,
+                         err_v)  # fmt: skip
+            if not (err <= 1.0):
+                rejects += 1
+                if rejects > _MAX_REJECTS or not (hs > 1e-300):
+                    status = outputs.STATUS_NOT_CONVERGED
+                    break
+                h_try = hs * (_SHRINK_MIN if not math.isfinite(err) else
+                              max(_SHRINK_MIN, _SAFETY * err ** -0.2))  # fmt: skip
+                continue
+            h_next = hs * (_GROW_MAX if err == 0.0 else min(_GROW_MAX, _SAFETY * err ** -0.2))
+            t_ev, c_ev, s_ev, kind = _first_event(y, y1, k[0], k[6], hs, n, psi, psi_t, clo, chi,
+                                                  gap, phase, hd_, huy, hlaw, branch, pw0,
+                                                  pw1)  # fmt: skip
+            switch = c_ev >= 0 or s_ev >= 0
+            if switch and t_ev < hs:
+                hs = t_ev
+                _dp_step(y, k, ek, fk, hs, ag0, slope, s, n, omega, zeta, gamma, psi, gap, beta,
+                         cd, zhd, phase, model, hd_, hk, hal, huy, hbw, hlaw, branch, rate, ys,
+                         y1, de, cimp)  # fmt: skip
+            steps += 1
+            e_in += de[0]
+            e_d += de[1]
+            w_c += de[2]
+            w_p += de[3]
+            e_h += de[4]
+            t = i * dt_rec + s
+            peak_f, peak_t, nlog = _contact_peaks(
+                y[:n], y[n : 2 * n], y1[:n], y1[n : 2 * n], k[0][n : 2 * n], k[6][n : 2 * n],
+                psi, gap, beta, cd, zhd, phase, model, fk[0], fk[6], cimp, cout, pending, hs, t,
+                peak_f, peak_t, ep, logs, nlog, peak_e,
+            )  # fmt: skip
+            track_floors(phi_t, flo, fhi, xf0, xfd0, y1[:n], y1[n : 2 * n], hs, peaks, xb, xdb)
+            _storey_peaks(dmat, y1[:n], y1[n : 2 * n], hs, u0, du0, peak_u)
+            _floor_accels(phi, k[6][n : 2 * n], ag0 + slope * (s + hs), peak_acc)
+            for f in range(nf):
+                xscale = max(xscale, peaks[f])
+                vscale = max(vscale, abs(xfd0[f]))
+            for c in range(nc):
+                if phase[c] != 0:
+                    dscale[c] = max(dscale[c], rowdot(psi, c, y1[:n]) - gap[c])
+            for j in range(m):
+                y[j] = y1[j]
+            for j in range(m):
+                k[0, j] = k[6, j]
+            for r in range(_N_RATES):
+                ek[0, r] = ek[6, r]
+            for c in range(nc):
+                fk[0, c] = fk[6, c]
+            s += hs
+            if switch and t_ev <= hs:
+                if c_ev >= 0:
+                    if kind == _ONSET:
+                        hc = _open_contact(c_ev, y[n : 2 * n], psi, xi, beta, meff, zhd, phase,
+                                           pending, model, relation, substeps, dt_rec, settings,
+                                           cd, ep)  # fmt: skip
+                        dscale[c_ev] = max(1e-15, abs(ep[c_ev, outputs.EP_V0]) * hc)
+                        h_next = min(h_next, hc)
+                    elif kind == _TO_RESTITUTION:
+                        phase[c_ev] = 2
+                    elif kind == _SEPARATION:
+                        phase[c_ev] = 0
+                    else:
+                        phase[c_ev] = 1
+                else:
+                    branch[s_ev], y[2 * n + s_ev] = storey_switch(
+                        hlaw[s_ev], branch[s_ev], y[2 * n + s_ev], 0.0, huy[s_ev]
+                    )
+                _deriv(y, ag0 + slope * s, n, omega, zeta, gamma, psi, gap, beta, cd, zhd, phase,
+                       model, hd_, hk, hal, huy, hbw, hlaw, branch, fk[0], rate, k[0],
+                       ek[0])  # fmt: skip
+            h_try = h_next
+            ok = True
+            for j in range(m):
+                if not math.isfinite(y[j]):
+                    ok = False
+            if not ok:
+                status = outputs.STATUS_UNSTABLE
+                break
+        if status != outputs.STATUS_OK:
+            break
+    for j in range(n):
+        q[j] = y[j]
+        v[j] = y[n + j]
+    if store_h and status == outputs.STATUS_OK:
+        _store_history(npts - 1, q, v, phi, psi, gap, beta, cd, zhd, phase, model, hx, hd, hf)
+    stored_energy = 0.0
+    for c in range(nc):
+        if phase[c] != 0:
+            stored_energy += stored(model, rowdot(psi, c, q) - gap[c], beta[c])
+    drift = np.empty(ns)
+    for s in range(ns):
+        drift[s] = rowdot(dmat, s, q)
+    outputs.finish(out, cout, peaks, side, phase, q, v, omega, e0, e_in, e_d - w_p, w_c,
+                   stored_energy, peak_f, peak_t, steps, status)  # fmt: skip
+    outputs.finish_impacts(out, cout, logs[0], nlog, peak_e[0])
+    storey_outputs(out, store, peak_u, drift, peak_acc, side, e_h, sout)
