@@ -20,8 +20,9 @@ displacement so far, or the static displacement of the record's peak in the most
 mode), every yielding storey's ``z`` under it times its yield drift, and every closed contact's
 penetration under it times the episode's deepest penetration, so that short contacts and
 near-yield storeys take the steps they need and quiet spells long ones.  Every step ends on
-the record's samples (the ground acceleration has kinks there) and is no longer than
-``dt_s``.  Every switch is located inside the step that holds it, on the cubic Hermite
+the record's samples (the ground acceleration has kinks there); ``dt_s`` is only the first
+step's length, since the error estimate bounds every step.  Every switch is located inside
+the step that holds it, on the cubic Hermite
 interpolant of the quantity and its rate, and the step is taken again up to it: contact onset
 (grazing ones included), approach -> restitution, separation and restitution -> approach, and
 each storey's branch (yield, unloading).  Inside every step the right-hand side is smooth.
@@ -57,7 +58,7 @@ from pound_mc.integrators.laws import contact_forces, stored
 from pound_mc.integrators.storey_laws import (
     LAW_BILINEAR,
     LAW_BOUC_WEN,
-    initial_branch,
+    settled_branch,
     storey_event,
     storey_switch,
     z_rate,
@@ -102,6 +103,9 @@ _SUBSTEPS_DEFAULT = 16.0
 _GROW_MAX, _SHRINK_MIN, _SAFETY = 5.0, 0.2, 0.9
 #: Energy rates integrated with the state: input, damping, contact, plastic load, hysteretic.
 _N_RATES = 5
+#: A drift rate below this share of ``u_y omega_max`` is a located turn's round-off: the
+#: branch there follows the rate's rate (:func:`~pound_mc.integrators.storey_laws.settled_branch`).
+DU_TOL = 1e-9
 #: Rejected steps allowed per record interval before the run is not converged.
 _MAX_REJECTS = 10_000
 
@@ -272,6 +276,41 @@ def _first_event(y, y1, k0, k6, hs, n, psi, psi_t, clo, chi, gap, phase, hd_, hu
     return t_ev, c_ev, s_ev, kind
 
 
+@jit
+def _settle(y, ag, n, omega, zeta, gamma, psi, gap, beta, cd, zhd, phase, model, hd_, hk, hal,
+            huy, hbw, hlaw, branch, fk0, rate, k0, ek0, wmax):  # fmt: skip
+    """Rates at a state where branches and phases may switch, each settled first.
+
+    Storeys on :func:`~pound_mc.integrators.storey_laws.settled_branch`; a contact in approach
+    whose penetration already falls (a grazing onset, located at the top of its penetration)
+    is in restitution, and one in restitution at or below zero penetration that still falls is
+    open.  Evaluates the right-hand side into ``k0`` (and ``ek0``, ``fk0``) with them settled
+    (again where one changed: the rates depend on it).
+    """
+    for c in range(phase.size):
+        if phase[c] == 0:
+            continue
+        dd = rowdot(psi, c, y[n : 2 * n])
+        if phase[c] == 1 and dd < 0.0:
+            phase[c] = 2
+        if phase[c] == 2 and dd <= 0.0 and rowdot(psi, c, y[:n]) - gap[c] <= 0.0:
+            phase[c] = 0
+    for _ in range(3):
+        _deriv(y, ag, n, omega, zeta, gamma, psi, gap, beta, cd, zhd, phase, model, hd_, hk, hal,
+               huy, hbw, hlaw, branch, fk0, rate, k0, ek0)  # fmt: skip
+        changed = False
+        for s in range(huy.size):
+            du, dda = _storey_rates(y, k0, n, hd_, s)
+            # a located turn leaves the drift rate within round-off of 0
+            b = settled_branch(hlaw[s], branch[s], y[2 * n + s], du, dda, huy[s],
+                               DU_TOL * huy[s] * wmax)  # fmt: skip
+            if b != branch[s]:
+                branch[s] = b
+                changed = True
+        if not changed:
+            return
+
+
 @jit(inline=True)
 def _storey_peaks(dmat, q1, v1, hs, u0, du0, peak_u):
     """Continuous-time peak |drift| of every storey over a step (cubic Hermite); moves on."""
@@ -417,13 +456,8 @@ def adaptive_rk(
     w_p = 0.0
     e_h = 0.0
     e0 = mechanical_energy(q, v, omega)
-    _deriv(y, ag[0], n, omega, zeta, gamma, psi, gap, beta, cd, zhd, phase, model, hd_, hk, hal,
-           huy, hbw, hlaw, branch, fk[0], rate, k[0], ek[0])  # fmt: skip
-    for s in range(hn):
-        du, dda = _storey_rates(y, k[0], n, hd_, s)
-        branch[s] = initial_branch(hlaw[s], du, dda)
-    _deriv(y, ag[0], n, omega, zeta, gamma, psi, gap, beta, cd, zhd, phase, model, hd_, hk, hal,
-           huy, hbw, hlaw, branch, fk[0], rate, k[0], ek[0])  # fmt: skip
+    _settle(y, ag[0], n, omega, zeta, gamma, psi, gap, beta, cd, zhd, phase, model, hd_, hk, hal,
+            huy, hbw, hlaw, branch, fk[0], rate, k[0], ek[0], wmax)  # fmt: skip
     h_try = min(settings.dt_s, dt_rec, 0.05 * 2.0 * math.pi / wmax)
     peak_f = 0.0
     peak_t = 0.0
@@ -431,6 +465,10 @@ def adaptive_rk(
     status = outputs.STATUS_OK
     store_h = hx.shape[0] > 0
     outputs.reset_contacts(cout)
+    # steps allowed (accepted, rejected and cut): absurd parameters give up instead of running
+    # for ever, and say so
+    budget = 200 * (npts - 1) + 2_000_000
+    tries = 0
     for i in range(npts - 1):
         if store_h:
             _store_history(i, y[:n], y[n : 2 * n], phi, psi, gap, beta, cd, zhd, phase, model,
@@ -440,8 +478,12 @@ def adaptive_rk(
         s = 0.0
         rejects = 0
         while s < dt_rec * (1.0 - 1e-12):
+            tries += 1
+            if tries > budget:
+                status = outputs.STATUS_NOT_CONVERGED
+                break
             room = dt_rec - s
-            hs = min(h_try, settings.dt_s)
+            hs = h_try
             if hs >= room or room - hs < 1e-3 * hs:
                 hs = room
             _dp_step(y, k, ek, fk, hs, ag0, slope, s, n, omega, zeta, gamma, psi, gap, beta, cd,
@@ -457,7 +499,7 @@ def adaptive_rk(
                 h_try = hs * (_SHRINK_MIN if not math.isfinite(err) else
                               max(_SHRINK_MIN, _SAFETY * err ** -0.2))  # fmt: skip
                 continue
-            h_next = hs * (_GROW_MAX if err == 0.0 else min(_GROW_MAX, _SAFETY * err ** -0.2))
+            h_next = hs * (_GROW_MAX if err == 0.0 else min(_GROW_MAX, _SAFETY * err**-0.2))
             t_ev, c_ev, s_ev, kind = _first_event(y, y1, k[0], k[6], hs, n, psi, psi_t, clo, chi,
                                                   gap, phase, hd_, huy, hlaw, branch, pw0,
                                                   pw1)  # fmt: skip
@@ -515,9 +557,9 @@ def adaptive_rk(
                     branch[s_ev], y[2 * n + s_ev] = storey_switch(
                         hlaw[s_ev], branch[s_ev], y[2 * n + s_ev], 0.0, huy[s_ev]
                     )
-                _deriv(y, ag0 + slope * s, n, omega, zeta, gamma, psi, gap, beta, cd, zhd, phase,
-                       model, hd_, hk, hal, huy, hbw, hlaw, branch, fk[0], rate, k[0],
-                       ek[0])  # fmt: skip
+                _settle(y, ag0 + slope * s, n, omega, zeta, gamma, psi, gap, beta, cd, zhd, phase,
+                        model, hd_, hk, hal, huy, hbw, hlaw, branch, fk[0], rate, k[0],
+                        ek[0], wmax)  # fmt: skip
             h_try = h_next
             ok = True
             for j in range(m):

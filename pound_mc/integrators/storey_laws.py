@@ -26,7 +26,14 @@ import math
 from pound_mc._jit import jit
 from pound_mc.integrators.toolkit import hermite_max, hermite_root
 
-__all__ = ["LAW_BILINEAR", "LAW_BOUC_WEN", "z_rate", "storey_event", "storey_switch"]
+__all__ = [
+    "LAW_BILINEAR",
+    "LAW_BOUC_WEN",
+    "z_rate",
+    "storey_event",
+    "storey_switch",
+    "settled_branch",
+]
 
 LAW_BILINEAR = 0
 LAW_BOUC_WEN = 1
@@ -88,14 +95,22 @@ def storey_switch(law, branch, z, du, uy):
 
 
 @jit(inline=True)
-def initial_branch(law, du, dda):
-    """Branch at the start of a run or after a step that did not switch it.
+def settled_branch(law, branch, z, du, dda, uy, du_tol):
+    """The branch a storey takes at a state where its branch may switch (start, events).
 
-    Bilinear storeys start elastic; a Bouc-Wen storey takes the sign of its drift rate (of its
-    rate's rate where the drift rate is 0, positive at rest).
+    ``du, dda``: drift rate and its rate; where ``|du| <= du_tol`` (at a located turn of the
+    drift, within the root's round-off) the rate's rate decides the direction.  A bilinear
+    storey yields only while its drift moves outwards beyond ``u_y`` (a yield located at the
+    top of a grazing drift, where the drift turns at once, unloads there), and a Bouc-Wen
+    storey's branch is its drift's direction.
     """
+    out = du if abs(du) > du_tol else dda
     if law == LAW_BILINEAR:
+        if branch != 0:
+            return branch if branch * out > 0.0 else 0
+        if abs(z) > uy * (1.0 + YIELD_TOL) and z * out > 0.0:
+            return 1 if z > 0.0 else -1
         return 0
-    if du != 0.0:
-        return 1 if du > 0.0 else -1
-    return -1 if dda < 0.0 else 1
+    if out == 0.0:
+        return branch if branch != 0 else 1
+    return 1 if out > 0.0 else -1
