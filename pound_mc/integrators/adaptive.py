@@ -28,6 +28,12 @@ import numpy as np
 
 from pound_mc._jit import jit
 from pound_mc.integrators import outputs
+from pound_mc.integrators.bounds import (
+    LOCAL_DAMPING_SHARE,
+    LOCAL_PERIOD_SHARE,
+    contact_bound,
+    shortest_period_steps,
+)
 from pound_mc.integrators.laws import (
     contact_forces,
     duration,
@@ -255,19 +261,25 @@ def _shift(q, v, q1, v1, dc0, ddc0, dc1, ddc1, en0, en1):
 
 
 @jit(inline=True)
-def _substep_length(q, v, psi, gap, phase, hc, t, t_onset, room):
+def _substep_length(q, v, psi, gap, phase, hc, t, t_onset, room, model, beta, cd, zhd, loc_k,
+                    loc_c):  # fmt: skip
     """Length of the next contact sub-step; ``room`` is what is left of the record interval.
 
     Sub-steps are graded geometrically away from onset and towards separation, where the force
-    law is not smooth (delta^0.25, delta^0.5 terms).
+    law is not smooth (delta^0.25, delta^0.5 terms), and bounded by every closed contact's
+    local period and damping time (:func:`~pound_mc.integrators.bounds.contact_bound`;
+    ``loc_k``, ``loc_c`` per contact).
     """
     hs = min(hc, max(1.0 * (t - t_onset), hc * 1e-3))
     for c in range(gap.size):
-        if phase[c] == 2:
-            ddc = rowdot(psi, c, v)
-            if ddc < 0.0:
-                dc = rowdot(psi, c, q) - gap[c]
-                hs = min(hs, max(-0.5 * dc / ddc, hc * 0.25))
+        if phase[c] == 0:
+            continue
+        ddc = rowdot(psi, c, v)
+        dc = rowdot(psi, c, q) - gap[c]
+        if phase[c] == 2 and ddc < 0.0:
+            hs = min(hs, max(-0.5 * dc / ddc, hc * 0.25))
+        hs, _ = contact_bound(hs, dc, ddc, model, beta[c], cd[c], zhd[c], phase[c], loc_k[c],
+                              loc_c[c], -1.0, -1.0)  # fmt: skip
     if hs >= room or room - hs < 1e-9 * hc:
         hs = room
     return hs
@@ -462,6 +474,11 @@ def adaptive(
     relation = settings.relation
     substeps = settings.substeps
     n, nc, nf, npts, m_sub, h, cd = run_sizes(ag, dt_rec, phi, gap, meff, beta, xi, settings, q)
+    # contact sub-steps: at most a share of the shortest modal period (the RK4 sub-steps carry
+    # every mode) and of each contact's local period and damping time (bounds)
+    _h_lin, h_rk = shortest_period_steps(omega, settings.dt_s)
+    loc_k = LOCAL_PERIOD_SHARE * np.sqrt(meff) / substeps
+    loc_c = LOCAL_DAMPING_SHARE * meff / substeps
     coef = np.empty((n, 2, 4))
     for j in range(n):
         coef[j] = coefficients(omega[j], zeta[j], h)
@@ -521,7 +538,7 @@ def adaptive(
     peak_f = 0.0
     peak_t = 0.0
     steps = 0
-    hc = h
+    hc = h_rk
     fresh = False
     t_onset = 0.0
     # steps allowed: 200 per linear step of the record, plus room for many contacts
@@ -591,7 +608,7 @@ def adaptive(
                 s += hh
                 if c_on >= 0:
                     hc = _open_contact(c_on, v, psi, xi, beta, meff, zhd, phase, pending, model,
-                                       relation, substeps, h, settings, cd, ep)  # fmt: skip
+                                       relation, substeps, h_rk, settings, cd, ep)  # fmt: skip
                     t_onset = i * dt_rec + s
                     in_contact = True
                 else:
@@ -600,7 +617,8 @@ def adaptive(
                 # ---------------- contact sub-step (RK4) with located switches
                 fresh = False
                 hs = _substep_length(q, v, psi, gap, phase, hc, i * dt_rec + s, t_onset,
-                                     dt_rec - s)  # fmt: skip
+                                     dt_rec - s, model, beta, cd, zhd, loc_k,
+                                     loc_c)  # fmt: skip
                 de_in, de_d, dw_c = rk4(q, v, s, hs, ag0, slope, omega, zeta, gamma, psi, gap,
                                         beta, cd, zhd, phase, model, q1, v1, wk, fc, cimp,
                                         fc0, rate)  # fmt: skip
@@ -644,7 +662,7 @@ def adaptive(
                         if _all_open(phase):
                             # continue with exact steps from here to the next grid point
                             in_contact = False
-                            hc = h
+                            hc = h_rk
                     else:
                         phase[c_ev] = 1
                 k_grid = _grid_index(s, h, m_sub)

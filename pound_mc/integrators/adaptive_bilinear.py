@@ -57,6 +57,12 @@ from pound_mc.integrators.adaptive_pair import (
     _store_pair,
     _track_floor,
 )
+from pound_mc.integrators.bounds import (
+    LOCAL_DAMPING_SHARE,
+    LOCAL_PERIOD_SHARE,
+    contact_bound,
+    shortest_period_steps,
+)
 from pound_mc.integrators.hysteretic import S_ALPHA, S_BW, S_K, S_YIELD, storey_outputs
 from pound_mc.integrators.laws import LAW_CODES, duration, episode_zeta, stored, substep_peaks
 from pound_mc.integrators.toolkit import (
@@ -166,7 +172,10 @@ def adaptive_bilinear(
     sub-steps share the branch state and its events in one loop.
     """
     model, relation, substeps, npts = settings.model, settings.relation, settings.substeps, ag.size
-    m_sub, h = step_size(dt_rec, settings.dt_s)
+    # linear steps and contact sub-steps bounded by the shorter period (bounds), as in the pair
+    h_lin, h_rk = shortest_period_steps(omega, settings.dt_s)
+    m_sub, h = step_size(dt_rec, h_lin)
+    _m_rk, h_rk = step_size(dt_rec, h_rk)
     inv_dt = 1.0 / dt_rec
     ww = omega * omega
     zw2 = 2.0 * zeta * omega
@@ -178,6 +187,8 @@ def adaptive_bilinear(
     al = store[:, S_ALPHA].copy()
     gp, b, me, xi0 = gap[0], beta[0], meff[0], xi[0]
     cd = 2.0 * xi0 * math.sqrt(b * me)
+    loc_k = LOCAL_PERIOD_SHARE * math.sqrt(me) / substeps
+    loc_c = LOCAL_DAMPING_SHARE * me / substeps
     # exact-step coefficients of the regular step per building and branch (0 elastic, 1 yield)
     cf = np.zeros((2, 2, 2, 4))
     for j in range(2):
@@ -209,7 +220,7 @@ def adaptive_bilinear(
     v_ep = math.nan
     maxpen = -_INF
     steps = 0
-    hc = h
+    hc = h_rk
     herm_tol = 4.0 * (max(omega[0], omega[1]) * h) ** 4 / 384.0
     t_onset = 0.0
     budget = 200 * (npts - 1) * m_sub + 1_000_000
@@ -377,6 +388,10 @@ def adaptive_bilinear(
                     if ddc < 0.0:
                         dc = ps[0] * qs[0] + ps[1] * qs[1] - gpe
                         hs = min(hs, max(-tail * dc / ddc, hc * tail_min))
+                if phase != 0:  # the contact's local period and damping time (bounds)
+                    hs, _ = contact_bound(hs, ps[0] * qs[0] + ps[1] * qs[1] - gpe,
+                                          ps[0] * v[0] + ps[1] * v[1], model, b, cd, zhd, phase,
+                                          loc_k, loc_c, -1.0, -1.0)  # fmt: skip
                 if hs >= dt_rec - s or dt_rec - s - hs < 1e-9 * hc:
                     hs = dt_rec - s
                 hh, fc0, fc1, kind, ac0, ac1, de = _contact_substep(
@@ -428,7 +443,7 @@ def adaptive_bilinear(
                 elif kind == 6:  # separation
                     phase = 0
                     in_contact = False
-                    hc = h
+                    hc = h_rk
                 if kind >= 4:
                     kind = 0
                 k_grid = min(int(math.floor(s_end / h + 1e-9)), m_sub - 1)
@@ -455,7 +470,7 @@ def adaptive_bilinear(
                 v0c = ps[0] * v[0] + ps[1] * v[1]
                 v_ep = v0c
                 zhd = episode_zeta(model, relation, xi0, v0c, zhd)
-                hc = min(h, duration(model, v0c, b, me) / substeps)
+                hc = min(h_rk, duration(model, v0c, b, me) / substeps)
                 t_onset = i * dt_rec + s
                 in_contact = True
             elif kind >= 2:
