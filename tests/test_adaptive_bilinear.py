@@ -13,7 +13,6 @@ from dataclasses import replace
 import pytest
 from test_inelastic import _b1_window, _bilinear_b1, _scene, rel
 
-from pound_mc.errors import InputError
 from pound_mc.integrators import OUTPUTS
 from pound_mc.integrators.reference import reference_solution
 from pound_mc.physics.structures import sdof
@@ -102,13 +101,3 @@ def test_yield_never_reached_gives_the_elastic_adaptive_results():
     for name in ("max_impact_velocity", "median_impact_velocity"):
         assert want[name] > 0.0
         assert abs(got[name] - want[name]) <= 1e-12 * want[name], name
-
-
-def test_adaptive_refuses_a_yielding_branch_without_stiffness():
-    scene, rec = _b1_window(n=10)
-    scene = replace(
-        _bilinear_b1(scene),
-        left=sdof(0.5, 1e6, 0.05, hysteresis="bilinear", yield_disp_m=0.02, post_yield_ratio=0.0),
-    )
-    with pytest.raises(InputError, match="left.post_yield_ratio.*newmark"):
-        simulate(scene, record=rec)

@@ -311,16 +311,16 @@ def test_no_contact_pair():
 
 @pytest.mark.parametrize("lean", [False, True])
 def test_jankowski_bound_screen_never_changes_a_sub_step(lean):
-    # the screen of adaptive_pair._contact_bound skips Jankowski's local bounds below a
+    # the screen of bounds.contact_bound skips Jankowski's local bounds below a
     # penetration where they can neither bind nor be tight at the check's finer setting: its
     # sub-step and tightness must be those of the full evaluation, bit for bit, over a wide
     # random set of states and contacts and right at the screen's thresholds; a lean run's
     # screen (share 1: the bounds themselves, whose tightness that run does not use) must
     # keep the sub-step
-    from pound_mc.integrators import adaptive_pair as ap
+    from pound_mc.integrators import bounds as ap
 
     law = ap._JANKOWSKI
-    bound = ap._contact_bound.py_func
+    bound = ap.contact_bound.py_func
     rng = np.random.default_rng(11)
     screened = 0
     n = 4000
@@ -331,9 +331,9 @@ def test_jankowski_bound_screen_never_changes_a_sub_step(lean):
         substeps = int(rng.choice([4, 8, 16, 32]))
         loc_k = ap.LOCAL_PERIOD_SHARE * np.sqrt(me) / substeps
         loc_c = ap.LOCAL_DAMPING_SHARE * me / substeps
-        share = 1.0 if lean else ap._FINE
-        kp4 = ap._period_screen(law, b, loc_k, share)
-        kc4 = ap._damping_screen(law, b, cd, loc_c, share)
+        share = 1.0 if lean else ap.FINE
+        kp4 = ap.period_screen(law, b, loc_k, share)
+        kc4 = ap.damping_screen(law, b, cd, loc_c, share)
         hs = 10.0 ** rng.uniform(-6.0, -1.5)
         phase = int(rng.integers(0, 3))
         dd = rng.uniform(-1.0, 1.0) if k % 3 else 0.0

@@ -184,13 +184,15 @@ def test_bad_cluster_options(study_file, tmp_path, capsys, extra, message):
 
 
 def test_refused_input_reads_as_in_a_local_run(tmp_path, capfd):
-    """A study the kernels refuse at its first simulation (an elastic-perfectly plastic SDOF
-    with ``adaptive``) failed on the workers: the worker's traceback, then a ClusterError
-    naming ``--scheduler``.  Now the refusal comes back as the result, raised as a local run
-    raises it: the same one line naming the file and the key, exit status 2, no retries."""
+    """A study the kernels refused at its first simulation (then an elastic-perfectly plastic
+    SDOF with ``adaptive``, now one with ``central-difference``) failed on the workers: the
+    worker's traceback, then a ClusterError naming ``--scheduler``.  The refusal reads as a
+    local run's: the same one line naming the file and the key, exit status 2, no retries."""
     path = tmp_path / "epp.toml"
-    path.write_text(study_text(left={"hysteresis": "bilinear", "yield_disp_m": 0.01,
-                                     "post_yield_ratio": 0.0}))  # fmt: skip
+    path.write_text(study_text(
+        left={"hysteresis": "bilinear", "yield_disp_m": 0.01, "post_yield_ratio": 0.0},
+        integrator={"method": "central-difference", "dt_s": 1e-3},
+    ))  # fmt: skip
     argv = ["run", str(path), "--no-plot", "--no-progress"]
     errors = []
     for extra in (["--out", str(tmp_path / "local")], ["--out", str(tmp_path / "dask"),
@@ -198,7 +200,7 @@ def test_refused_input_reads_as_in_a_local_run(tmp_path, capfd):
         assert main([*argv, *extra]) == 2
         errors.append(capfd.readouterr().err)
     assert errors[0] == errors[1], errors
-    assert "left.post_yield_ratio" in errors[1] and errors[1].count("\n") == 1
+    assert "integrator.method" in errors[1] and errors[1].count("\n") == 1
     assert not list(tmp_path.glob("*/*.nc")) and not list(tmp_path.glob("*/*/chunk_*"))
 
 

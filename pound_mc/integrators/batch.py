@@ -177,14 +177,25 @@ def _run_fixed(
               q, v, out, cout, hx, hd, hf)  # fmt: skip
 
 
-def _check_inelastic(settings) -> None:
-    """Refuse what the inelastic kernels do not do, naming the key."""
-    if settings.method not in (ADAPTIVE, NEWMARK, NEWMARK_EXPLICIT):
+#: Methods that run yielding buildings (``central-difference`` has no inelastic kernel).
+INELASTIC_METHODS = ("adaptive", "newmark", "newmark-explicit")
+
+
+def check_inelastic_method(method: str, file=None) -> None:
+    """Refuse a method that does not run yielding buildings, naming the key (and ``file``)."""
+    if method not in INELASTIC_METHODS:
         raise InputError(
             "buildings with hysteresis other than 'elastic' run with method = 'adaptive' (the "
             "default), 'newmark' or 'newmark-explicit'",
+            file=file,
             key="integrator.method",
         )
+
+
+def _check_inelastic(settings) -> None:
+    """Refuse what the inelastic kernels do not do, naming the key."""
+    if settings.method not in (ADAPTIVE, NEWMARK, NEWMARK_EXPLICIT):
+        check_inelastic_method("central-difference")
 
 
 def _inelastic_run(storeys, sout, kernel):

@@ -37,6 +37,7 @@ from pound_mc.integrators.accuracy import (
     flag_inaccurate,
     substep_check_due,
 )
+from pound_mc.integrators.batch import check_inelastic_method
 from pound_mc.integrators.outputs import STATUS_OK
 from pound_mc.integrators.threads import numba_threads
 from pound_mc.motions import G, load_record, record_arrays
@@ -212,6 +213,8 @@ class StudyEngine:
         #: Whether a building can yield: each simulation then runs its own scene (inelastic
         #: ``newmark``, or ``adaptive`` for SDOF pairs), and the dataset holds the storeys' outputs.
         self.inelastic = self.scene.inelastic
+        if self.inelastic:  # refused before any simulation, not at the first one
+            check_inelastic_method(self._base["integrator.method"], self.study.path)
         #: Whether each simulation runs its own scene (:meth:`scene_of`, its modes computed
         #: for it): with yielding buildings, and with a shear building whose keys vary.
         self.per_scene = self.inelastic or (
