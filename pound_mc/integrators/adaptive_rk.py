@@ -54,7 +54,7 @@ from pound_mc.integrators.adaptive import (
     _store_history,
 )
 from pound_mc.integrators.hysteretic import S_ALPHA, S_BW, S_K, S_YIELD, storey_outputs
-from pound_mc.integrators.laws import contact_forces, stored
+from pound_mc.integrators.laws import force, stored
 from pound_mc.integrators.storey_laws import (
     LAW_BILINEAR,
     LAW_BOUC_WEN,
@@ -64,11 +64,11 @@ from pound_mc.integrators.storey_laws import (
     z_rate,
 )
 from pound_mc.integrators.toolkit import (
-    accel,
+    borrow,
     hermite_max,
     hermite_root,
+    matvec_spans,
     mechanical_energy,
-    powers,
     row_spans,
     rowdot,
     track_floors,
@@ -118,57 +118,73 @@ def tolerance(substeps):
 
 
 @jit
-def _deriv(y, ag, n, omega, zeta, gamma, psi, gap, beta, cd, zhd, phase, model, hd_, hk, hal,
-           huy, hbw, hlaw, branch, fc, rate, dy, er):  # fmt: skip
-    """Right-hand side at state ``y = (q, v, z)`` and ground acceleration ``ag`` into ``dy``.
+def _deriv(y, ag, n, omega, zeta, gamma, psi, gap, beta, cd, zhd, phase, model, hd_, hlo, hhi,
+           hk, hal, huy, hbw, hlaw, branch, rate, kk, ek, fk, st):  # fmt: skip
+    """Right-hand side at state ``y = (q, v, z)`` and ground acceleration ``ag``: row ``st``.
 
-    ``er`` receives the energy rates (input, damping, contact, plastic load, hysteretic),
-    ``fc`` the contact forces.
+    Writes the rates into ``kk[st]``, the energy rates (input, damping, contact, plastic load,
+    hysteretic) into ``ek[st]`` and the contact forces into ``fk[st]``; indices, not views,
+    so that no array is reference-counted per call.  ``hlo, hhi``: the modes each yielding
+    storey's drift row spans (its building's).
     """
-    q = y[:n]
-    v = y[n : 2 * n]
-    a = dy[n : 2 * n]
-    contact_forces(q, v, psi, gap, beta, cd, zhd, phase, model, fc, rate)
-    accel(q, v, ag, omega, zeta, gamma, psi, fc, a)
-    pin, pd = powers(v, ag, omega, zeta, gamma)
+    pin = 0.0
+    pd = 0.0
+    for j in range(n):
+        vj = y[n + j]
+        kk[st, j] = vj
+        zw = 2.0 * zeta[j] * omega[j]
+        kk[st, n + j] = -zw * vj - omega[j] * omega[j] * y[j] - gamma[j] * ag
+        pin -= ag * gamma[j] * vj
+        pd += zw * vj * vj
     pc = 0.0
-    for c in range(fc.size):
-        if fc[c] != 0.0:
-            pc += fc[c] * rate[c]
+    for c in range(gap.size):
+        if phase[c] == 0:
+            fk[st, c] = 0.0
+            continue
+        d = -gap[c]
+        dd = 0.0
+        for j in range(n):
+            d += psi[c, j] * y[j]
+            dd += psi[c, j] * y[n + j]
+        rate[c] = dd
+        f = force(model, d, dd, beta[c], cd[c], zhd[c], phase[c])
+        fk[st, c] = f
+        if f != 0.0:
+            pc += f * dd
+            for j in range(n):
+                kk[st, n + j] -= f * psi[c, j]
     pp = 0.0
     peh = 0.0
     for s in range(hk.size):
         u = 0.0
         du = 0.0
-        for j in range(n):
-            u += hd_[s, j] * q[j]
-            du += hd_[s, j] * v[j]
+        for j in range(hlo[s], hhi[s]):
+            u += hd_[s, j] * y[j]
+            du += hd_[s, j] * y[n + j]
         z = y[2 * n + s]
         kp = (1.0 - hal[s]) * hk[s]
         fs = kp * (u - z)
         if fs != 0.0:
-            for j in range(n):
-                a[j] += hd_[s, j] * fs
+            for j in range(hlo[s], hhi[s]):
+                kk[st, n + j] += hd_[s, j] * fs
         zd = z_rate(hlaw[s], branch[s], z, du, huy[s], hbw[s])
-        dy[2 * n + s] = zd
+        kk[st, 2 * n + s] = zd
         pp += fs * du  # the plastic load's power sum_j P_j v_j, storey by storey
         peh += kp * z * (du - zd)
-    for j in range(n):
-        dy[j] = v[j]
-    er[0] = pin
-    er[1] = pd
-    er[2] = pc
-    er[3] = pp
-    er[4] = peh
+    ek[st, 0] = pin
+    ek[st, 1] = pd
+    ek[st, 2] = pc
+    ek[st, 3] = pp
+    ek[st, 4] = peh
 
 
 @jit
-def _dp_step(y, k, ek, fk, hs, ag0, slope, s, n, omega, zeta, gamma, psi, gap, beta, cd, zhd,
-             phase, model, hd_, hk, hal, huy, hbw, hlaw, branch, rate, ys, y1, de,
+def _dp_step(y, kk, ek, fk, hs, ag0, slope, s, n, omega, zeta, gamma, psi, gap, beta, cd, zhd,
+             phase, model, hd_, hlo, hhi, hk, hal, huy, hbw, hlaw, branch, rate, ys, y1, de,
              cimp):  # fmt: skip
-    """One Dormand-Prince step of ``hs`` from ``y`` (``k[0]``, ``ek[0]``, ``fk[0]``: its rates).
+    """One Dormand-Prince step of ``hs`` from ``y`` (``kk[0]``, ``ek[0]``, ``fk[0]``: its rates).
 
-    Fills the stages ``k[1:]`` (``k[6]`` the rates at the end), the new state ``y1``, the
+    Fills the stages ``kk[1:]`` (``kk[6]`` the rates at the end), the new state ``y1``, the
     energy increments ``de`` and the contact impulses ``cimp``.
     """
     m = y.size
@@ -176,11 +192,11 @@ def _dp_step(y, k, ek, fk, hs, ag0, slope, s, n, omega, zeta, gamma, psi, gap, b
         for i in range(m):
             acc = 0.0
             for r in range(st):
-                acc += _A[st, r] * k[r, i]
+                acc += _A[st, r] * kk[r, i]
             ys[i] = y[i] + hs * acc
         _deriv(ys, ag0 + slope * (s + _C[st] * hs), n, omega, zeta, gamma, psi, gap, beta, cd,
-               zhd, phase, model, hd_, hk, hal, huy, hbw, hlaw, branch, fk[st], rate, k[st],
-               ek[st])  # fmt: skip
+               zhd, phase, model, hd_, hlo, hhi, hk, hal, huy, hbw, hlaw, branch, rate, kk, ek,
+               fk, st)  # fmt: skip
     for i in range(m):
         y1[i] = ys[i]  # stage 7 is evaluated at the fifth-order solution (first same as last)
     for r in range(_N_RATES):
@@ -196,25 +212,26 @@ def _dp_step(y, k, ek, fk, hs, ag0, slope, s, n, omega, zeta, gamma, psi, gap, b
 
 
 @jit
-def _error(k, hs, n, phi, psi, phase, hn, xscale, vscale, huy, dscale, rtol, err_q, err_v):
+def _error(kk, hs, n, phi_t, flo, fhi, psi, phase, hn, xscale, vscale, huy, dscale, rtol, err_q,
+           err_v, xb, xdb):  # fmt: skip
     """Embedded error of a step relative to the tolerance (<= 1: accepted)."""
     for j in range(n):
         eq = 0.0
         ev = 0.0
         for st in range(7):
-            eq += _E[st] * k[st, j]
-            ev += _E[st] * k[st, n + j]
+            eq += _E[st] * kk[st, j]
+            ev += _E[st] * kk[st, n + j]
         err_q[j] = hs * eq
         err_v[j] = hs * ev
+    matvec_spans(phi_t, err_q, xb, flo, fhi)
+    matvec_spans(phi_t, err_v, xdb, flo, fhi)
     worst = 0.0
-    for f in range(phi.shape[0]):
-        ex = abs(rowdot(phi, f, err_q)) / (rtol * xscale)
-        evf = abs(rowdot(phi, f, err_v)) / (rtol * vscale)
-        worst = max(worst, ex, evf)
+    for f in range(xb.size):
+        worst = max(worst, abs(xb[f]) / (rtol * xscale), abs(xdb[f]) / (rtol * vscale))
     for s in range(hn):
         ez = 0.0
         for st in range(7):
-            ez += _E[st] * k[st, 2 * n + s]
+            ez += _E[st] * kk[st, 2 * n + s]
         worst = max(worst, abs(hs * ez) / (rtol * huy[s]))
     for c in range(phase.size):
         if phase[c] != 0:
@@ -223,31 +240,28 @@ def _error(k, hs, n, phi, psi, phase, hn, xscale, vscale, huy, dscale, rtol, err
 
 
 @jit(inline=True)
-def _storey_rates(y, dy, n, hd_, s):
-    """Drift rate and its rate of yielding storey ``s`` at a state and its rates."""
+def _storey_rates(y, kk, row, n, hd_, hlo, hhi, s):
+    """Drift rate and its rate of yielding storey ``s`` at a state and its rates ``kk[row]``."""
     du = 0.0
     dda = 0.0
-    for j in range(n):
+    for j in range(hlo[s], hhi[s]):
         du += hd_[s, j] * y[n + j]
-        dda += hd_[s, j] * dy[n + j]
+        dda += hd_[s, j] * kk[row, n + j]
     return du, dda
 
 
 @jit
-def _first_event(y, y1, k0, k6, hs, n, psi, psi_t, clo, chi, gap, phase, hd_, huy, hlaw,
-                 branch, pw0, pw1):  # fmt: skip
+def _first_event(y, y1, q, v, q1, v1, a0, a1, kk, hs, n, psi, psi_t, clo, chi, gap, phase, hd_,
+                 hlo, hhi, huy, hlaw, branch, pw0, pw1):  # fmt: skip
     """Earliest switch in a step: ``(time, contact, storey, kind)``; ``(inf, -1, -1, 0)``: none.
 
     Contacts by :func:`~pound_mc.integrators.adaptive._locate_switch`, plus a grazing onset
     (the penetration rises above 0 and falls back inside the step); storeys by
-    :func:`~pound_mc.integrators.storey_laws.storey_event`.
+    :func:`~pound_mc.integrators.storey_laws.storey_event`.  ``q, v, q1, v1, a0, a1``: views
+    of the states ``y``, ``y1`` and of the rates ``kk[0]``, ``kk[6]`` at the step's ends.
     """
-    q = y[:n]
-    v = y[n : 2 * n]
-    q1 = y1[:n]
-    v1 = y1[n : 2 * n]
-    t_ev, c_ev, kind = _locate_switch(q, v, q1, v1, k0[n : 2 * n], k6[n : 2 * n], psi, psi_t,
-                                      clo, chi, gap, phase, hs, pw0, pw1)  # fmt: skip
+    t_ev, c_ev, kind = _locate_switch(q, v, q1, v1, a0, a1, psi, psi_t, clo, chi, gap, phase, hs,
+                                      pw0, pw1)  # fmt: skip
     for c in range(gap.size):
         if phase[c] != 0:
             continue
@@ -264,8 +278,8 @@ def _first_event(y, y1, k0, k6, hs, n, psi, psi_t, clo, chi, gap, phase, hd_, hu
                         t_ev, c_ev, kind = te, c, _ONSET
     s_ev = -1
     for s in range(huy.size):
-        du0, dda0 = _storey_rates(y, k0, n, hd_, s)
-        du1, dda1 = _storey_rates(y1, k6, n, hd_, s)
+        du0, dda0 = _storey_rates(y, kk, 0, n, hd_, hlo, hhi, s)
+        du1, dda1 = _storey_rates(y1, kk, 6, n, hd_, hlo, hhi, s)
         te = storey_event(hlaw[s], branch[s], y[2 * n + s], y1[2 * n + s], du0, du1, dda0, dda1,
                           huy[s], hs)  # fmt: skip
         if te < t_ev:
@@ -277,30 +291,34 @@ def _first_event(y, y1, k0, k6, hs, n, psi, psi_t, clo, chi, gap, phase, hd_, hu
 
 
 @jit
-def _settle(y, ag, n, omega, zeta, gamma, psi, gap, beta, cd, zhd, phase, model, hd_, hk, hal,
-            huy, hbw, hlaw, branch, fk0, rate, k0, ek0, wmax):  # fmt: skip
+def _settle(y, ag, n, omega, zeta, gamma, psi, gap, beta, cd, zhd, phase, model, hd_, hlo, hhi,
+            hk, hal, huy, hbw, hlaw, branch, rate, kk, ek, fk, wmax):  # fmt: skip
     """Rates at a state where branches and phases may switch, each settled first.
 
     Storeys on :func:`~pound_mc.integrators.storey_laws.settled_branch`; a contact in approach
     whose penetration already falls (a grazing onset, located at the top of its penetration)
     is in restitution, and one in restitution at or below zero penetration that still falls is
-    open.  Evaluates the right-hand side into ``k0`` (and ``ek0``, ``fk0``) with them settled
+    open.  Evaluates the right-hand side into row 0 of ``kk``, ``ek``, ``fk`` with them settled
     (again where one changed: the rates depend on it).
     """
     for c in range(phase.size):
         if phase[c] == 0:
             continue
-        dd = rowdot(psi, c, y[n : 2 * n])
+        d = -gap[c]
+        dd = 0.0
+        for j in range(n):
+            d += psi[c, j] * y[j]
+            dd += psi[c, j] * y[n + j]
         if phase[c] == 1 and dd < 0.0:
             phase[c] = 2
-        if phase[c] == 2 and dd <= 0.0 and rowdot(psi, c, y[:n]) - gap[c] <= 0.0:
+        if phase[c] == 2 and dd <= 0.0 and d <= 0.0:
             phase[c] = 0
     for _ in range(3):
-        _deriv(y, ag, n, omega, zeta, gamma, psi, gap, beta, cd, zhd, phase, model, hd_, hk, hal,
-               huy, hbw, hlaw, branch, fk0, rate, k0, ek0)  # fmt: skip
+        _deriv(y, ag, n, omega, zeta, gamma, psi, gap, beta, cd, zhd, phase, model, hd_, hlo, hhi,
+               hk, hal, huy, hbw, hlaw, branch, rate, kk, ek, fk, 0)  # fmt: skip
         changed = False
         for s in range(huy.size):
-            du, dda = _storey_rates(y, k0, n, hd_, s)
+            du, dda = _storey_rates(y, kk, 0, n, hd_, hlo, hhi, s)
             # a located turn leaves the drift rate within round-off of 0
             b = settled_branch(hlaw[s], branch[s], y[2 * n + s], du, dda, huy[s],
                                DU_TOL * huy[s] * wmax)  # fmt: skip
@@ -312,11 +330,17 @@ def _settle(y, ag, n, omega, zeta, gamma, psi, gap, beta, cd, zhd, phase, model,
 
 
 @jit(inline=True)
-def _storey_peaks(dmat, q1, v1, hs, u0, du0, peak_u):
-    """Continuous-time peak |drift| of every storey over a step (cubic Hermite); moves on."""
+def _storey_peaks(dmat, dlo, dhi, q1, v1, hs, u0, du0, peak_u):
+    """Continuous-time peak |drift| of every storey over a step (cubic Hermite); moves on.
+
+    ``dlo, dhi``: the modes each storey's drift row spans.
+    """
     for s in range(u0.size):
-        u1 = rowdot(dmat, s, q1)
-        du1 = rowdot(dmat, s, v1)
+        u1 = 0.0
+        du1 = 0.0
+        for j in range(dlo[s], dhi[s]):
+            u1 += dmat[s, j] * q1[j]
+            du1 += dmat[s, j] * v1[j]
         m = abs(u1)
         if m > peak_u[s]:
             peak_u[s] = m
@@ -332,10 +356,11 @@ def _storey_peaks(dmat, q1, v1, hs, u0, du0, peak_u):
 
 
 @jit(inline=True)
-def _floor_accels(phi, a1, ag1, peak_acc):
-    """Peak absolute floor accelerations at a step's end [m/s^2]."""
-    for f in range(phi.shape[0]):
-        xa = abs(rowdot(phi, f, a1) + ag1)
+def _floor_accels(phi_t, flo, fhi, a1, ag1, peak_acc, xb):
+    """Peak absolute floor accelerations at a step's end [m/s^2] (``xb``: scratch per floor)."""
+    matvec_spans(phi_t, a1, xb, flo, fhi)
+    for f in range(xb.size):
+        xa = abs(xb[f] + ag1)
         if xa > peak_acc[f]:
             peak_acc[f] = xa
 
@@ -378,7 +403,9 @@ def adaptive_rk(
     Arguments as :func:`~pound_mc.integrators.hysteretic.newmark_hysteretic`: ``dmat`` the
     storeys' drift rows in modal coordinates, ``store`` the storey table, ``sout`` the storeys'
     peak and final drifts.  Longer than 150 lines because the loop keeps its scalar state
-    (energies, clocks, step size) in locals across accepted, rejected and cut steps.
+    (energies, clocks, step size) in locals across accepted, rejected and cut steps.  The loop
+    works on views without an owner (:func:`~pound_mc.integrators.toolkit.borrow`, kept alive
+    by ``owned``), as :func:`~pound_mc.integrators.adaptive.adaptive` does.
     """
     model = settings.model
     relation = settings.relation
@@ -391,6 +418,8 @@ def adaptive_rk(
     cd = 2.0 * xi * np.sqrt(beta * meff)
     rtol = tolerance(substeps)
     hd_, hk, hal, huy, hbw, hlaw = _yielding(store, dmat, n)
+    hlo, hhi = row_spans(hd_)
+    dlo, dhi = row_spans(dmat)
     hn = hk.size
     branch = np.zeros(hn, dtype=np.int64)
     m = 2 * n + hn
@@ -400,7 +429,7 @@ def adaptive_rk(
         y[n + j] = v[j]
     for s in range(hn):
         y[2 * n + s] = rowdot(hd_, s, q)  # at rest or elastic: no plastic drift
-    k = np.zeros((7, m))
+    kk = np.zeros((7, m))
     ek = np.zeros((7, _N_RATES))
     fk = np.zeros((7, nc))
     ys = np.empty(m)
@@ -438,6 +467,28 @@ def adaptive_rk(
     peak_u = np.zeros(ns)
     peak_acc = np.zeros(nf)
     dscale = np.full(nc, 1e-12)
+    # views of the state and of the rates at a step's two ends
+    yq, yv, y1q, y1v = y[:n], y[n : 2 * n], y1[:n], y1[n : 2 * n]
+    a0v, a1v = kk[0, n : 2 * n], kk[6, n : 2 * n]
+    owned = (hd_, hk, hal, huy, hbw, hlaw, hlo, hhi, dlo, dhi, branch, y, kk, ek, fk, ys, y1, de,
+             cimp, phase, pending, zhd, ep, peak_e, peaks, phi_t, psi_t, flo, fhi, clo, chi, xf0,
+             xfd0, xb, xdb, pw0, pw1, rate, err_q, err_v, u0, du0, peak_u, peak_acc, dscale,
+             cd)  # fmt: skip
+    hd_, hk, hal, huy, hbw = borrow(hd_), borrow(hk), borrow(hal), borrow(huy), borrow(hbw)
+    hlaw, hlo, hhi, dlo, dhi = borrow(hlaw), borrow(hlo), borrow(hhi), borrow(dlo), borrow(dhi)
+    branch, y, kk, ek, fk = borrow(branch), borrow(y), borrow(kk), borrow(ek), borrow(fk)
+    ys, y1, de, cimp, phase = borrow(ys), borrow(y1), borrow(de), borrow(cimp), borrow(phase)
+    pending, zhd, ep, peak_e = borrow(pending), borrow(zhd), borrow(ep), borrow(peak_e)
+    peaks, phi_t, psi_t, flo = borrow(peaks), borrow(phi_t), borrow(psi_t), borrow(flo)
+    fhi, clo, chi, xf0, xfd0 = borrow(fhi), borrow(clo), borrow(chi), borrow(xf0), borrow(xfd0)
+    xb, xdb, pw0, pw1, rate = borrow(xb), borrow(xdb), borrow(pw0), borrow(pw1), borrow(rate)
+    err_q, err_v, u0, du0 = borrow(err_q), borrow(err_v), borrow(u0), borrow(du0)
+    peak_u, peak_acc, dscale, cd = borrow(peak_u), borrow(peak_acc), borrow(dscale), borrow(cd)
+    yq, yv, y1q, y1v = borrow(yq), borrow(yv), borrow(y1q), borrow(y1v)
+    a0v, a1v = borrow(a0v), borrow(a1v)
+    fk0, fk6 = borrow(fk[0]), borrow(fk[6])
+    ag, omega, zeta, gamma = borrow(ag), borrow(omega), borrow(zeta), borrow(gamma)
+    phi, psi, gap, dmat = borrow(phi), borrow(psi), borrow(gap), borrow(dmat)
     # scales of the error norm: the static displacement and velocity of the record's peak in
     # the most flexible mode, raised to the response's own peaks as they come
     agmax = 0.0
@@ -456,8 +507,8 @@ def adaptive_rk(
     w_p = 0.0
     e_h = 0.0
     e0 = mechanical_energy(q, v, omega)
-    _settle(y, ag[0], n, omega, zeta, gamma, psi, gap, beta, cd, zhd, phase, model, hd_, hk, hal,
-            huy, hbw, hlaw, branch, fk[0], rate, k[0], ek[0], wmax)  # fmt: skip
+    _settle(y, ag[0], n, omega, zeta, gamma, psi, gap, beta, cd, zhd, phase, model, hd_, hlo, hhi,
+            hk, hal, huy, hbw, hlaw, branch, rate, kk, ek, fk, wmax)  # fmt: skip
     h_try = min(settings.dt_s, dt_rec, 0.05 * 2.0 * math.pi / wmax)
     peak_f = 0.0
     peak_t = 0.0
@@ -471,8 +522,7 @@ def adaptive_rk(
     tries = 0
     for i in range(npts - 1):
         if store_h:
-            _store_history(i, y[:n], y[n : 2 * n], phi, psi, gap, beta, cd, zhd, phase, model,
-                           hx, hd, hf)  # fmt: skip
+            _store_history(i, yq, yv, phi, psi, gap, beta, cd, zhd, phase, model, hx, hd, hf)
         ag0 = ag[i]
         slope = (ag[i + 1] - ag[i]) / dt_rec
         s = 0.0
@@ -486,11 +536,11 @@ def adaptive_rk(
             hs = h_try
             if hs >= room or room - hs < 1e-3 * hs:
                 hs = room
-            _dp_step(y, k, ek, fk, hs, ag0, slope, s, n, omega, zeta, gamma, psi, gap, beta, cd,
-                     zhd, phase, model, hd_, hk, hal, huy, hbw, hlaw, branch, rate, ys, y1, de,
-                     cimp)  # fmt: skip
-            err = _error(k, hs, n, phi, psi, phase, hn, xscale, vscale, huy, dscale, rtol, err_q,
-                         err_v)  # fmt: skip
+            _dp_step(y, kk, ek, fk, hs, ag0, slope, s, n, omega, zeta, gamma, psi, gap, beta, cd,
+                     zhd, phase, model, hd_, hlo, hhi, hk, hal, huy, hbw, hlaw, branch, rate, ys,
+                     y1, de, cimp)  # fmt: skip
+            err = _error(kk, hs, n, phi_t, flo, fhi, psi, phase, hn, xscale, vscale, huy, dscale,
+                         rtol, err_q, err_v, xb, xdb)  # fmt: skip
             if not (err <= 1.0):
                 rejects += 1
                 if rejects > _MAX_REJECTS or not (hs > 1e-300):
@@ -499,16 +549,16 @@ def adaptive_rk(
                 h_try = hs * (_SHRINK_MIN if not math.isfinite(err) else
                               max(_SHRINK_MIN, _SAFETY * err ** -0.2))  # fmt: skip
                 continue
-            h_next = hs * (_GROW_MAX if err == 0.0 else min(_GROW_MAX, _SAFETY * err**-0.2))
-            t_ev, c_ev, s_ev, kind = _first_event(y, y1, k[0], k[6], hs, n, psi, psi_t, clo, chi,
-                                                  gap, phase, hd_, huy, hlaw, branch, pw0,
-                                                  pw1)  # fmt: skip
+            h_next = hs * (_GROW_MAX if err == 0.0 else min(_GROW_MAX, _SAFETY * err ** -0.2))
+            t_ev, c_ev, s_ev, kind = _first_event(y, y1, yq, yv, y1q, y1v, a0v, a1v, kk, hs, n,
+                                                  psi, psi_t, clo, chi, gap, phase, hd_, hlo,
+                                                  hhi, huy, hlaw, branch, pw0, pw1)  # fmt: skip
             switch = c_ev >= 0 or s_ev >= 0
             if switch and t_ev < hs:
                 hs = t_ev
-                _dp_step(y, k, ek, fk, hs, ag0, slope, s, n, omega, zeta, gamma, psi, gap, beta,
-                         cd, zhd, phase, model, hd_, hk, hal, huy, hbw, hlaw, branch, rate, ys,
-                         y1, de, cimp)  # fmt: skip
+                _dp_step(y, kk, ek, fk, hs, ag0, slope, s, n, omega, zeta, gamma, psi, gap, beta,
+                         cd, zhd, phase, model, hd_, hlo, hhi, hk, hal, huy, hbw, hlaw, branch,
+                         rate, ys, y1, de, cimp)  # fmt: skip
             steps += 1
             e_in += de[0]
             e_d += de[1]
@@ -517,23 +567,21 @@ def adaptive_rk(
             e_h += de[4]
             t = i * dt_rec + s
             peak_f, peak_t, nlog = _contact_peaks(
-                y[:n], y[n : 2 * n], y1[:n], y1[n : 2 * n], k[0][n : 2 * n], k[6][n : 2 * n],
-                psi, gap, beta, cd, zhd, phase, model, fk[0], fk[6], cimp, cout, pending, hs, t,
-                peak_f, peak_t, ep, logs, nlog, peak_e,
+                yq, yv, y1q, y1v, a0v, a1v, psi, gap, beta, cd, zhd, phase, model, fk0, fk6, cimp,
+                cout, pending, hs, t, peak_f, peak_t, ep, logs, nlog, peak_e,
             )  # fmt: skip
-            track_floors(phi_t, flo, fhi, xf0, xfd0, y1[:n], y1[n : 2 * n], hs, peaks, xb, xdb)
-            _storey_peaks(dmat, y1[:n], y1[n : 2 * n], hs, u0, du0, peak_u)
-            _floor_accels(phi, k[6][n : 2 * n], ag0 + slope * (s + hs), peak_acc)
+            track_floors(phi_t, flo, fhi, xf0, xfd0, y1q, y1v, hs, peaks, xb, xdb)
+            _storey_peaks(dmat, dlo, dhi, y1q, y1v, hs, u0, du0, peak_u)
+            _floor_accels(phi_t, flo, fhi, a1v, ag0 + slope * (s + hs), peak_acc, xb)
             for f in range(nf):
                 xscale = max(xscale, peaks[f])
                 vscale = max(vscale, abs(xfd0[f]))
             for c in range(nc):
                 if phase[c] != 0:
-                    dscale[c] = max(dscale[c], rowdot(psi, c, y1[:n]) - gap[c])
+                    dscale[c] = max(dscale[c], rowdot(psi, c, y1q) - gap[c])
             for j in range(m):
                 y[j] = y1[j]
-            for j in range(m):
-                k[0, j] = k[6, j]
+                kk[0, j] = kk[6, j]
             for r in range(_N_RATES):
                 ek[0, r] = ek[6, r]
             for c in range(nc):
@@ -542,9 +590,9 @@ def adaptive_rk(
             if switch and t_ev <= hs:
                 if c_ev >= 0:
                     if kind == _ONSET:
-                        hc = _open_contact(c_ev, y[n : 2 * n], psi, xi, beta, meff, zhd, phase,
-                                           pending, model, relation, substeps, dt_rec, settings,
-                                           cd, ep)  # fmt: skip
+                        hc = _open_contact(c_ev, yv, psi, xi, beta, meff, zhd, phase, pending,
+                                           model, relation, substeps, dt_rec, settings, cd,
+                                           ep)  # fmt: skip
                         dscale[c_ev] = max(1e-15, abs(ep[c_ev, outputs.EP_V0]) * hc)
                         h_next = min(h_next, hc)
                     elif kind == _TO_RESTITUTION:
@@ -558,14 +606,10 @@ def adaptive_rk(
                         hlaw[s_ev], branch[s_ev], y[2 * n + s_ev], 0.0, huy[s_ev]
                     )
                 _settle(y, ag0 + slope * s, n, omega, zeta, gamma, psi, gap, beta, cd, zhd, phase,
-                        model, hd_, hk, hal, huy, hbw, hlaw, branch, fk[0], rate, k[0],
-                        ek[0], wmax)  # fmt: skip
+                        model, hd_, hlo, hhi, hk, hal, huy, hbw, hlaw, branch, rate, kk, ek, fk,
+                        wmax)  # fmt: skip
             h_try = h_next
-            ok = True
-            for j in range(m):
-                if not math.isfinite(y[j]):
-                    ok = False
-            if not ok:
+            if not _finite(y):
                 status = outputs.STATUS_UNSTABLE
                 break
         if status != outputs.STATUS_OK:
@@ -586,3 +630,19 @@ def adaptive_rk(
                    stored_energy, peak_f, peak_t, steps, status)  # fmt: skip
     outputs.finish_impacts(out, cout, logs[0], nlog, peak_e[0])
     storey_outputs(out, store, peak_u, drift, peak_acc, side, e_h, sout)
+    _alive(owned)
+
+
+@jit
+def _finite(y):
+    """Whether every state variable is finite."""
+    for j in range(y.size):
+        if not math.isfinite(y[j]):
+            return False
+    return True
+
+
+@jit
+def _alive(owned):
+    """A use of ``owned`` (the kernel's scratch arrays) that keeps them alive to here."""
+    return len(owned)
