@@ -549,7 +549,7 @@ def adaptive_rk(
                 h_try = hs * (_SHRINK_MIN if not math.isfinite(err) else
                               max(_SHRINK_MIN, _SAFETY * err ** -0.2))  # fmt: skip
                 continue
-            h_next = hs * (_GROW_MAX if err == 0.0 else min(_GROW_MAX, _SAFETY * err ** -0.2))
+            h_next = hs * (_GROW_MAX if err == 0.0 else min(_GROW_MAX, _SAFETY * err**-0.2))
             t_ev, c_ev, s_ev, kind = _first_event(y, y1, yq, yv, y1q, y1v, a0v, a1v, kk, hs, n,
                                                   psi, psi_t, clo, chi, gap, phase, hd_, hlo,
                                                   hhi, huy, hlaw, branch, pw0, pw1)  # fmt: skip
