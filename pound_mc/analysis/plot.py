@@ -41,6 +41,7 @@ from pound_mc.analysis.style import (
     legend_outside,
     line_style,
     new_axes,
+    note_left_out,
     save,
     scale_of,
     value_text,
@@ -584,6 +585,7 @@ def probability_chart(
     )
     if line is not None:
         ax.get_legend().set_title(axis_label(ds, line), prop={"size": 8})
+    note_left_out(fig, pounding_counted(ds["status"]).values, "unstable or not converged")
     return save(fig, path)
 
 

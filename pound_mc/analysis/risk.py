@@ -30,7 +30,16 @@ from pound_mc.analysis.gaps import RulesDoNotApply, study_gaps
 from pound_mc.errors import InputError
 from pound_mc.study.dataset import pounding_counted
 
-__all__ = ["INTENSITY_DIMS", "GAP_DIM", "counted", "event_mask", "fragility", "required_gap"]
+__all__ = [
+    "INTENSITY_DIMS",
+    "GAP_DIM",
+    "counted",
+    "left_out",
+    "left_out_why",
+    "event_mask",
+    "fragility",
+    "required_gap",
+]
 
 #: Dataset dimensions of the intensity axes (``record.sa_g``, ``record.pga_g``).
 INTENSITY_DIMS = ("sa_g", "pga_g")
@@ -113,6 +122,29 @@ def _counts(ds: xr.Dataset, event: str, over=("record", "sample")):
     return hit.sum(over), ok.sum(over)
 
 
+def left_out(ds: xr.Dataset, event: str = "pounding", over=("record", "sample")) -> xr.DataArray:
+    """Simulations a summary of ``event`` leaves out (not :func:`counted`), summed over ``over``.
+
+    Unstable and not-converged runs always; ``inaccurate`` runs (their peak force in doubt)
+    for a force or ductility event.  No analysis leaves runs out silently: every summary
+    reports this count (``n_left_out``).
+    """
+    return (~counted(ds, event)).sum(over)
+
+
+def left_out_why(event: str = "pounding") -> str:
+    """The statuses of the simulations a summary of ``event`` leaves out, in words."""
+    if str(event).strip() == "pounding":
+        return "unstable or not converged"
+    return "unstable, not converged or inaccurate: their peak force is in doubt"
+
+
+#: ``n_left_out``'s long name.
+_LEFT_OUT = (
+    "simulations left out (unstable or not converged; inaccurate unless the event is pounding)"
+)
+
+
 def fragility(
     ds: xr.Dataset,
     im: str | None = None,
@@ -143,7 +175,8 @@ def fragility(
     xarray.Dataset
         Along the remaining grid axes: ``theta`` (median, units of the IM), ``beta`` [-],
         ``theta_ci`` and ``beta_ci`` (with a ``bound`` dimension: lower, upper), the stripes
-        ``n_event`` and ``n_total`` (with the IM dimension) and ``fit_message`` (why a
+        ``n_event``, ``n_total`` and ``n_left_out`` (the runs not counted, :func:`left_out`;
+        with the IM dimension) and ``fit_message`` (why a
         combination has no fit, "" where it has one), ``n_boot_discarded`` (bootstrap resamples
         without a fit, left out) and ``bootstrap_note`` (why, "" where none was; the intervals
         are NaN when more than half were); attributes ``im``, ``event``, ``ci``.
@@ -153,6 +186,7 @@ def fragility(
     rest = [d for d in n_event.dims if d != dim]
     n_event = n_event.transpose(*rest, dim)
     n_total = n_total.transpose(*rest, dim)
+    n_out = left_out(ds, event).transpose(*rest, dim)
     shape = tuple(ds.sizes[d] for d in rest)
     theta = np.full(shape, np.nan)
     beta = np.full(shape, np.nan)
@@ -187,6 +221,8 @@ def fragility(
                         {"units": "1", "long_name": f"simulations with {event}"}),
             "n_total": (n_total.dims, n_total.values.astype(np.int64),
                         {"units": "1", "long_name": _COUNTED}),
+            "n_left_out": (n_out.dims, n_out.values.astype(np.int64),
+                           {"units": "1", "long_name": _LEFT_OUT}),
             "fit_message": (rest, message, {"long_name": "why there is no fit"}),
             "n_boot_discarded": (rest, discarded, {"units": "1", "long_name":
                                  "bootstrap resamples without a fit, left out"}),
@@ -232,7 +268,8 @@ def required_gap(
     xarray.Dataset
         Along the grid axes other than the gap: ``required_gap`` [m], ``required_gap_ci``
         (``bound``: lower, upper) [m], ``message`` (why there is none, else ""), the
-        ``pounding_probability`` and ``n_total`` per gap, and with ``rules`` ``gap_abs``,
+        ``pounding_probability``, ``n_total`` and ``n_left_out`` (:func:`left_out`) per gap,
+        and with ``rules`` ``gap_abs``,
         ``gap_srss``, ``gap_ddc`` [m]; attributes ``target`` and ``ci`` (and ``rules``, why
         the rules' gaps are left out, for a study of shear buildings or a wall).
     """
@@ -245,6 +282,7 @@ def required_gap(
     rest = [d for d in n_event.dims if d != GAP_DIM]
     n_event = n_event.transpose(*rest, GAP_DIM)
     n_total = n_total.transpose(*rest, GAP_DIM)
+    n_out = left_out(ds, "pounding").transpose(*rest, GAP_DIM)
     p = n_event / n_total.where(n_total > 0)
     shape = tuple(ds.sizes[d] for d in rest)
     gap = np.full(shape, np.nan)
@@ -270,6 +308,8 @@ def required_gap(
                                      "fraction of the simulations with an impact"}),
             "n_total": (n_total.dims, n_total.values.astype(np.int64),
                         {"units": "1", "long_name": _COUNTED}),
+            "n_left_out": (n_out.dims, n_out.values.astype(np.int64),
+                           {"units": "1", "long_name": _LEFT_OUT}),
         },
         coords={**{d: ds[d] for d in (*rest, GAP_DIM)}, "bound": ["lower", "upper"]},
         attrs={"target": float(probability), "ci": float(ci)},

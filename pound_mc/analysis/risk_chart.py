@@ -32,12 +32,14 @@ from pound_mc.analysis.plot import (
     rule_gaps,
     save,
 )
-from pound_mc.analysis.risk import GAP_DIM, _counts, _intensity_dim, required_gap
+from pound_mc.analysis.risk import GAP_DIM, _counts, _intensity_dim, left_out_why, required_gap
+from pound_mc.analysis.risk import counted as counted_mask
 from pound_mc.analysis.style import (
     _name_and_units,
     axis_label,
     chart_doc,
     new_axes,
+    note_left_out,
     value_text,
 )
 from pound_mc.errors import InputError
@@ -166,6 +168,7 @@ def fragility_panels(
             f"samples, lognormal fit by maximum likelihood{boot}",
             fontsize=9,
         )
+    note_left_out(fig, counted_mask(ds, event), left_out_why(event))
     return save(fig, path)
 
 

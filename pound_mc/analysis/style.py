@@ -44,6 +44,7 @@ __all__ = [
     "output_path",
     "no_values",
     "require_simulations",
+    "note_left_out",
 ]
 
 #: Okabe & Ito (2008) colour-blind-safe colours (yellow left out: too pale on white).
@@ -313,6 +314,19 @@ def require_simulations(ds: xr.Dataset, file: str | None = None) -> None:
     empty = [d for d, n in ds["peak_force"].sizes.items() if n == 0]
     if empty:
         raise InputError(f"has no simulations: its dimension {empty[0]!r} is empty", file=file)
+
+
+def note_left_out(fig: Figure, counted, why: str) -> None:
+    """Say at the figure's foot how many simulations a chart leaves out, where any are.
+
+    ``counted``: the mask of the simulations the chart counts; ``why``: which statuses those
+    left out have.  No analysis leaves runs out silently.
+    """
+    mask = np.asarray(counted, dtype=bool)
+    n_out = int(mask.size - mask.sum())
+    if n_out:
+        fig.text(0.005, 0.005, f"{n_out:,} of {mask.size:,} simulations left out ({why})",
+                 fontsize=7, color="dimgray", ha="left", va="bottom")  # fmt: skip
 
 
 def save(fig: Figure, path: str | Path | None) -> Figure:

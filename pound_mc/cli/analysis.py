@@ -16,7 +16,7 @@ import xarray as xr
 
 from pound_mc.analysis import plot, plot_numerics, profiles, risk_chart
 from pound_mc.analysis.report import write_report
-from pound_mc.analysis.risk import counted, fragility
+from pound_mc.analysis.risk import counted, fragility, left_out_why
 from pound_mc.analysis.selection import MATERIAL_DIM, dim_name, selection
 from pound_mc.analysis.style import output_path, require_simulations
 from pound_mc.errors import InputError, OutputError
@@ -364,12 +364,19 @@ def fragility_command(args) -> int:
         "intensities": np.asarray(fit[fit.attrs["im"]].values).tolist(),
         "n_event": fit["n_event"].transpose(*rest, fit.attrs["im"]).values.tolist(),
         "n_total": fit["n_total"].transpose(*rest, fit.attrs["im"]).values.tolist(),
+        # per combination and intensity: the runs the fit leaves out (not counted)
+        "n_left_out": fit["n_left_out"].transpose(*rest, fit.attrs["im"]).values.tolist(),
     }
     if args.json:
         print(json.dumps(out, indent=1))
         return 0
     print(f"fragility of {out['event']} against {out['im']} ({path.name}); "
           f"{round(100 * fit.attrs['ci'])} % bootstrap intervals")  # fmt: skip
+    n_used = int(fit["n_total"].sum())
+    n_out = int(fit["n_left_out"].sum())
+    why = left_out_why(out["event"])
+    print(f"  {n_used:,} simulations counted, "
+          + (f"{n_out:,} left out ({why})" if n_out else "none left out"))  # fmt: skip
     flat_theta = np.atleast_1d(fit["theta"].values).ravel()
     flat_beta = np.atleast_1d(fit["beta"].values).ravel()
     tci = fit["theta_ci"].values.reshape(-1, 2)

@@ -12,6 +12,7 @@ import tomllib
 from importlib import resources
 from pathlib import Path
 
+import numpy as np
 import xarray as xr
 
 from pound_mc.analysis.inelastic_chart import inelastic_chart, yielding_sides
@@ -116,12 +117,26 @@ def run_command(args) -> int:
 
 
 def status_warnings(path: Path) -> list[str]:
-    """Lines for the simulations of a dataset that did not end ``ok``, with what that means."""
+    """Lines for the simulations of a dataset that did not end ``ok``, with what that means.
+
+    Also how many the accuracy check's refinements ran again (``refinements``) and how many
+    of those it still flags.
+    """
     with xr.open_dataset(path) as ds:
         status = ds["status"].values.ravel()
+        refined = ds["refinements"].values.ravel() if "refinements" in ds else None
     n = status.size
     count = {name: int((status == code).sum()) for code, name in STATUS_FLAGS.items()}
     lines = []
+    if refined is not None and np.any(refined > 0):
+        n_refined = int((refined > 0).sum())
+        inaccurate = next(code for code, name in STATUS_FLAGS.items() if name == "inaccurate")
+        still = int(((refined > 0) & (status == inaccurate)).sum())
+        lines.append(
+            f"note: {n_refined:,} of {n:,} simulations flagged by the accuracy check were run "
+            f"again finer (dt_s halved, substeps doubled, up to {int(refined.max())} times); "
+            f"{still:,} of them remain flagged"
+        )
     if count["inaccurate"]:
         lines.append(
             f"warning: {count['inaccurate']:,} of {n:,} simulations flagged inaccurate (their "

@@ -766,7 +766,7 @@ def simulate(
             raise InputError(problem, key=key)
     m = scene.method if method is None else method
     dt_s = scene.dt_s if dt_s is None else float(dt_s)
-    substeps = scene.substeps if substeps is None else substeps
+    substeps = scene.substeps if substeps is None else int(substeps)  # numpy integers too
     if record is None:
         record = scene.record_arrays()
     dt_rec, acc = record

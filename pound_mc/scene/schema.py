@@ -15,6 +15,7 @@ number of gaps) are checked by :func:`pound_mc.scene.model.scene_from_dict`.
 from __future__ import annotations
 
 import math
+import numbers
 import re
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -135,7 +136,7 @@ class Field:
                 return f"must be {_bounds_phrase(self)}, got {value!r}"
             return None
         if kind == "integer":
-            if not (isinstance(value, int) and not isinstance(value, bool)):
+            if not (isinstance(value, numbers.Integral) and not isinstance(value, bool)):
                 return f"must be an integer, got {value!r}"
             if not self._within(value):
                 return f"must be an integer {_bounds_phrase(self)}, got {value!r}"

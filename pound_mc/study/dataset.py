@@ -33,6 +33,7 @@ from pound_mc.study.definition import grid_dim_name
 
 __all__ = [
     "RESULT_VARIABLES",
+    "RUN_VARIABLES",
     "CONTACT_VARIABLES",
     "CONTACT_COORDINATES",
     "INELASTIC_VARIABLES",
@@ -70,6 +71,17 @@ RESULT_VARIABLES = {
         "f8",
     ),
 }
+#: Per-simulation settings a run ended with: the accuracy check's flagged runs are refined
+#: (``integrator.dt_s`` halved and ``integrator.substeps`` doubled, at most
+#: :data:`~pound_mc.study.engine.MAX_REFINEMENTS` times): name -> (units, long_name, dtype).
+RUN_VARIABLES = {
+    "run_dt_s": ("s", "integrator step (fixed-step methods) or step bound (adaptive) the run "
+                 "ended with", "f8"),
+    "run_substeps": ("1", "contact sub-steps per contact duration (adaptive) the run ended "
+                     "with", "i4"),
+    "refinements": ("1", "times the run was refined (dt_s halved, substeps doubled) because "
+                    "the accuracy check flagged it", "i1"),
+}  # fmt: skip
 #: Per-simulation, per-contact outputs of studies with a shear building (an extra trailing
 #: ``contact`` dimension): name -> (units, long_name, dtype).  Each is ``contact_`` and the
 #: per-simulation quantity of :data:`RESULT_VARIABLES` it takes its units and dtype from.
@@ -230,6 +242,10 @@ def build_dataset(
                 "units": "1",
             }
         data_vars[name] = (dims, np.asarray(results[name]).astype(dtype, copy=False), attrs)
+    for name in (n for n in RUN_VARIABLES if n in results):
+        units, long_name, dtype = RUN_VARIABLES[name]
+        values = np.asarray(results[name]).astype(dtype, copy=False)
+        data_vars[name] = (dims, values, {"units": units, "long_name": long_name})
     for name in (n for n in INELASTIC_VARIABLES if n in results):
         units, long_name, dtype = INELASTIC_VARIABLES[name]
         values = np.asarray(results[name]).astype(dtype, copy=False)

@@ -22,6 +22,7 @@ disagree.
 from __future__ import annotations
 
 import time
+from dataclasses import replace
 
 import netCDF4
 import numba
@@ -34,6 +35,7 @@ from pound_mc._version import __version__
 from pound_mc.errors import InputError, InputErrors, named_by
 from pound_mc.integrators.accuracy import (
     ADAPTIVE_SUBSTEPS_FACTOR,
+    STATUS_INACCURATE,
     flag_inaccurate,
     substep_check_due,
 )
@@ -51,6 +53,7 @@ from pound_mc.study.dataset import (
     CONTACT_VARIABLES,
     INELASTIC_VARIABLES,
     RESULT_VARIABLES,
+    RUN_VARIABLES,
     STOREY_VARIABLES,
 )
 from pound_mc.study.definition import INTENSITY_KEYS, MATERIAL_KEY, grid_dim_name, scene_model
@@ -76,6 +79,11 @@ _KERNEL_KEYS = (
     "contact.beta",
     "integrator.dt_s",
 )
+#: Most refinements of a run the accuracy check flags (each halves ``dt_s`` and doubles
+#: ``substeps``; :meth:`StudyEngine.run_indices`).
+MAX_REFINEMENTS = 3
+#: Largest ``integrator.substeps`` a refinement may reach (the key's bound).
+MAX_SUBSTEPS = 1024
 # Dataset variables of STOREY_VARIABLES: their key in a result's ``storeys``.
 _STOREY_KEYS = {
     "storey_peak_drift": "peak_drift_ratio",
@@ -481,6 +489,7 @@ class StudyEngine:
         building (:attr:`mdof`) :data:`~pound_mc.study.dataset.CONTACT_VARIABLES` (one per contact).
         """
         out = {name: ((), dtype) for name, (_, _, dtype) in RESULT_VARIABLES.items()}
+        out.update({name: ((), dtype) for name, (_, _, dtype) in RUN_VARIABLES.items()})
         if self.mdof:
             nc = self.n_contacts
             out.update({name: ((nc,), dtype) for name, (_, _, dtype) in CONTACT_VARIABLES.items()})
@@ -501,12 +510,19 @@ class StudyEngine:
         """Scene keys the study varies (grid axes and sampled keys)."""
         return [*self.study.grid, *(v.key for v in self.study.variables)]
 
-    def _run_scenes(self, indices: np.ndarray, out: dict) -> dict:
-        """Run simulations ``indices`` one by one, each its own :meth:`scene_of`."""
+    def _run_scenes(self, indices: np.ndarray, out: dict, level: int = 0) -> dict:
+        """Run simulations ``indices`` one by one, each its own :meth:`scene_of`.
+
+        ``level``: the refinement (:meth:`run_indices`), ``dt_s / 2^level`` and ``substeps``
+        times ``2^level``.
+        """
         names = (*RESULT_VARIABLES, *(INELASTIC_VARIABLES if self.inelastic else ()))
         try:
             for k, index in enumerate(indices):
                 scene, record = self.scene_of(int(index)), self.record_of(int(index))
+                if level:
+                    scene = replace(scene, dt_s=scene.dt_s * 0.5**level,
+                                    substeps=scene.substeps * 2**level)  # fmt: skip
                 res = simulate(scene, record=record)
                 for name in names:
                     out[name][k] = res.outputs[name]
@@ -522,19 +538,46 @@ class StudyEngine:
         return out
 
     def run_indices(self, indices: np.ndarray) -> dict[str, np.ndarray]:
-        """Run the simulations with flat ``indices``; the outputs of :meth:`result_layout`."""
+        """Run the simulations with flat ``indices``; the outputs of :meth:`result_layout`.
+
+        With the accuracy check on, the runs it flags ``inaccurate`` are run again with
+        ``dt_s`` halved and ``substeps`` doubled, at most :data:`MAX_REFINEMENTS` times (or
+        until ``substeps`` would pass its bound); each keeps the outputs of its last run and
+        ``run_dt_s``, ``run_substeps``, ``refinements`` say which settings gave them.
+        """
+        indices = np.asarray(indices, dtype=np.int64)
+        out = self._run_level(indices, 0)
+        out["refinements"] = np.zeros(indices.size, dtype=np.int8)
+        base_sub = int(self._base["integrator.substeps"])
+        if self._base["integrator.accuracy_check"]:
+            for level in range(1, MAX_REFINEMENTS + 1):
+                flagged = np.flatnonzero(out["status"] == STATUS_INACCURATE)
+                if flagged.size == 0 or base_sub * 2**level > MAX_SUBSTEPS:
+                    break
+                again = self._run_level(indices[flagged], level)
+                for name, values in again.items():
+                    out[name][flagged] = values
+                out["refinements"][flagged] = level
+        dt_s = self.parameters(indices)["integrator.dt_s"]
+        out["run_dt_s"] = dt_s * 0.5 ** out["refinements"].astype(float)
+        out["run_substeps"] = base_sub * 2 ** out["refinements"].astype(np.int32)
+        return out
+
+    def _run_level(self, indices: np.ndarray, level: int) -> dict[str, np.ndarray]:
+        """Run ``indices`` at refinement ``level`` (``dt_s / 2^level``, ``substeps 2^level``)."""
         p = self.parameters(indices)
         n = p["record"].size
         out = {
             name: np.empty((n, *tail), dtype=dtype)
             for name, (tail, dtype) in self.result_layout().items()
+            if name not in RUN_VARIABLES
         }
         if self.per_scene:
-            return self._run_scenes(indices, out)
+            return self._run_scenes(indices, out, level)
         settings = {
             "method": self._base["integrator.method"],
             "contact_model": self._base["contact.model"],
-            "substeps": self._base["integrator.substeps"],
+            "substeps": self._base["integrator.substeps"] * 2**level,
             "accuracy_check": self._base["integrator.accuracy_check"],
             "relation": self._base["contact.relation"] or None,
         }
@@ -553,7 +596,7 @@ class StudyEngine:
                 "gap_m": p["contact.gap_m"][sel],
                 "beta": p["contact.beta"][sel],
                 "xi": p["contact.xi"][sel],
-                "dt_s": p["integrator.dt_s"][sel],
+                "dt_s": p["integrator.dt_s"][sel] * 0.5**level,
                 **settings,
             }
             if self.mdof:
