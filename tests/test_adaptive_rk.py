@@ -180,7 +180,7 @@ _NEVER_YIELDS = {"hysteresis": "bilinear", "yield_disp_m": 1000.0, "post_yield_r
     ids=["shear-1000kg-storeys", "never-yielding-extreme-pair", "extreme-wall"],
 )  # fmt: skip
 def test_every_kernel_bounds_its_steps(case):
-    """These were reported ok while off by 2.4x (1,000 kg storeys), 268x (the never-yielding
+    """These were reported ok while off by 2x (1,000 kg storeys), 268x (the never-yielding
     pair) and 40 % (the wall); every kernel now bounds its steps by the shortest period it
     carries and the contact's own time scale: within 1 % of the reference at the defaults."""
     scene = replace(case(), tail_s=0.0)

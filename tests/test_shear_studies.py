@@ -259,9 +259,12 @@ def test_flagged_runs_report_their_rebound_as_simulate_does(tmp_path):
     study = study_from_text(text, file=tmp_path / "flagged.toml")
     ds = xr.load_dataset(run_study(study, tmp_path, progress=False).path)
     status = ds["status"].values.ravel()
-    assert (status == 3).all()  # dt 0.01 s steps over these contacts: every run flagged
+    # dt 0.01 s steps over these contacts: every run was flagged, and refined; each holds the
+    # numbers of its last run, flagged or not
+    assert (ds["refinements"] > 0).all()
     engine = StudyEngine(study)
+    steps = ds["run_dt_s"].values.ravel()
     for i, value in enumerate(ds["peak_force_restitution"].values.ravel()):
-        res = simulate(engine.scene_of(i), record=engine.record_of(i))
+        res = simulate(engine.scene_of(i), record=engine.record_of(i), dt_s=steps[i])
         assert value == pytest.approx(res.outputs["peak_force_restitution"], rel=1e-12)
         assert np.isfinite(value)

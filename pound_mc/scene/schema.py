@@ -383,14 +383,15 @@ _HYSTERESIS = Field(
     "hysteresis", "string", "Storey law: `elastic`, `bilinear` (kinematic hardening: storey "
     "force alpha k u + (1 - alpha) k z, z elastic-perfectly-plastic with |z| <= yield drift) "
     "or `bouc-wen` (same force, z smooth: z' = u' (1 - |z/u_y|^n (0.5 sign(u' z) + 0.5)), no "
-    "degradation or pinching; runs with `newmark` or `newmark-explicit`); damping from the "
-    "initial elastic modes.",
+    "degradation or pinching); damping from the initial elastic modes.  Every method but "
+    "`central-difference` runs yielding buildings; `adaptive` with error-controlled steps and "
+    "located yield and unload events.",
     default="elastic", choices=HYSTERESIS,
 )  # fmt: skip
 _POST_YIELD = Field(
     "post_yield_ratio", "number", "Post-yield over elastic storey stiffness alpha (bilinear; "
-    "default 0, elastic-perfectly-plastic; `adaptive` needs it above damping_ratio^2, "
-    "`newmark` takes 0).", minimum=0.0, maximum=1.0, exclusive_maximum=True,
+    "default 0, elastic-perfectly-plastic; every method takes any value from 0).",
+    minimum=0.0, maximum=1.0, exclusive_maximum=True,
     varied=True,
 )  # fmt: skip
 _BW_EXPONENT = Field(
@@ -529,17 +530,21 @@ INTEGRATOR = Table(
         Field("method", "string", "Integration method.", default="adaptive",
               choices=tuple(METHODS)),
         Field("dt_s", "number", "Step of the fixed-step methods, or the bound on steps between "
-              "contacts (adaptive).", unit="s", default=0.001, minimum=0.0,
+              "contacts (adaptive with elastic buildings; with yielding ones the first step, "
+              "the error estimate bounds the others).", unit="s", default=0.001, minimum=0.0,
               exclusive_minimum=True, maximum=1.0, varied=True),
         Field("substeps", "integer", "Sub-steps per contact-duration estimate while in contact "
-              "(adaptive).", default=16, minimum=4, maximum=1024),
+              "(adaptive; with yielding buildings the error tolerance, 1e-9 (16 / substeps)^2 "
+              "relative to the response).", default=16, minimum=4, maximum=1024),
         Field("tail_s", "number", "Free vibration after the record (zero ground acceleration) "
               "of runs with yielding buildings, for their residual drift.", unit="s",
               default=5.0, minimum=0.0, maximum=600.0),
         Field("accuracy_check", "boolean", "Run every study simulation with a contact a second "
               "time, finer (fixed-step methods at dt_s / 2, adaptive with twice the sub-steps), "
-              "and flag it inaccurate where the peak force changes by more than 0.5 %; false "
-              "saves that second run (1.3-3 times the cost) and leaves sensitive runs unflagged.",
+              "and flag it inaccurate where the peak force changes by more than 0.5 %; a study "
+              "then runs each flagged simulation again with dt_s halved and substeps doubled, "
+              "up to 3 times (dataset: run_dt_s, run_substeps, refinements).  False saves that "
+              "second run (1.3-3 times the cost) and leaves sensitive runs unflagged.",
               default=True),
     ),
 )  # fmt: skip
