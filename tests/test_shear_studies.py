@@ -258,7 +258,6 @@ def test_flagged_runs_report_their_rebound_as_simulate_does(tmp_path):
     )
     study = study_from_text(text, file=tmp_path / "flagged.toml")
     ds = xr.load_dataset(run_study(study, tmp_path, progress=False).path)
-    status = ds["status"].values.ravel()
     # dt 0.01 s steps over these contacts: every run was flagged, and refined; each holds the
     # numbers of its last run, flagged or not
     assert (ds["refinements"] > 0).all()
