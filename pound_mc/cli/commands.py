@@ -314,9 +314,9 @@ def _study(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--structures",
         nargs="+",
-        choices=("sdof", "shear"),
-        default=["sdof", "shear"],
-        help="building pairs (default both)",
+        choices=("sdof", "shear", "yielding"),
+        default=["sdof", "shear", "yielding"],
+        help="building pairs (default all three; yielding: bilinear shear buildings)",
     )
 
     p = _command(

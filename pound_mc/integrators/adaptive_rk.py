@@ -103,8 +103,10 @@ _SUBSTEPS_DEFAULT = 16.0
 _GROW_MAX, _SHRINK_MIN, _SAFETY = 5.0, 0.2, 0.9
 #: Energy rates integrated with the state: input, damping, contact, plastic load, hysteretic.
 _N_RATES = 5
-#: A drift rate below this share of ``u_y omega_max`` is a located turn's round-off: the
-#: branch there follows the rate's rate (:func:`~pound_mc.integrators.storey_laws.settled_branch`).
+#: A drift rate below this share of ``u_y omega_max`` (a penetration rate below it of the
+#: response's velocity scale) is a located turn's round-off: the branch (the phase) there
+#: follows the rate's rate (:func:`~pound_mc.integrators.storey_laws.settled_branch`,
+#: :func:`_settle`).
 DU_TOL = 1e-9
 #: Rejected steps allowed per record interval before the run is not converged.
 _MAX_REJECTS = 10_000
@@ -292,41 +294,60 @@ def _first_event(y, y1, q, v, q1, v1, a0, a1, kk, hs, n, psi, psi_t, clo, chi, g
 
 @jit
 def _settle(y, ag, n, omega, zeta, gamma, psi, gap, beta, cd, zhd, phase, model, hd_, hlo, hhi,
-            hk, hal, huy, hbw, hlaw, branch, rate, kk, ek, fk, wmax):  # fmt: skip
-    """Rates at a state where branches and phases may switch, each settled first.
+            hk, hal, huy, hbw, hlaw, branch, rate, kk, ek, fk, wmax, vscale, fresh):  # fmt: skip
+    """Settle every contact phase and storey branch at a step's end; the rates in row 0.
 
-    Storeys on :func:`~pound_mc.integrators.storey_laws.settled_branch`; a contact in approach
-    whose penetration already falls (a grazing onset, located at the top of its penetration)
-    is in restitution, and one in restitution at or below zero penetration that still falls is
-    open.  Evaluates the right-hand side into row 0 of ``kk``, ``ek``, ``fk`` with them settled
-    (again where one changed: the rates depend on it).
+    A located switch leaves the quantity that turned (a penetration rate, a drift rate) within
+    round-off of 0: there its rate decides (:data:`DU_TOL`), so that a switch is never undone
+    at once (a contact resting at zero gap would otherwise flip between approach and
+    restitution for ever).  Contacts: in approach with a falling penetration, restitution; in
+    restitution with a rising one, approach; in restitution at or below zero penetration and
+    falling, open.  Storeys: :func:`~pound_mc.integrators.storey_laws.settled_branch`.  Also
+    catches a turn that a step's end values hid from the event screen.  ``kk[0]`` (and
+    ``ek[0]``, ``fk[0]``) hold the rates at ``y`` for the phases as they were; evaluated again
+    where one changed, or where ``fresh`` (an event changed them).
     """
-    for c in range(phase.size):
-        if phase[c] == 0:
-            continue
-        d = -gap[c]
-        dd = 0.0
-        for j in range(n):
-            d += psi[c, j] * y[j]
-            dd += psi[c, j] * y[n + j]
-        if phase[c] == 1 and dd < 0.0:
-            phase[c] = 2
-        if phase[c] == 2 and dd <= 0.0 and d <= 0.0:
-            phase[c] = 0
-    for _ in range(3):
+    changed = fresh
+    if fresh:
         _deriv(y, ag, n, omega, zeta, gamma, psi, gap, beta, cd, zhd, phase, model, hd_, hlo, hhi,
                hk, hal, huy, hbw, hlaw, branch, rate, kk, ek, fk, 0)  # fmt: skip
-        changed = False
+    for _ in range(3):
+        moved = False
+        tol = DU_TOL * vscale
+        for c in range(phase.size):
+            if phase[c] == 0:
+                continue
+            d = -gap[c]
+            dd = 0.0
+            ddd = 0.0
+            for j in range(n):
+                d += psi[c, j] * y[j]
+                dd += psi[c, j] * y[n + j]
+                ddd += psi[c, j] * kk[0, n + j]
+            way = dd if abs(dd) > tol else ddd
+            new = phase[c]
+            if phase[c] == 1 and way < 0.0:
+                new = 2
+            elif phase[c] == 2 and way > 0.0 and d > 0.0:
+                new = 1
+            if new == 2 and way <= 0.0 and d <= 0.0:
+                new = 0
+            if new != phase[c]:
+                phase[c] = new
+                moved = True
         for s in range(huy.size):
             du, dda = _storey_rates(y, kk, 0, n, hd_, hlo, hhi, s)
-            # a located turn leaves the drift rate within round-off of 0
             b = settled_branch(hlaw[s], branch[s], y[2 * n + s], du, dda, huy[s],
                                DU_TOL * huy[s] * wmax)  # fmt: skip
             if b != branch[s]:
                 branch[s] = b
-                changed = True
-        if not changed:
-            return
+                moved = True
+        if not moved:
+            return changed
+        changed = True
+        _deriv(y, ag, n, omega, zeta, gamma, psi, gap, beta, cd, zhd, phase, model, hd_, hlo, hhi,
+               hk, hal, huy, hbw, hlaw, branch, rate, kk, ek, fk, 0)  # fmt: skip
+    return changed
 
 
 @jit(inline=True)
@@ -508,7 +529,7 @@ def adaptive_rk(
     e_h = 0.0
     e0 = mechanical_energy(q, v, omega)
     _settle(y, ag[0], n, omega, zeta, gamma, psi, gap, beta, cd, zhd, phase, model, hd_, hlo, hhi,
-            hk, hal, huy, hbw, hlaw, branch, rate, kk, ek, fk, wmax)  # fmt: skip
+            hk, hal, huy, hbw, hlaw, branch, rate, kk, ek, fk, wmax, vscale, True)  # fmt: skip
     h_try = min(settings.dt_s, dt_rec, 0.05 * 2.0 * math.pi / wmax)
     peak_f = 0.0
     peak_t = 0.0
@@ -587,7 +608,9 @@ def adaptive_rk(
             for c in range(nc):
                 fk[0, c] = fk[6, c]
             s += hs
+            fresh = False
             if switch and t_ev <= hs:
+                fresh = True
                 if c_ev >= 0:
                     if kind == _ONSET:
                         hc = _open_contact(c_ev, yv, psi, xi, beta, meff, zhd, phase, pending,
@@ -605,9 +628,10 @@ def adaptive_rk(
                     branch[s_ev], y[2 * n + s_ev] = storey_switch(
                         hlaw[s_ev], branch[s_ev], y[2 * n + s_ev], 0.0, huy[s_ev]
                     )
-                _settle(y, ag0 + slope * s, n, omega, zeta, gamma, psi, gap, beta, cd, zhd, phase,
-                        model, hd_, hlo, hhi, hk, hal, huy, hbw, hlaw, branch, rate, kk, ek, fk,
-                        wmax)  # fmt: skip
+            # every step's end: a switch, or a turn the end values hid, settled (no Zeno)
+            _settle(y, ag0 + slope * s, n, omega, zeta, gamma, psi, gap, beta, cd, zhd, phase,
+                    model, hd_, hlo, hhi, hk, hal, huy, hbw, hlaw, branch, rate, kk, ek, fk, wmax,
+                    vscale, fresh)  # fmt: skip
             h_try = h_next
             if not _finite(y):
                 status = outputs.STATUS_UNSTABLE

@@ -26,6 +26,7 @@ from numba.core import event as numba_event
 # the kernel cache (see pound_mc._jit.source_key), and every edit here would recompile
 import pound_mc._jit as jit_cache
 from pound_mc.integrators import METHODS
+from pound_mc.integrators.batch import INELASTIC_METHODS
 from pound_mc.physics.contact import CONTACT_MODELS
 from pound_mc.study.definition import study_from_text
 from pound_mc.study.engine import StudyEngine
@@ -193,8 +194,15 @@ storey_height_m = [3.0, 3.0, 3.0]
 damping_ratio = 0.05
 """
 
-#: Building pairs of :func:`compile_kernels`: each runs through its own batch function.
-STRUCTURES = {"sdof": _SDOF, "shear": _SHEAR}
+_YIELDING = _SHEAR.replace(
+    "damping_ratio = 0.05",
+    'damping_ratio = 0.05\nhysteresis = "bilinear"\nstorey_yield_disp_m = 0.002\n'
+    "post_yield_ratio = 0.05",
+)
+
+#: Building pairs of :func:`compile_kernels`: each runs through its own batch function
+#: (``yielding``: bilinear shear buildings, the inelastic kernels).
+STRUCTURES = {"sdof": _SDOF, "shear": _SHEAR, "yielding": _YIELDING}
 
 
 def tiny_study(method: str, law: str = "jankowski", structure: str = "sdof"):
@@ -223,7 +231,7 @@ method = "{method}"
 def compile_kernels(
     methods: Iterable[str] | None = None,
     laws: Iterable[str] | None = None,
-    structures: Iterable[str] = ("sdof", "shear"),
+    structures: Iterable[str] = ("sdof", "shear", "yielding"),
     *,
     stream: TextIO | None = None,
 ) -> list[dict]:
@@ -238,7 +246,8 @@ def compile_kernels(
         Integration methods (default all of :data:`pound_mc.integrators.METHODS`) and contact
         laws (default all of :data:`pound_mc.physics.contact.CONTACT_MODELS`).
     structures : iterable of str
-        ``"sdof"`` (SDOF pairs) and/or ``"shear"`` (shear buildings).
+        ``"sdof"`` (SDOF pairs), ``"shear"`` (shear buildings) and/or ``"yielding"``
+        (yielding shear buildings; ``central-difference`` does not run them).
     stream : file, optional
         Where a line per combination is printed (None: nothing).
 
@@ -250,6 +259,8 @@ def compile_kernels(
     rows = []
     for structure in structures:
         for method in METHODS if methods is None else methods:
+            if structure == "yielding" and method not in INELASTIC_METHODS:
+                continue
             for law in CONTACT_MODELS if laws is None else laws:
                 engine = StudyEngine(tiny_study(method, law, structure))
                 t0 = time.perf_counter()
