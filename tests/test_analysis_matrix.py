@@ -328,6 +328,7 @@ RUN_CHARTS = {
     "quickstart": {"required_gap", "fragility"},
     "separation_gap": {"spectrum", "required_gap"},
     "shear_spectrum": {"spectrum", "required_gap", "contacts"},
+    "yielding_shear": {"spectrum", "inelastic", "required_gap", "contacts"},
 }
 
 

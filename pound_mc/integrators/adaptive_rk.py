@@ -414,7 +414,7 @@ def _yielding(store, dmat, n):
     return hd_, hk, hal, huy, hbw, hlaw
 
 
-@jit
+@jit(entry=True)
 def adaptive_rk(
     ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi, settings,
     q, v, out, cout, hx, hd, hf, dmat, store, sout,

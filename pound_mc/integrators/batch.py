@@ -215,29 +215,14 @@ def _inelastic_run(storeys, sout, kernel):
             _run_adaptive_bilinear(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff,
                                    beta, xi, settings, q, v, out, cout, hx, hd, hf, store,
                                    sout)  # fmt: skip
-        elif kernel == "rk":
-            _run_adaptive_rk(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi,
-                             settings, q, v, out, cout, hx, hd, hf, dmat, store,
-                             sout)  # fmt: skip
+        elif kernel == "rk":  # dt_s is its first step only: no bound to check
+            adaptive_rk(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi,
+                        settings, q, v, out, cout, hx, hd, hf, dmat, store, sout)  # fmt: skip
         else:
             _run_inelastic(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi,
                            settings, q, v, out, cout, hx, hd, hf, dmat, store, sout)  # fmt: skip
 
     return run
-
-
-@jit
-def _run_adaptive_rk(
-    ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi, settings,
-    q, v, out, cout, hx, hd, hf, dmat, store, sout,
-):  # fmt: skip
-    """One run of error-controlled ``adaptive``; a step bound that cannot end fails."""
-    if _endless(ag, dt_rec, settings):
-        fail(out, cout, STATUS_NOT_CONVERGED)
-        sout[:] = np.nan
-        return
-    adaptive_rk(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi, settings,
-                q, v, out, cout, hx, hd, hf, dmat, store, sout)  # fmt: skip
 
 
 @jit
