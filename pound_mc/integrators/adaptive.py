@@ -31,6 +31,7 @@ from pound_mc.integrators import outputs
 from pound_mc.integrators.bounds import (
     LOCAL_DAMPING_SHARE,
     LOCAL_PERIOD_SHARE,
+    MODAL_STEPS_PER_PERIOD,
     contact_bound,
     shortest_period_steps,
 )
@@ -476,7 +477,7 @@ def adaptive(
     n, nc, nf, npts, m_sub, h, cd = run_sizes(ag, dt_rec, phi, gap, meff, beta, xi, settings, q)
     # contact sub-steps: at most a share of the shortest modal period (the RK4 sub-steps carry
     # every mode) and of each contact's local period and damping time (bounds)
-    _h_lin, h_rk = shortest_period_steps(omega, settings.dt_s)
+    _h_lin, h_rk = shortest_period_steps(omega, settings.dt_s, MODAL_STEPS_PER_PERIOD)
     loc_k = LOCAL_PERIOD_SHARE * np.sqrt(meff) / substeps
     loc_c = LOCAL_DAMPING_SHARE * meff / substeps
     coef = np.empty((n, 2, 4))
