@@ -53,7 +53,7 @@ STEPS_PER_PERIOD = 50.0
 #: the shortest modal period.  Without it a 3+5 pair with 1,000 kg storeys of 1e9 N/m stepped
 #: its few-ms modes at the 10 ms ``dt_s`` (twice the reference's peak force, status ok).  At
 #: 20 every drill is within 3e-4 of the reference, as at 50, while the 3+5 pair of
-#: ``shear_3_5.toml`` (contacts of ~0.1 s between 1e6 kg floors) takes 6 % more time than
+#: ``shear_3_5.toml`` (contacts of ~0.1 s between 1e6 kg floors) takes 9 % more time than
 #: unbounded (peak force 6.1e-6 from the reference; 8.5e-6 unbounded, 2.3e-6 at 50 for 52 %).
 MODAL_STEPS_PER_PERIOD = 20.0
 #: A contact sub-step spans at most 2/3 of ``1 / substeps`` of the contact's local period at
