@@ -112,7 +112,8 @@ def counted(ds: xr.Dataset, event: str = "pounding") -> xr.DataArray:
     (:func:`~pound_mc.study.dataset.pounding_counted`: the flag doubts the peak force, and
     only pounding runs carry it); a force or ductility event counts status ok only.
     """
-    return pounding_counted(ds["status"]) if event == "pounding" else ds["status"] == 0
+    pounding = str(event).strip() == "pounding"
+    return pounding_counted(ds["status"]) if pounding else ds["status"] == 0
 
 
 def _counts(ds: xr.Dataset, event: str, over=("record", "sample")):

@@ -340,6 +340,8 @@ def _settle(y, ag, n, omega, zeta, gamma, psi, gap, beta, cd, zhd, phase, model,
             b = settled_branch(hlaw[s], branch[s], y[2 * n + s], du, dda, huy[s],
                                DU_TOL * huy[s] * wmax)  # fmt: skip
             if b != branch[s]:
+                if hlaw[s] == LAW_BILINEAR and b != 0:
+                    y[2 * n + s] = b * huy[s]  # yielding: z on the yield surface
                 branch[s] = b
                 moved = True
         if not moved:
@@ -449,7 +451,8 @@ def adaptive_rk(
         y[j] = q[j]
         y[n + j] = v[j]
     for s in range(hn):
-        y[2 * n + s] = rowdot(hd_, s, q)  # at rest or elastic: no plastic drift
+        # no plastic drift at the start (z = u, within the yield drift)
+        y[2 * n + s] = min(max(rowdot(hd_, s, q), -huy[s]), huy[s])
     kk = np.zeros((7, m))
     ek = np.zeros((7, _N_RATES))
     fk = np.zeros((7, nc))
@@ -522,6 +525,9 @@ def adaptive_rk(
         wmax = max(wmax, omega[j])
     xscale = max(agmax / (wmin * wmin), 1e-12)
     vscale = max(agmax / wmin, 1e-12)
+    for f in range(nf):  # an initial state sets the scale where the ground is still
+        xscale = max(xscale, abs(xf0[f]))
+        vscale = max(vscale, abs(xfd0[f]))
     e_in = 0.0
     e_d = 0.0
     w_c = 0.0

@@ -75,12 +75,17 @@ def storey_event(law, branch, z0, z1, du0, du1, dda0, dda1, uy, h):
                 if hm > 0.0:
                     best = min(best, hermite_root(y0, sg * du0, hm, 0.0, tm))
         return best
-    # the drift rate turns against the branch (bilinear yielding, Bouc-Wen either)
+    # the drift rate turns against the branch (bilinear yielding, Bouc-Wen either), also where
+    # it turns and turns back inside the step (both ends on the branch's side)
     b = float(branch)
     y0 = b * du0
     y1 = b * du1
     if y0 > 0.0 and y1 <= 0.0:
         return hermite_root(y0, b * dda0, y1, b * dda1, h)
+    if y0 > 0.0 and y1 > 0.0 and b * dda0 < 0.0 and b * dda1 > 0.0:
+        hm, tm = hermite_max(-y0, -b * dda0, -y1, -b * dda1, h)
+        if hm > 0.0:  # the rate's least value is below 0: the first root before it
+            return hermite_root(y0, b * dda0, -hm, 0.0, tm)
     return math.inf
 
 

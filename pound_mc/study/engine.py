@@ -521,8 +521,9 @@ class StudyEngine:
             for k, index in enumerate(indices):
                 scene, record = self.scene_of(int(index)), self.record_of(int(index))
                 if level:
+                    finer = 2**level if scene.method == "adaptive" else 1
                     scene = replace(scene, dt_s=scene.dt_s * 0.5**level,
-                                    substeps=scene.substeps * 2**level)  # fmt: skip
+                                    substeps=scene.substeps * finer)  # fmt: skip
                 res = simulate(scene, record=record)
                 for name in names:
                     out[name][k] = res.outputs[name]
@@ -541,26 +542,38 @@ class StudyEngine:
         """Run the simulations with flat ``indices``; the outputs of :meth:`result_layout`.
 
         With the accuracy check on, the runs it flags ``inaccurate`` are run again with
-        ``dt_s`` halved and ``substeps`` doubled, at most :data:`MAX_REFINEMENTS` times (or
-        until ``substeps`` would pass its bound); each keeps the outputs of its last run and
+        ``dt_s`` halved and (``adaptive``) ``substeps`` doubled, at most
+        :data:`MAX_REFINEMENTS` times (or until the check's ``substeps`` would pass the key's
+        bound); each keeps the outputs of its last run that ended ok or inaccurate, and
         ``run_dt_s``, ``run_substeps``, ``refinements`` say which settings gave them.
         """
         indices = np.asarray(indices, dtype=np.int64)
         out = self._run_level(indices, 0)
         out["refinements"] = np.zeros(indices.size, dtype=np.int8)
         base_sub = int(self._base["integrator.substeps"])
+        adaptive = self._base["integrator.method"] == "adaptive"
+        eligible = np.ones(indices.size, dtype=bool)
         if self._base["integrator.accuracy_check"]:
             for level in range(1, MAX_REFINEMENTS + 1):
-                flagged = np.flatnonzero(out["status"] == STATUS_INACCURATE)
-                if flagged.size == 0 or base_sub * 2**level > MAX_SUBSTEPS:
+                flagged = np.flatnonzero((out["status"] == STATUS_INACCURATE) & eligible)
+                # adaptive's check runs twice the sub-steps: both within the key's bound
+                if flagged.size == 0 or (
+                    adaptive and base_sub * 2**level * ADAPTIVE_SUBSTEPS_FACTOR > MAX_SUBSTEPS
+                ):
                     break
                 again = self._run_level(indices[flagged], level)
+                # a finer run that failed (unstable, not converged) does not replace a result
+                # the analyses can still count: that run keeps its last usable one
+                usable = np.isin(again["status"], (STATUS_OK, STATUS_INACCURATE))
+                eligible[flagged[~usable]] = False
                 for name, values in again.items():
-                    out[name][flagged] = values
-                out["refinements"][flagged] = level
+                    out[name][flagged[usable]] = values[usable]
+                out["refinements"][flagged[usable]] = level
         dt_s = self.parameters(indices)["integrator.dt_s"]
         out["run_dt_s"] = dt_s * 0.5 ** out["refinements"].astype(float)
-        out["run_substeps"] = base_sub * 2 ** out["refinements"].astype(np.int32)
+        # fixed-step methods have no sub-steps to refine: their substeps stay the study's
+        factor = 2 ** out["refinements"].astype(np.int32) if adaptive else 1
+        out["run_substeps"] = base_sub * factor
         return out
 
     def _run_level(self, indices: np.ndarray, level: int) -> dict[str, np.ndarray]:
@@ -574,10 +587,11 @@ class StudyEngine:
         }
         if self.per_scene:
             return self._run_scenes(indices, out, level)
+        adaptive = self._base["integrator.method"] == "adaptive"
         settings = {
             "method": self._base["integrator.method"],
             "contact_model": self._base["contact.model"],
-            "substeps": self._base["integrator.substeps"] * 2**level,
+            "substeps": self._base["integrator.substeps"] * (2**level if adaptive else 1),
             "accuracy_check": self._base["integrator.accuracy_check"],
             "relation": self._base["contact.relation"] or None,
         }
