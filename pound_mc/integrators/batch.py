@@ -179,23 +179,22 @@ def _run_fixed(
 
 #: Methods that run yielding buildings (``central-difference`` has no inelastic kernel).
 INELASTIC_METHODS = ("adaptive", "newmark", "newmark-explicit")
+_INELASTIC_REFUSAL = (
+    "buildings with hysteresis other than 'elastic' run with method = 'adaptive' (the default), "
+    "'newmark' or 'newmark-explicit'"
+)
 
 
 def check_inelastic_method(method: str, file=None) -> None:
     """Refuse a method that does not run yielding buildings, naming the key (and ``file``)."""
     if method not in INELASTIC_METHODS:
-        raise InputError(
-            "buildings with hysteresis other than 'elastic' run with method = 'adaptive' (the "
-            "default), 'newmark' or 'newmark-explicit'",
-            file=file,
-            key="integrator.method",
-        )
+        raise InputError(_INELASTIC_REFUSAL, file=file, key="integrator.method")
 
 
 def _check_inelastic(settings) -> None:
-    """Refuse what the inelastic kernels do not do, naming the key."""
+    """Refuse, by its code, a method that does not run yielding buildings, naming the key."""
     if settings.method not in (ADAPTIVE, NEWMARK, NEWMARK_EXPLICIT):
-        check_inelastic_method("central-difference")
+        raise InputError(_INELASTIC_REFUSAL, key="integrator.method")
 
 
 def _inelastic_run(storeys, sout, kernel):
