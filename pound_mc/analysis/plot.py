@@ -29,6 +29,8 @@ from pound_mc.analysis.physics_charts import (  # noqa: F401  (charts of this mo
     restitution_curves,
     restitution_ranges_chart,
 )
+from pound_mc.analysis.risk import counted as counted_mask
+from pound_mc.analysis.risk import left_out_why
 from pound_mc.analysis.selection import (
     MATERIAL_DIM,
     material_names,
@@ -585,7 +587,7 @@ def probability_chart(
     )
     if line is not None:
         ax.get_legend().set_title(axis_label(ds, line), prop={"size": 8})
-    note_left_out(fig, pounding_counted(ds["status"]).values, "unstable or not converged")
+    note_left_out(fig, counted_mask(ds, "pounding").values, left_out_why("pounding"))
     return save(fig, path)
 
 

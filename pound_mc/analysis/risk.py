@@ -49,6 +49,11 @@ _DUCTILITY = ("peak_ductility_left", "peak_ductility_right")
 _EVENT = re.compile(r"^\s*(peak_force|ductility)\s*>\s*([-+0-9.eE]+)\s*$")
 
 
+def _is_pounding(event) -> bool:
+    """Whether ``event`` names pounding (spaces around it allowed, as the CLI may pass them)."""
+    return str(event).strip() == "pounding"
+
+
 def event_mask(ds: xr.Dataset, event: str = "pounding") -> xr.DataArray:
     """Per simulation, whether it had ``event`` (``pounding``, ``peak_force>N``, ``ductility>X``).
 
@@ -112,8 +117,7 @@ def counted(ds: xr.Dataset, event: str = "pounding") -> xr.DataArray:
     (:func:`~pound_mc.study.dataset.pounding_counted`: the flag doubts the peak force, and
     only pounding runs carry it); a force or ductility event counts status ok only.
     """
-    pounding = str(event).strip() == "pounding"
-    return pounding_counted(ds["status"]) if pounding else ds["status"] == 0
+    return pounding_counted(ds["status"]) if _is_pounding(event) else ds["status"] == 0
 
 
 def _counts(ds: xr.Dataset, event: str, over=("record", "sample")):
@@ -135,7 +139,7 @@ def left_out(ds: xr.Dataset, event: str = "pounding", over=("record", "sample"))
 
 def left_out_why(event: str = "pounding") -> str:
     """The statuses of the simulations a summary of ``event`` leaves out, in words."""
-    if str(event).strip() == "pounding":
+    if _is_pounding(event):
         return "unstable or not converged"
     return "unstable, not converged or inaccurate: their peak force is in doubt"
 

@@ -21,6 +21,7 @@ from pound_mc.analysis.profiles import contacts_chart
 from pound_mc.analysis.risk_chart import fragility_panels, required_gap_chart
 from pound_mc.errors import InputError
 from pound_mc.integrators import METHODS
+from pound_mc.integrators.accuracy import STATUS_INACCURATE
 from pound_mc.physics.contact import CONTACT_MODELS
 from pound_mc.study.dataset import STATUS_FLAGS
 from pound_mc.study.definition import load_study
@@ -130,8 +131,7 @@ def status_warnings(path: Path) -> list[str]:
     lines = []
     if refined is not None and np.any(refined > 0):
         n_refined = int((refined > 0).sum())
-        inaccurate = next(code for code, name in STATUS_FLAGS.items() if name == "inaccurate")
-        still = int(((refined > 0) & (status == inaccurate)).sum())
+        still = int(((refined > 0) & (status == STATUS_INACCURATE)).sum())
         lines.append(
             f"note: {n_refined:,} of {n:,} simulations flagged by the accuracy check were run "
             f"again finer (dt_s halved, substeps doubled, up to {int(refined.max())} times); "

@@ -179,22 +179,17 @@ def _run_fixed(
 
 #: Methods that run yielding buildings (``central-difference`` has no inelastic kernel).
 INELASTIC_METHODS = ("adaptive", "newmark", "newmark-explicit")
-_INELASTIC_REFUSAL = (
-    "buildings with hysteresis other than 'elastic' run with method = 'adaptive' (the default), "
-    "'newmark' or 'newmark-explicit'"
-)
 
 
 def check_inelastic_method(method: str, file=None) -> None:
     """Refuse a method that does not run yielding buildings, naming the key (and ``file``)."""
     if method not in INELASTIC_METHODS:
-        raise InputError(_INELASTIC_REFUSAL, file=file, key="integrator.method")
-
-
-def _check_inelastic(settings) -> None:
-    """Refuse, by its code, a method that does not run yielding buildings, naming the key."""
-    if settings.method not in (ADAPTIVE, NEWMARK, NEWMARK_EXPLICIT):
-        raise InputError(_INELASTIC_REFUSAL, key="integrator.method")
+        raise InputError(
+            "buildings with hysteresis other than 'elastic' run with method = 'adaptive' (the "
+            "default), 'newmark' or 'newmark-explicit'",
+            file=file,
+            key="integrator.method",
+        )
 
 
 def _inelastic_run(storeys, sout, kernel):
@@ -360,7 +355,7 @@ def run_kernel(
                                restitution=restitution)  # fmt: skip
     pair = _is_sdof_pair(omega, gap, phi)
     if storeys is not None:
-        _check_inelastic(settings)
+        check_inelastic_method(method)
     n = omega.size
     nc = gap.size
     nf = phi.shape[0]

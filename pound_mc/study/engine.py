@@ -48,6 +48,7 @@ from pound_mc.motions.preprocessing import WINDOW_PEAK_WARN
 from pound_mc.physics.contact import default_relation, kernel_damping, reported_xi
 from pound_mc.physics.relations import restitution_of_xi
 from pound_mc.scene import Scene, scene_from_dict, simulate
+from pound_mc.scene import schema as scene_schema
 from pound_mc.scene.model import storey_results
 from pound_mc.study.dataset import (
     CONTACT_VARIABLES,
@@ -83,7 +84,7 @@ _KERNEL_KEYS = (
 #: ``substeps``; :meth:`StudyEngine.run_indices`).
 MAX_REFINEMENTS = 3
 #: Largest ``integrator.substeps`` a refinement may reach (the key's bound).
-MAX_SUBSTEPS = 1024
+MAX_SUBSTEPS = int(scene_schema.INTEGRATOR["substeps"].maximum)
 # Dataset variables of STOREY_VARIABLES: their key in a result's ``storeys``.
 _STOREY_KEYS = {
     "storey_peak_drift": "peak_drift_ratio",
@@ -218,8 +219,8 @@ class StudyEngine:
             scene_model(study.scene, side) in ("shear", "wall") for side in ("left", "right")
         )
         self.arrays = self.scene.modal_arrays() if self.mdof else None
-        #: Whether a building can yield: each simulation then runs its own scene (inelastic
-        #: ``newmark``, or ``adaptive`` for SDOF pairs), and the dataset holds the storeys' outputs.
+        #: Whether a building can yield: each simulation then runs its own scene (the inelastic
+        #: kernels), and the dataset holds the storeys' outputs.
         self.inelastic = self.scene.inelastic
         if self.inelastic:  # refused before any simulation, not at the first one
             check_inelastic_method(self._base["integrator.method"], self.study.path)
@@ -228,12 +229,6 @@ class StudyEngine:
         self.per_scene = self.inelastic or (
             self.mdof and any(key.split(".", 1)[0] in ("left", "right") for key in self._varied)
         )
-
-    def _where(self, key: str) -> str:
-        """A key as the study file gives it: ``grid.KEY``, ``sampling.vary.KEY`` or ``KEY``."""
-        if key in self.study.grid:
-            return f"grid.{key}"
-        return f"sampling.vary.{key}" if any(v.key == key for v in self.study.variables) else key
 
     def _intensities(self) -> None:
         """Each record's own PGA and Sa, and the factors that scale it to the intensity axis."""
