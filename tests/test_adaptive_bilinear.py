@@ -17,7 +17,7 @@ from pound_mc.integrators import OUTPUTS
 from pound_mc.integrators.reference import reference_solution
 from pound_mc.physics.structures import sdof
 from pound_mc.scene import scene_from_dict, simulate
-from pound_mc.scene.model import with_tail
+from pound_mc.scene.simulation import with_tail
 
 #: Compared with the reference (acceptance of issue 13: within 1e-4 at default settings).
 COMPARED = ("peak_force", "peak_disp_left", "peak_disp_right", "peak_ductility_left",

@@ -28,7 +28,7 @@ from pound_mc.integrators.outputs import INELASTIC_OUTPUTS
 from pound_mc.integrators.reference import reference_solution
 from pound_mc.physics.structures import sdof
 from pound_mc.scene import load_scene, scene_from_dict, simulate
-from pound_mc.scene.model import with_tail
+from pound_mc.scene.simulation import with_tail
 from pound_mc.study.definition import load_study
 from pound_mc.study.engine import StudyEngine
 from pound_mc.study.runner import run_study
@@ -158,7 +158,8 @@ def test_yield_never_reached_gives_the_elastic_results():
     assert got["hysteretic_energy"] == 0.0
     # the general elastic kernel (histories route an SDOF pair to it): bitwise
     arrays = scene.kernel_arrays()
-    general, _, hist = run_kernel(*rec[::-1], **arrays, method="newmark", dt_s=1e-3, history=True)
+    general, _, hist, _ = run_kernel(*rec[::-1], **arrays, method="newmark", dt_s=1e-3,
+                                     history=True)  # fmt: skip
     # the inelastic kernel's histories are the elastic kernel's, bit for bit
     kept = simulate(limit, record=rec, method="newmark", dt_s=1e-3, history=True)
     assert list(kept.outputs.values()) == pytest.approx(list(got.values()), rel=0, abs=0,

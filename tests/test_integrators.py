@@ -109,7 +109,7 @@ def run_linear(scene, ag, dt, *, method="adaptive", dt_s, x0=None, v0=None):
     q0, vq0 = modal_state(
         scene, np.zeros(n) if x0 is None else x0, np.zeros(n) if v0 is None else v0
     )
-    out, _, hist = run_kernel(
+    out, _, hist, _ = run_kernel(
         ag,
         dt,
         **scene.modal_arrays(),

@@ -33,15 +33,19 @@ def test_contacts_between_neighbours():
     assert [(c.pair, c.m_eff) for c in s.contacts] == [(0, 5.0e5), (1, 5.0e5)]
     a = s.kernel_arrays()
     assert a["psi"].shape == (2, 3)
-    assert list(a["side"]) == [0, 1, 1]
+    # the kernels' building codes: 0 the first, 1 the last ("left" / "right"), 2 the middle
+    assert list(a["side"]) == [0, 2, 1]
     s = row({**SDOF, "period_s": 0.5}, {**SDOF, "period_s": 1.0}, {"model": "wall"})
     assert [(c.pair, c.m_eff) for c in s.contacts] == [(0, 5.0e5), (1, 1.0e6)]
+    # a wall is no building: the one before it is the last
+    assert list(s.kernel_arrays()["side"]) == [0, 1, 2]
 
 
 @pytest.mark.slow
 def test_three_buildings_against_reference():
-    # a 0.5 s, a 1.0 s and a 0.7 s SDOF 3 mm apart: both contacts pound; impacts per contact
-    # and peak forces as the SciPy reference (peak_disp_right: the largest of the others)
+    # a 0.5 s, a 1.0 s and a 0.7 s SDOF 3 mm apart: both contacts pound; impacts per contact,
+    # peak forces and each building's peak displacement as the SciPy reference
+    # (peak_disp_right: the last building's)
     s = row({**SDOF, "period_s": 0.5}, {**SDOF, "period_s": 1.0}, {**SDOF, "period_s": 0.7})
     record = s.record_arrays()
     ref = reference_solution(s, record)
@@ -54,6 +58,13 @@ def test_three_buildings_against_reference():
     for side in ("left", "right"):
         assert res.outputs[f"peak_disp_{side}"] == pytest.approx(ref[f"peak_disp_{side}"],
                                                                  rel=1e-4)  # fmt: skip
+    assert [b["building"] for b in res.buildings] == [0, 1, 2]
+    for mine, theirs in zip(res.buildings, ref["buildings"], strict=True):
+        assert mine["peak_disp"] == pytest.approx(theirs["peak_disp"], rel=1e-4)
+    assert res.buildings[0]["peak_disp"] == res.outputs["peak_disp_left"]
+    assert res.buildings[2]["peak_disp"] == res.outputs["peak_disp_right"]
+    # the middle building is neither: it moves most here (1.0 s between 0.5 s and 0.7 s)
+    assert res.buildings[1]["peak_disp"] > res.outputs["peak_disp_right"]
     assert [c["pair"] for c in res.to_json()["contacts"]] == [1, 2]
 
 
@@ -77,7 +88,9 @@ def test_row_validation():
 
 
 def test_history_chart_draws_each_contacts_neighbours(tmp_path):
-    """Contact 2 of a row redrew building 1 against building 2; building 3 was never drawn."""
+    """Contact 2 of a row redrew building 1 against building 2; building 3 was never drawn.
+    Each building's floor is now drawn once, in the building's colour (the middle one was
+    drawn twice, once per contact's colour)."""
     s = row({**SDOF, "period_s": 0.5}, {**SDOF, "period_s": 1.0}, {**SDOF, "period_s": 0.7})
     res = simulate(s, history=True)
     floors = np.hstack([res.disp_left_m, res.disp_right_m])  # buildings 1, 2, 3
@@ -85,10 +98,10 @@ def test_history_chart_draws_each_contacts_neighbours(tmp_path):
     np.testing.assert_array_equal(floors[:, 1] - floors[:, 2] - 0.003, res.penetration_m[:, 1])
     lines = time_history_chart(res, tmp_path / "row.png").axes[0].lines
     assert [ln.get_label() for ln in lines] == [
-        "contact 1: building 1, floor 1", "contact 1: building 2, floor 1",
-        "contact 2: building 2, floor 1", "contact 2: building 3, floor 1",
+        "building 0, floor 1", "building 1, floor 1", "building 2, floor 1",
     ]  # fmt: skip
-    for ln, k in zip(lines, (0, 1, 1, 2), strict=True):
+    assert len({ln.get_color() for ln in lines}) == 3  # one colour per building
+    for ln, k in zip(lines, (0, 1, 2), strict=True):
         np.testing.assert_allclose(ln.get_ydata(), floors[:, k] * 1e3)
 
 
@@ -98,11 +111,10 @@ def test_history_chart_names_a_wall_and_the_scene(tmp_path):
     s = replace(row({**SDOF, "period_s": 0.5}, {**SDOF, "period_s": 1.0}, {"model": "wall"}),
                 file="studies/scenes/my_row.toml")  # fmt: skip
     fig = time_history_chart(simulate(s, history=True), tmp_path / "row.png")
+    # the wall stands still: not drawn
     assert [ln.get_label() for ln in fig.axes[0].lines] == [
-        "contact 1: building 1, floor 1", "contact 1: building 2, floor 1",
-        "contact 2: building 2, floor 1", "contact 2: wall",
+        "building 0, floor 1", "building 1, floor 1",
     ]  # fmt: skip
-    np.testing.assert_array_equal(fig.axes[0].lines[3].get_ydata(), 0.0)  # the wall stands
     assert fig._suptitle.get_text() == "scene my_row.toml"
 
 
@@ -162,19 +174,21 @@ def test_rows_of_yielding_buildings_match_the_reference(name):
     out = simulate(s, record=record, method="newmark", dt_s=1e-4).outputs
     assert out["status"] == 0 and ref["impacts"] >= 8
     assert out["impacts"] == ref["impacts"]
-    assert ref["peak_ductility_right"] > 2.0  # the others' largest: they yield
+    assert np.nanmax([b["peak_ductility"] for b in ref["buildings"]]) > 2.0  # one yields
     for key in ("peak_force", "peak_disp_left", "peak_disp_right", "peak_ductility_left",
                 "peak_ductility_right", "hysteretic_energy"):  # fmt: skip
-        if np.isnan(ref[key]):  # the first building is elastic: no ductility
+        if np.isnan(ref[key]):  # an elastic end building: no ductility
             assert np.isnan(out[key]), key
         else:
             assert out[key] == pytest.approx(ref[key], rel=3e-4), key
     # each storey named by its building's place in the row (a wall: "wall")
     res = simulate(s, record=record, method="newmark", dt_s=1e-4)
-    names = [b.get("model") == "wall" and "wall" or f"building {k + 1}"
+    names = [b.get("model") == "wall" and "wall" or f"building {k}"
              for k, b in enumerate(YIELDING_ROWS[name])]  # fmt: skip
     assert res.storeys["building"].tolist() == names and res.storeys["storey"].tolist() == [1] * 3
-    assert np.nanmax(res.storeys["peak_ductility"]) == out["peak_ductility_right"]
+    for b in res.buildings:  # an SDOF building has one storey: its ductility is the building's
+        mine = res.storeys["peak_ductility"][res.storeys["building"] == f"building {b['building']}"]
+        np.testing.assert_array_equal(mine, [b["peak_ductility"]])
 
 
 @pytest.mark.parametrize("name", list(YIELDING_ROWS))
@@ -185,7 +199,8 @@ def test_yielding_rows_run_adaptive_at_defaults(name):
     s = replace(row(*YIELDING_ROWS[name]), tail_s=0.0)
     record = s.record_arrays()
     ref = reference_solution(s, record)
-    out = simulate(s, record=record).outputs
+    res = simulate(s, record=record)
+    out = res.outputs
     assert out["status"] == 0 and out["impacts"] == ref["impacts"] >= 8
     for key in ("peak_force", "peak_disp_left", "peak_disp_right", "peak_ductility_left",
                 "peak_ductility_right", "hysteretic_energy", "max_penetration"):  # fmt: skip
@@ -193,6 +208,15 @@ def test_yielding_rows_run_adaptive_at_defaults(name):
             assert np.isnan(out[key]), key
         else:
             assert out[key] == pytest.approx(ref[key], rel=1e-5), key
+    # every building's, the middle one's included (a wall is none)
+    assert len(res.buildings) == len(ref["buildings"])
+    for mine, theirs in zip(res.buildings, ref["buildings"], strict=True):
+        assert mine["building"] == theirs["building"]
+        for key in ("peak_disp", "peak_ductility"):
+            if np.isnan(theirs[key]):  # an elastic building: no ductility
+                assert np.isnan(mine[key]), key
+            else:
+                assert mine[key] == pytest.approx(theirs[key], rel=1e-5), key
 
 
 def test_simulate_command_shows_the_yielding_demands(tmp_path, capsys):
@@ -210,9 +234,15 @@ def test_simulate_command_shows_the_yielding_demands(tmp_path, capsys):
     path.write_text("\n".join(lines))
     assert main(["simulate", str(path)]) == 0
     text = capsys.readouterr().out
-    out = simulate(scene_from_dict(tomllib.loads(path.read_text()))).outputs
-    assert f"ductility right  {out['peak_ductility_right']:.4g}\n" in text
-    assert "ductility left   nan\n" in text  # the first building is elastic
+    res = simulate(scene_from_dict(tomllib.loads(path.read_text())))
+    out = res.outputs
+    # every building of the row, left to right (the first and the last are elastic)
+    for b in res.buildings:
+        assert (
+            f"building {b['building']}       peak disp {b['peak_disp']:.6g} m, ductility "
+            f"{b['peak_ductility']:.4g} (sdof)\n"
+        ) in text
+    assert "ductility 3." in text or "ductility 2." in text or "ductility 4." in text
     assert f"hysteresis       {out['hysteretic_energy']:.6g} J" in text
     assert f"at t = {out['peak_force_time']:.6g} s\n" in text
     # a method given on the command line is named as given (it was integrator.method)

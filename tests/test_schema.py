@@ -48,7 +48,8 @@ def test_shipped_files_match_the_json_schema(path):
 
 def test_json_schema_takes_walls_and_rows():
     """A wall on the right and a row (``[[buildings]]``) run (``scene_from_dict`` takes them)
-    but the JSON Schema refused both; it now refuses a file with a row and a pair at once."""
+    but the JSON Schema refused both; it now refuses a file with a row and a pair at once.
+    A study file may give a row too (DESIGN.md section 10)."""
     sdof = {"model": "sdof", "period_s": 0.5, "damping_ratio": 0.05, "mass_kg": 1.0e6}
     wall = {**SCENE, "right": {"model": "wall"}}
     row = {k: v for k, v in SCENE.items() if k not in ("left", "right")}
@@ -58,11 +59,14 @@ def test_json_schema_takes_walls_and_rows():
         jsonschema.validate(data, json_schema())
     with pytest.raises(jsonschema.ValidationError):
         jsonschema.validate({**row, "left": sdof, "right": sdof}, json_schema())
+    study = {**row, "study": {"name": "s", "seed": 1}, "grid": {"buildings.1.period_s": [1, 2]}}
+    jsonschema.validate(study, json_schema())
+    with pytest.raises(jsonschema.ValidationError):  # a key no building has
+        jsonschema.validate({**study, "grid": {"buildings.1.heigth_m": [1, 2]}}, json_schema())
     for bad in (
         {**row, "buildings": [sdof]},  # one building
         {**row, "left": sdof},  # a row and half a pair
         {**row, "buildings": [{"model": "wall"}, sdof]},  # a wall first
-        {**row, "study": {"name": "s", "seed": 1}},  # a row in a study file
     ):
         with pytest.raises(jsonschema.ValidationError):
             jsonschema.validate(bad, json_schema())

@@ -5,10 +5,6 @@ Each function draws on the Axes given (``ax=``) or on a new :class:`matplotlib.f
 show it and tests can read the plotted data back from its artists.  Colours, units and labels
 come from :mod:`pound_mc.analysis.style`; the charts of the physics (restitution relations,
 the drop test) are in :mod:`pound_mc.analysis.physics_charts`.
-
-Longer than 600 lines because the spectrum, probability and distribution charts (and the
-spectrum's panels) share one set of selection helpers (horizontal and line axes, held axes,
-nearest values, records) that the other chart modules import from here.
 """
 
 from __future__ import annotations

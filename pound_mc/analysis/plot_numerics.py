@@ -109,7 +109,7 @@ def _contact_floors(result) -> list[tuple[str, np.ndarray, str, np.ndarray]]:
     """Per contact: the label and displacement history of its floor in each building.
 
     The top floors for SDOF pairs; in a row (``[[buildings]]``) the floors of the contact's
-    two neighbours, named by their place in the row.
+    two neighbours, named by their place in the row (from 0).
     """
     scene = getattr(result, "scene", None)
     contacts = getattr(scene, "contacts", None)
@@ -117,7 +117,7 @@ def _contact_floors(result) -> list[tuple[str, np.ndarray, str, np.ndarray]]:
     n = result.penetration_m.shape[1]
     row = getattr(scene, "row", None)
     buildings = row if row is not None else [getattr(scene, s, None) for s in ("left", "right")]
-    who = ["left", "right"] if row is None else [f"building {k + 1}" for k in range(len(row))]
+    who = ["left", "right"] if row is None else [f"building {k}" for k in range(len(row))]
 
     def name(k, floor):  # building k's floor (0-based); a wall, at rest with the ground, has none
         wall = getattr(buildings[k], "model", None) == "wall"
@@ -137,6 +137,26 @@ def _contact_floors(result) -> list[tuple[str, np.ndarray, str, np.ndarray]]:
             for c in contacts]  # fmt: skip
 
 
+def _row_floors(ax, t, floors) -> None:
+    """A row's floors that meet at a contact, each once, in its building's colour.
+
+    A floor at two contacts (a middle building's) is drawn once; a wall, at rest, is not.
+    Solid the first floor drawn of a building, dashed its others.
+    """
+    seen: dict[str, np.ndarray] = {}
+    for name_l, x_l, name_r, x_r in floors:
+        for name, x in ((name_l, x_l), (name_r, x_r)):
+            if name != "wall" and name not in seen:
+                seen[name] = x
+    drawn: dict[int, int] = {}
+    for name, x in seen.items():
+        k = int(name.split(",")[0].removeprefix("building "))
+        colour = line_style(k)["color"]
+        ls = "-" if drawn.get(k, 0) == 0 else "--"
+        drawn[k] = drawn.get(k, 0) + 1
+        ax.plot(t, x * 1e3, lw=0.8, color=colour, ls=ls, label=name)
+
+
 @chart_doc
 def time_history_chart(
     result: SimulationResult,
@@ -147,7 +167,8 @@ def time_history_chart(
     """Displacements, penetration and contact force of one simulation against time.
 
     The top panel draws the displacements of the two floors that meet at each contact (the
-    same height), in the contact's colour: left building solid, right building dashed.  With
+    same height), in the contact's colour: left building solid, right building dashed; in a
+    row, each building's floors that meet a contact once, in the building's colour.  With
     yielding buildings the run goes on after the record for ``integrator.tail_s`` (residual
     drifts): that free vibration is shaded.
 
@@ -165,13 +186,16 @@ def time_history_chart(
         ax2.sharex(ax1)
         ax3.sharex(ax1)
     floors = _contact_floors(result)
+    if getattr(result.scene, "row", None) is not None:
+        _row_floors(ax1, t, floors)
     for c, (name_l, x_l, name_r, x_r) in enumerate(floors):
         style = line_style(c)
         colour = style["color"]
         many = len(floors) > 1
         where = f"contact {c + 1}: " if many else ""
-        ax1.plot(t, x_l * 1e3, lw=0.8, color=colour, label=f"{where}{name_l}")
-        ax1.plot(t, x_r * 1e3, lw=0.8, color=colour, ls="--", label=f"{where}{name_r}")
+        if getattr(result.scene, "row", None) is None:
+            ax1.plot(t, x_l * 1e3, lw=0.8, color=colour, label=f"{where}{name_l}")
+            ax1.plot(t, x_r * 1e3, lw=0.8, color=colour, ls="--", label=f"{where}{name_r}")
         ax2.plot(t, result.penetration_m[:, c] * 1e3, lw=0.8, color=colour,
                  label=f"contact {c + 1}")  # fmt: skip
         ax3.plot(t, result.force_N[:, c] / 1e6, lw=0.8, color=colour, label=f"contact {c + 1}")

@@ -168,6 +168,28 @@ def _with_values(ds, quantity) -> tuple[list[str], list[str]]:
     return [v for v in names if v not in empty], empty
 
 
+def _contact_axis(ds: xr.Dataset) -> tuple[np.ndarray, list[str], str]:
+    """Where each contact sits up the contacts chart, its tick label and the axis label.
+
+    Elevations where every contact has one; in a row (``contact_pair``), or where a contact
+    has no elevation (SDOF buildings without heights), the contact's number, labelled with
+    the buildings it lies between (from 0) and its elevation where known.
+    """
+    number = ds[CONTACT_DIM].values.astype(float)
+    elevation = ds["contact_elevation"].values if "contact_elevation" in ds.coords else None
+    known = elevation is not None and bool(np.all(np.isfinite(elevation)))
+    if "contact_pair" not in ds.coords:
+        if known:
+            return elevation, [f"{h:g}" for h in elevation], "contact elevation [m]"
+        return number, [f"{c:g}" for c in number], "contact [-]"
+    ticks = []
+    for k, p in enumerate(ds["contact_pair"].values.astype(int)):
+        known_k = elevation is not None and np.isfinite(elevation[k])
+        at = f" at {elevation[k]:g} m" if known_k else ""
+        ticks.append(f"{p}|{p + 1}{at}")
+    return number, ticks, "contact: buildings (from 0)"
+
+
 @style.chart_doc
 def contacts_chart(
     ds: xr.Dataset,
@@ -207,18 +229,14 @@ def contacts_chart(
         )
     _, line, hold, picks = _selection(ds, line, sel)
     q = _over_samples(ds, variable, [CONTACT_DIM] + ([line] if line else []), hold)
-    height = (
-        ds["contact_elevation"].values
-        if "contact_elevation" in ds.coords
-        else ds[CONTACT_DIM].values.astype(float)
-    )
+    height, ticks, ylabel = _contact_axis(ds)
     fig, (ax,) = style.new_axes(ax, (7.6, 4.8))
     _draw_lines(ax, ds, q, line, picks, height, style.scale_of(ds, variable), across=True)
-    ax.set_yticks(height, [f"{h:g}" for h in height])
+    ax.set_yticks(height, ticks)
     held = _held_text(ds, hold)
     ax.set(
         xlabel=style.axis_label(ds, variable),
-        ylabel="contact elevation [m]" if "contact_elevation" in ds.coords else "contact [-]",
+        ylabel=ylabel,
         title=(
             f"{ds[variable].attrs.get('long_name', variable)} ({ds.attrs.get('study_name', '')})"
             f"\nmedian over records and samples, 5-95 % band{', ' + held if held else ''}"

@@ -60,11 +60,20 @@ def simulate_command(args) -> int:
         print(f"peak force       {_text(info['peak_force_N'], '.6g')} N at t = "
               f"{_text(info['peak_force_time_s'], '.6g')} s")  # fmt: skip
         print(f"max penetration  {_text(info['max_penetration_m'], '.6g')} m")
-        print(f"peak disp left   {_text(info['peak_disp_left_m'], '.6g')} m")
-        print(f"peak disp right  {_text(info['peak_disp_right_m'], '.6g')} m")
+        if scene.row is None:
+            print(f"peak disp left   {_text(info['peak_disp_left_m'], '.6g')} m")
+            print(f"peak disp right  {_text(info['peak_disp_right_m'], '.6g')} m")
+        else:  # every building of the row, left to right
+            for b in info["buildings"]:
+                print(f"{'building ' + str(b['building']):<17}peak disp "
+                      f"{_text(b['peak_disp'], '.6g')} m" + (
+                          f", ductility {_text(b['peak_ductility'], '.4g')}"
+                          if scene.inelastic else "") + f" ({b['model']})")  # fmt: skip
         if scene.inelastic:  # the yielding buildings' demands (NaN: an elastic building)
-            for side in ("left", "right"):
-                print(f"{'ductility ' + side:<17}{_text(info[f'peak_ductility_{side}'], '.4g')}")
+            if scene.row is None:
+                for side in ("left", "right"):
+                    print(f"{'ductility ' + side:<17}"
+                          f"{_text(info[f'peak_ductility_{side}'], '.4g')}")  # fmt: skip
             print(f"hysteresis       {_text(info['hysteretic_energy'], '.6g')} J (dissipated "
                   "by yielding)")  # fmt: skip
         print(f"energy residual  {_text(info['energy_residual'], '.3g')} (of the energy put in)")

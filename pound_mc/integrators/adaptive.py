@@ -15,9 +15,6 @@ the compiled loop is the same as one long function, the source is not).  The loo
 views of its arrays that own nothing (:func:`~pound_mc.integrators.toolkit.borrow`): numba
 counts the references of every array an inlined helper with loops receives, with an atomic
 operation each, which took a quarter of a 10+10 shear pair's run.
-
-Longer than 600 lines because the kernel and the helpers it inlines are one compiled loop,
-kept in one module so that each helper is read beside the step that uses it.
 """
 
 from __future__ import annotations

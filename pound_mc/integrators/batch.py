@@ -19,10 +19,6 @@ Every run returns the outputs of :data:`OUTPUTS` and a status: 0 ok, 1 unstable 
 diverging state, or an energy balance broken either way by more than
 :data:`UNSTABLE_ENERGY_FRACTION` of the energy put in), 2 not converged (Newton).
 Fixed-step methods report maxima over their step points.
-
-Longer than 600 lines because every entry point (one run, SDOF-pair batches, scene batches) of
-every method family and their accuracy checks (:mod:`pound_mc.integrators.accuracy`) meet at
-this one boundary.
 """
 
 from __future__ import annotations
@@ -58,6 +54,8 @@ from pound_mc.integrators.outputs import (
     N_OUT,
     ONSET_SIZE,
     OUTPUTS,
+    PEAK_DISP_LEFT,
+    PEAK_DISP_RIGHT,
     PEAK_FORCE,
     PRE_MODE,
     PRE_RESUME,
@@ -105,6 +103,9 @@ class KernelResult(NamedTuple):
     outputs: dict
     contacts: dict
     history: tuple | None
+    #: Peak displacement [m] of each building code (``side``: 0 the first, 1 the last,
+    #: 2... a row's others), NaN unless ok.
+    code_peaks: np.ndarray
 
 
 @jit(inline=True)
@@ -361,7 +362,9 @@ def run_kernel(
     nf = phi.shape[0]
     q = np.zeros(n) if q0 is None else np.array(q0, dtype=float)
     v = np.zeros(n) if v0 is None else np.array(v0, dtype=float)
-    out = np.empty(N_OUT)
+    # a row's buildings past the first and last: each code's peak past the outputs
+    n_codes = int(np.max(side)) + 1 if np.size(side) else 0
+    out = np.empty(N_OUT + (n_codes if n_codes > 2 else 0))
     cout = np.empty((nc, N_COUT))
     if history:  # NaN where a run that stopped (unstable, not converged) did not reach
         hx, hd, hf = (np.full((ag.size, k), np.nan) for k in (nf, nc, nc))
@@ -392,9 +395,10 @@ def run_kernel(
     if settings.method != ADAPTIVE:
         t_c = shortest_contact_s(model, cout[:, C_MAX_PENETRATION], beta, meff).min()
         out[STATUS] = flag_inaccurate(out[STATUS], out[IMPACTS], t_c, dt_s)
-    outputs = dict(zip(OUTPUTS, out.tolist(), strict=True))
+    outputs = dict(zip(OUTPUTS, out[:N_OUT].tolist(), strict=True))
     contacts = dict(zip(CONTACT_OUTPUTS, cout.T.copy(), strict=True))
-    return KernelResult(outputs, contacts, (hx, hd, hf) if history else None)
+    code_peaks = out[N_OUT:].copy() if n_codes > 2 else out[[PEAK_DISP_LEFT, PEAK_DISP_RIGHT]]
+    return KernelResult(outputs, contacts, (hx, hd, hf) if history else None, code_peaks)
 
 
 @jit(inline=True)

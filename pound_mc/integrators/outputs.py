@@ -148,10 +148,31 @@ def fail(out, cout, status):
             cout[c, k] = np.nan
 
 
+#: Codes of the floors' buildings (the kernels' ``side``): the first building of a pair or a
+#: row (``left``) and the last (``right``); from 2 on, the other buildings of a row and a wall
+#: that closes one (:meth:`pound_mc.scene.Scene.side_codes`).  The ``*_left`` / ``*_right``
+#: outputs are the first's and the last's; with codes past 1, ``out`` may hold each code's
+#: peak displacement past :data:`N_OUT` (:func:`finish`).
+SIDE_FIRST, SIDE_LAST = 0, 1
+
+
+@jit
+def _row_peaks(out, peaks, side, n_codes):
+    """Peak displacement of each building code, at ``out[N_OUT + code]``."""
+    for k in range(n_codes):
+        out[N_OUT + k] = 0.0
+    for f in range(peaks.size):
+        out[N_OUT + side[f]] = max(out[N_OUT + side[f]], peaks[f])
+
+
 @jit
 def finish(out, cout, peaks, side, phase, q, v, omega, e0, e_in, e_d, w_c, stored, peak_f,
            peak_t, steps, status):  # fmt: skip
-    """Fill the output vector at the end of a run: maxima, energy balance and status."""
+    """Fill the output vector at the end of a run: maxima, energy balance and status.
+
+    A row (``side`` codes past :data:`SIDE_LAST`) whose ``out`` has a slot per code past
+    :data:`N_OUT` gets each code's peak displacement there.
+    """
     nc = cout.shape[0]
     e_mech = mechanical_energy(q, v, omega)
     scale = abs(e_in) + e0
@@ -160,13 +181,18 @@ def finish(out, cout, peaks, side, phase, q, v, omega, e0, e_in, e_d, w_c, store
     residual = (e0 + e_in - e_mech - e_d - w_c) / scale
     pl = 0.0
     pr = 0.0
+    n_row = 0  # codes of a row's buildings past the first and last (0: a pair)
     for f in range(peaks.size):
-        if side[f] == 0:
+        if side[f] == SIDE_FIRST:
             pl = max(pl, peaks[f])
-        else:
+        elif side[f] == SIDE_LAST:
             pr = max(pr, peaks[f])
+        else:
+            n_row = max(n_row, side[f] + 1)
         if peaks[f] > DIVERGENCE_LIMIT_M:
             status = STATUS_UNSTABLE
+    if n_row > 0 and out.size >= N_OUT + n_row:
+        _row_peaks(out, peaks, side, n_row)
     if status == STATUS_OK and not math.isfinite(residual):
         status = STATUS_UNSTABLE
     if status == STATUS_OK and abs(residual) > UNSTABLE_ENERGY_FRACTION:
@@ -196,6 +222,9 @@ def finish(out, cout, peaks, side, phase, q, v, omega, e0, e_in, e_d, w_c, store
         # unstable or not converged: no plain numbers that could be taken for results
         for k in _NAN_WHEN_FAILED:
             out[k] = np.nan
+        if n_row > 0 and out.size >= N_OUT + n_row:
+            for k in range(n_row):
+                out[N_OUT + k] = np.nan
         for c in range(nc):
             cout[c, C_PEAK_FORCE] = np.nan
             cout[c, C_MAX_PENETRATION] = np.nan

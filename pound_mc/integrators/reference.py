@@ -40,10 +40,6 @@ velocity at the onset event, and its damping (``xi`` by
 :func:`pound_mc.physics.relations.xi_from_e`, or ``zeta``) is fixed for that episode.
 
 This is slow (seconds for a 30 s SDOF-pair record) and meant for tests and checks only.
-
-Longer than 600 lines because one solver covers every scene the kernels run (rows of buildings,
-yielding storeys, per-impact restitution, the contacts' work), so that each test meets the same
-independent reference.
 """
 
 from __future__ import annotations
@@ -161,7 +157,10 @@ def reference_solution(
     -------
     dict
         ``peak_force`` [N], ``impacts``, ``max_penetration`` [m] (0 without impacts),
-        ``peak_disp_left``, ``peak_disp_right`` [m] (max over floors and time of ``|x|``),
+        ``peak_disp_left``, ``peak_disp_right`` [m] (max over floors and time of ``|x|``;
+        in a row the first building's and the last's), ``buildings`` (per building from the
+        left, a wall none: ``building``, ``peak_disp``, ``peak_ductility``, ``peak_drift``,
+        ``residual_drift``),
         ``impact_times`` (list [s]), ``impact_velocities`` (list [m/s], the onset velocity of
         every impact), ``peak_force_restitution`` (the restitution the law rebounds with for
         the damping of the peak-force episode, by a single-impact integration; NaN with fixed
@@ -184,9 +183,7 @@ def reference_solution(
 
     # a row of buildings (``scene.row``) or the two; the left one's floors first
     buildings = getattr(scene, "row", None) or [scene.left, scene.right]
-    left = buildings[0]
     starts = np.cumsum([0] + [b.n_floors for b in buildings])
-    nl = left.n_floors
     n = int(starts[-1])
     m = np.zeros((n, n))
     k = np.zeros((n, n))
@@ -260,7 +257,7 @@ def reference_solution(
             s_k.append(bld.storey_stiffness_N_per_m[st])
             s_uy.append(bld.yield_disp_m[st] if bld.inelastic else np.inf)
             s_alpha.append(bld.post_yield_ratio)
-            s_side.append(min(b, 1))  # left, or one of the others
+            s_side.append(b)  # the building's place from the left
             s_h.append(bld.storey_height_m[st])
             s_bw.append(bld.bw_exponent if bld.hysteresis == "bouc-wen" else 0.0)
     s_top, s_bot = np.array(s_top), np.array(s_bot)
@@ -594,27 +591,37 @@ def reference_solution(
             impacts[j] += 1
             pending[j] = False
             impact_velocities.append(float(v_episode[j]))
-    x_left = peak_x[:nl]
-    x_right = peak_x[nl:]
+    # "left" and "right": the first building and the last (in a row closed by a wall, the
+    # building before it: a wall is no building; a pair's right wall stays "right")
+    last = len(buildings) - 1
+    if last > 1 and buildings[last].model == "wall":
+        last -= 1
+    x_left = peak_x[: starts[1]]
+    x_right = peak_x[starts[last] : starts[last + 1]]
     u_end = drifts(y[:n])
     up_end = plastic_drift(u_end, y)
     e_hyst += float(np.sum(np.where(yielding, k_plastic * uy_finite * np.abs(up_end - s_up), 0)))
     if nz:
         e_hyst += float(y[2 * n + nz])
     side_of = np.array(s_side)
-    storey_out = {}
-    # "right": the right building, or the largest over the others of a row
-    for b, name in enumerate(("left", "right")):
+    per_building = []
+    for b, bld in enumerate(buildings):
         side = side_of == b
-        inelastic = any(bld.inelastic for bld in (buildings[:1] if b == 0 else buildings[1:]))
         duct = peak_u[side] / s_uy[side]
-        storey_out[f"peak_ductility_{name}"] = float(duct.max()) if inelastic else np.nan
         mine = side & (np.array(s_h) > 0.0)  # storeys of known height (not an SDOF without one)
         hs = np.array(s_h)[mine]
-        storey_out[f"peak_drift_{name}"] = float(np.max(peak_u[mine] / hs)) if hs.size else np.nan
-        storey_out[f"residual_drift_{name}"] = (
-            float(np.max(np.abs(u_end[mine]) / hs)) if hs.size else np.nan
-        )
+        per_building.append({
+            "building": b,
+            "peak_disp": float(peak_x[starts[b] : starts[b + 1]].max()),
+            "peak_ductility": float(duct.max()) if bld.inelastic else np.nan,
+            "peak_drift": float(np.max(peak_u[mine] / hs)) if hs.size else np.nan,
+            "residual_drift": float(np.max(np.abs(u_end[mine]) / hs)) if hs.size else np.nan,
+        })  # fmt: skip
+    storey_out = {"buildings": [r for r, bld in zip(per_building, buildings, strict=True)
+                                if bld.model != "wall"]}  # fmt: skip
+    for name, b in (("left", 0), ("right", last)):
+        for key in ("peak_ductility", "peak_drift", "residual_drift"):
+            storey_out[f"{key}_{name}"] = per_building[b][key]
     total_impacts = int(impacts.sum())
     if np.isfinite(peak_e):  # the law's rebound for that episode's damping, integrated here
         if model == "hertzdamp":

@@ -122,7 +122,7 @@ def run_impact(scene, method: str, dt_s: float, *, v0: float = 0.5, duration_s: 
     rec_dt = duration_s
     ag = np.zeros(2)
     v_modal = np.array([v0 * arrays["gamma"][0], 0.0])
-    out, _, _ = run_kernel(
+    out, *_ = run_kernel(
         ag,
         rec_dt,
         **arrays,

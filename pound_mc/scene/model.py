@@ -1,12 +1,8 @@
-"""One deterministic simulation: a scene file (TOML) to a :class:`SimulationResult`.
+"""A scene file (TOML) to a validated :class:`Scene` and the arrays its kernels take.
 
-A scene holds ``[record]``, ``[left]``, ``[right]``, ``[contact]`` and ``[integrator]``
-(``../shared/DESIGN.md`` section 6), declared in :mod:`pound_mc.scene.schema`.
-:func:`simulate` runs it through the compiled kernels of :mod:`pound_mc.integrators`.
-
-Longer than 600 lines because a scene has several shapes that share its validation and its
-cached kernel arrays: two buildings, a building against a wall, a row of buildings, and
-yielding storeys (their storey tables and free-vibration tail).
+A scene holds ``[record]``, ``[left]``, ``[right]`` (or a row, ``[[buildings]]``),
+``[contact]`` and ``[integrator]`` (``../shared/DESIGN.md`` section 6), declared in
+:mod:`pound_mc.scene.schema`; :func:`pound_mc.scene.simulation.simulate` runs it.
 """
 
 from __future__ import annotations
@@ -21,8 +17,6 @@ from typing import Any
 import numpy as np
 
 from pound_mc.errors import InputError
-from pound_mc.integrators import run_kernel
-from pound_mc.integrators.outputs import INELASTIC_OUTPUTS
 from pound_mc.motions import load_record, record_arrays
 from pound_mc.physics.contact import CONTACT_MODELS, kernel_damping, reported_xi
 from pound_mc.physics.structures import (
@@ -35,15 +29,7 @@ from pound_mc.physics.structures import (
 )
 from pound_mc.scene import schema
 
-__all__ = [
-    "Scene",
-    "SimulationResult",
-    "scene_from_dict",
-    "load_scene",
-    "simulate",
-    "STOREY_KEYS",
-    "storey_results",
-]
+__all__ = ["Scene", "scene_from_dict", "load_scene", "ROW_TABLE"]
 
 #: Tables a study adds to a scene (checked by :mod:`pound_mc.study.definition`).
 _STUDY_TABLES = {"study", "grid", "sampling", "records"}
@@ -206,24 +192,39 @@ class Scene:
     @property
     def inelastic(self) -> bool:
         """Whether a building's storeys can yield (the inelastic kernel runs it)."""
-        return any(b.inelastic for b in self._buildings())
+        return any(b.inelastic for b in self.buildings)
 
-    def _buildings(self) -> list:
-        """The buildings from left to right: the row's, or ``[left, right]``."""
+    @property
+    def buildings(self) -> list:
+        """The buildings from left to right (a wall included): the row's, or ``[left, right]``."""
         return list(self.row) if self.row is not None else [self.left, self.right]
+
+    def side_codes(self) -> list[int]:
+        """The kernels' code (``side``) of each building from left to right.
+
+        0 the first building, 1 the last (their outputs are ``*_left`` and ``*_right``); in a
+        row the buildings between them from 2 on, then a wall that closes the row (a wall is
+        no building: the building before it is the last).  A pair: ``[0, 1]``.
+        """
+        entries = self.buildings
+        walls = [k for k, b in enumerate(entries) if b.model == "wall"]
+        if len(entries) == 2 or not walls:
+            return [0] + [2 + k for k in range(len(entries) - 2)] + [1]
+        # a row of three or more closed by a wall: the wall is past the buildings' codes
+        return [0] + [2 + k for k in range(len(entries) - 3)] + [1, len(entries) - 1]
 
     def storey_arrays(self) -> tuple[np.ndarray, np.ndarray] | None:
         """Storeys of every building for the inelastic kernel; None when all are elastic.
 
         Returns the drift rows in modal coordinates (storeys x modes, ``u = D q``) and the
         storey table (stiffness [N/m], yield drift [m] (inf where elastic), post-yield ratio,
-        storey height [m] (NaN: none), building 0 left / 1 right, Bouc-Wen exponent (0: not
-        Bouc-Wen)), left storeys first.  In a row (``[[buildings]]``) the first building is
-        0 and every other 1, as the row's floors are (:meth:`_row_arrays`).
+        storey height [m] (NaN: none), the building's code (:meth:`side_codes`: 0 first,
+        1 last), Bouc-Wen exponent (0: not Bouc-Wen)), left storeys first.
         """
         if not self.inelastic:
             return None
-        buildings = self._buildings()
+        buildings = self.buildings
+        codes = self.side_codes()
         modes = np.cumsum([0] + [b.omega.size for b in buildings])
         dmat = np.zeros((sum(b.n_floors for b in buildings), modes[-1]))
         rows = []
@@ -235,16 +236,15 @@ class Scene:
             n_bw = bld.bw_exponent if bld.hysteresis == "bouc-wen" else 0.0
             for s in range(ns):
                 rows.append([bld.storey_stiffness_N_per_m[s], uy[s], bld.post_yield_ratio,
-                             bld.storey_height_m[s], min(b, 1), n_bw])  # fmt: skip
+                             bld.storey_height_m[s], codes[b], n_bw])  # fmt: skip
             start += ns
         return dmat, np.array(rows, dtype=float)
 
     def _row_arrays(self) -> dict[str, np.ndarray]:
         """:meth:`modal_arrays` of a row: contacts between neighbours (``Contact.pair``).
 
-        ``side`` is 0 for the first building's floors and 1 for every other's, so that
-        ``peak_disp_left`` is the first building's and ``peak_disp_right`` the largest of
-        the others'.
+        ``side`` holds each floor's building code (:meth:`side_codes`), so that
+        ``peak_disp_left`` is the first building's and ``peak_disp_right`` the last's.
         """
         row = self.row
         floors = np.cumsum([0] + [b.n_floors for b in row])
@@ -264,8 +264,8 @@ class Scene:
             "zeta": np.concatenate([np.full(b.omega.size, b.damping_ratio) for b in row]),
             "gamma": np.concatenate([b.gamma for b in row]),
             "phi": phi,
-            "side": np.r_[np.zeros(row[0].n_floors, dtype=np.int64),
-                          np.ones(floors[-1] - row[0].n_floors, dtype=np.int64)],
+            "side": np.repeat(np.array(self.side_codes(), dtype=np.int64),
+                              [b.n_floors for b in row]),
             "psi": psi.reshape(nc, modes[-1]),
             "gap": np.asarray(self.gap_m, dtype=float),
             "meff": np.array([c.m_eff for c in self.contacts]),
@@ -311,123 +311,6 @@ class Scene:
         spec.pop("sa_period_s", None)  # the period of a study's record.sa_g axis, not a step
         source = spec.pop("source")
         return load_record(source, base_dir=self.base_dir, **spec)
-
-
-@dataclass
-class SimulationResult:
-    """Outputs of one simulation.
-
-    Attributes
-    ----------
-    outputs : dict
-        Every name of :data:`pound_mc.integrators.OUTPUTS` (forces [N], lengths [m], energies
-        [J], ``status`` 0 ok / 1 unstable / 2 not converged).
-    contacts : dict
-        Per-contact arrays (``peak_force``, ``impacts``, ``max_penetration``, ``impulse``).
-    time_s, disp_left_m, disp_right_m, penetration_m, force_N : numpy.ndarray or None
-        Histories at the record's samples (only with ``history=True``); with yielding
-        buildings they go on over the free-vibration tail (``integrator.tail_s``) after it.
-        NaN from where a run that stopped (unstable, not converged) stopped.
-    storeys : dict or None
-        With yielding buildings, per storey (left building's first, bottom to top):
-        ``building`` ("left" / "right"; in a row "building 1", "building 2", ... or "wall"),
-        ``storey`` (1-based within it), ``peak_drift_ratio``
-        and ``residual_drift_ratio`` (``|drift|`` over storey height, NaN without heights),
-        ``peak_ductility`` (peak ``|drift|`` over yield drift, NaN for a storey that cannot yield);
-        the scalar outputs ``peak_drift_left`` ... are their maxima over a building's storeys.
-    """
-
-    outputs: dict[str, float]
-    contacts: dict[str, np.ndarray]
-    scene: Scene
-    time_s: np.ndarray | None = None
-    disp_left_m: np.ndarray | None = None
-    disp_right_m: np.ndarray | None = None
-    penetration_m: np.ndarray | None = None
-    force_N: np.ndarray | None = None
-    extra: dict = field(default_factory=dict)
-    storeys: dict | None = None
-
-    @property
-    def status(self) -> str:
-        """``"ok"``, ``"unstable"``, ``"not_converged"`` or ``"inaccurate"``."""
-        return {0: "ok", 1: "unstable", 2: "not_converged", 3: "inaccurate"}[
-            int(self.outputs["status"])
-        ]
-
-    def to_json(self) -> dict[str, Any]:
-        """JSON-serialisable summary with the pinned keys of DESIGN.md section 7.
-
-        ``xi`` is the damping ratio the kernels ran with; null for ``hertzdamp``, whose damping
-        constant is set at every impact from ``e`` and the impact velocity (no constant ratio).
-        """
-
-        def num(x):
-            x = float(x)
-            return x if math.isfinite(x) else None
-
-        def count(x):  # NaN where a run that is not ok has no count
-            x = float(x)
-            return int(x) if math.isfinite(x) else None
-
-        o = self.outputs
-        inelastic = {}
-        if self.scene.inelastic:
-            # the storeys' responses (DESIGN.md section 9), only for yielding buildings
-            inelastic = {name: num(o[name]) for name in INELASTIC_OUTPUTS}
-        return {
-            "peak_force_N": num(o["peak_force"]),
-            "impacts": count(o["impacts"]),
-            "peak_disp_left_m": num(o["peak_disp_left"]),
-            "peak_disp_right_m": num(o["peak_disp_right"]),
-            "max_penetration_m": num(o["max_penetration"]),
-            "impulse_N_s": num(o["impulse"]),
-            "dissipated_energy_J": num(o["dissipated_energy"]),
-            "input_energy_J": num(o["input_energy"]),
-            "energy_residual": num(o["energy_residual"]),
-            "peak_force_time_s": num(o["peak_force_time"]),
-            "status": self.status,
-            "method": self.scene.method,
-            "contact_model": self.scene.contact_model,
-            "xi": num(self.scene.xi) if self.scene.xi is not None else None,
-            "steps": count(o["steps"]),
-            "max_impact_velocity": num(o["max_impact_velocity"]),
-            "median_impact_velocity": num(o["median_impact_velocity"]),
-            "peak_force_restitution": num(o["peak_force_restitution"]),
-            "contacts": [
-                {
-                    "kind": c.kind,
-                    "left_floor": c.left_floor + 1,
-                    "right_floor": c.right_floor + 1,
-                    "elevation_m": c.elevation_m,
-                    "gap_m": float(self.scene.gap_m[k]),
-                    "peak_force_N": num(self.contacts["peak_force"][k]),
-                    "impacts": count(self.contacts["impacts"][k]),
-                    "max_impact_velocity": num(self.contacts["max_impact_velocity"][k]),
-                    **({"pair": c.pair + 1} if self.scene.row is not None else {}),
-                }
-                for k, c in enumerate(self.scene.contacts)
-            ],
-            **inelastic,
-            **(
-                {
-                    "storeys": [
-                        {
-                            "building": str(b),
-                            "storey": int(n),
-                            "peak_drift_ratio": num(d),
-                            "peak_ductility": num(mu),
-                            "residual_drift_ratio": num(r),
-                        }
-                        for b, n, d, mu, r in zip(
-                            *(self.storeys[k] for k in STOREY_KEYS), strict=True
-                        )
-                    ]
-                }
-                if self.storeys is not None and self.scene.inelastic
-                else {}
-            ),
-        }
 
 
 def _building(spec, side: str, file, errors: list, wall_ok: bool | None = None) -> Building | None:
@@ -663,44 +546,6 @@ def scene_from_dict(data: dict, *, file: str | Path | None = None) -> Scene:
     )
 
 
-def with_tail(acc, dt_rec: float, tail_s: float) -> np.ndarray:
-    """The record followed by ``tail_s`` [s] of free vibration (zero ground acceleration).
-
-    The ground acceleration falls linearly from the last sample to zero over one interval.
-    """
-    n_tail = int(round(tail_s / dt_rec))
-    return np.concatenate((np.asarray(acc, dtype=float), np.zeros(n_tail)))
-
-
-#: Keys of :attr:`SimulationResult.storeys`, in the order ``simulate --json`` lists them.
-STOREY_KEYS = ("building", "storey", "peak_drift_ratio", "peak_ductility", "residual_drift_ratio")
-
-
-def storey_results(table: np.ndarray, storey_out: np.ndarray, owner=None) -> dict[str, np.ndarray]:
-    """Per-storey outputs (:attr:`SimulationResult.storeys`) from the storey table.
-
-    ``table``: :meth:`Scene.storey_arrays`'s (stiffness, yield drift, post-yield ratio,
-    height, building 0/1 per row); ``storey_out``: the kernel's peak and final drifts [m].
-    ``owner``: each storey's building by name (default ``left`` / ``right`` from the table;
-    a row's are ``building 1``, ``building 2``, ...); storeys are numbered within it.
-    """
-    side = table[:, 4].astype(int)
-    owner = np.where(side == 0, "left", "right") if owner is None else np.asarray(owner)
-    number = np.empty(side.size, dtype=np.int32)
-    for name in dict.fromkeys(owner.tolist()):
-        number[owner == name] = np.arange(1, np.count_nonzero(owner == name) + 1)
-    uy = table[:, 1]
-    with np.errstate(invalid="ignore"):
-        ductility = np.where(np.isfinite(uy), storey_out[:, 0] / uy, np.nan)
-    return {
-        "building": owner,
-        "storey": number,
-        "peak_drift_ratio": storey_out[:, 0] / table[:, 3],
-        "peak_ductility": ductility,
-        "residual_drift_ratio": np.abs(storey_out[:, 1]) / table[:, 3],
-    }
-
-
 def load_scene(path: str | Path) -> Scene:
     """Read and validate a scene file (TOML)."""
     path = Path(path)
@@ -724,88 +569,3 @@ def _same_record(cached: dict, record: dict) -> bool:
         return bool(cached == record)
     except ValueError:  # values without a truth value of their equality (arrays)
         return False
-
-
-def simulate(
-    scene: Scene,
-    *,
-    history: bool = False,
-    record=None,
-    method: str | None = None,
-    dt_s: float | None = None,
-    substeps: int | None = None,
-) -> SimulationResult:
-    """Run one simulation of ``scene``.
-
-    Parameters
-    ----------
-    scene : Scene
-        The scene.
-    history : bool
-        Also return histories at the record's samples.
-    record : tuple (dt_s, acceleration), optional
-        A record already loaded (``records.record_arrays``); default the scene's own, read
-        once and cached on the scene (:meth:`Scene.record_arrays`).
-    method, dt_s, substeps : optional
-        Override the scene's integrator settings, within the bounds of the scene file's
-        ``[integrator]`` keys.
-
-    Raises
-    ------
-    InputError
-        An override out of those bounds (``dt_s = 0``, an unknown method), naming it.
-
-    Notes
-    -----
-    The first call on a scene reads its record (tens of milliseconds through obspy); later
-    calls on the same scene reuse it and the modal arrays, and cost the kernel plus a few
-    microseconds of Python.
-    """
-    for key, value in (("method", method), ("dt_s", dt_s), ("substeps", substeps)):
-        if value is not None and (problem := schema.INTEGRATOR[key].problem(value)):
-            raise InputError(problem, key=key)
-    m = scene.method if method is None else method
-    dt_s = scene.dt_s if dt_s is None else float(dt_s)
-    substeps = scene.substeps if substeps is None else int(substeps)  # numpy integers too
-    if record is None:
-        record = scene.record_arrays()
-    dt_rec, acc = record
-    arrays = scene.kernel_arrays()
-    storeys = scene.kernel_storeys()
-    storey_out = None
-    if storeys is not None:
-        acc = with_tail(acc, dt_rec, scene.tail_s)
-        storey_out = np.empty((storeys[1].shape[0], 2))
-    outputs, contacts, hist = run_kernel(
-        acc,
-        dt_rec,
-        **arrays,
-        model=scene.contact_model,
-        method=m,
-        relation=scene.relation,
-        dt_s=dt_s,
-        substeps=substeps,
-        history=history,
-        storeys=storeys,
-        restitution=scene.restitution_rule(),
-        storey_out=storey_out,
-    )
-    if (m, dt_s, substeps) != (scene.method, scene.dt_s, scene.substeps):
-        scene = replace(scene, method=m, dt_s=dt_s, substeps=substeps)
-    res = SimulationResult(outputs, contacts, scene)
-    if storey_out is not None:
-        owner = None
-        if scene.row is not None:  # a row's buildings by their place in it
-            names = ["wall" if b.model == "wall" else f"building {k + 1}"
-                     for k, b in enumerate(scene.row)]  # fmt: skip
-            owner = np.repeat(names, [b.n_floors for b in scene.row])
-        res.storeys = storey_results(np.asarray(storeys[1], dtype=float), storey_out, owner)
-    if hist is not None:
-        hx, hd, hf = hist
-        fl = scene.left.n_floors
-        res.time_s = np.arange(acc.size) * dt_rec
-        res.disp_left_m = hx[:, :fl]
-        res.disp_right_m = hx[:, fl:]
-        res.penetration_m = hd
-        res.force_N = hf
-    return res

@@ -15,6 +15,11 @@ With a shear building the contacts are the pairs of floors at equal height, alon
 ``contact_max_penetration`` and ``contact_impulse``.  The per-simulation variables then sum
 (``impacts``, ``impulse``) or take the maximum (``peak_force``, ``max_penetration``) over the
 contacts.
+
+A study of a row of buildings (``[[buildings]]``) adds a ``building`` dimension (from 0, left
+to right; a wall is none), coordinate ``building_model``: ``peak_disp``, ``peak_ductility``,
+``peak_drift`` and ``residual_drift`` per simulation and building; its contacts' coordinate
+``contact_pair`` names the building on each contact's left.
 """
 
 from __future__ import annotations
@@ -30,6 +35,7 @@ from pound_mc.errors import OutputError
 from pound_mc.integrators.accuracy import STATUS_INACCURATE
 from pound_mc.integrators.outputs import STATUS_OK
 from pound_mc.study.definition import grid_dim_name
+from pound_mc.study.schema import ROW_TABLE
 
 __all__ = [
     "RESULT_VARIABLES",
@@ -37,6 +43,7 @@ __all__ = [
     "CONTACT_VARIABLES",
     "CONTACT_COORDINATES",
     "INELASTIC_VARIABLES",
+    "BUILDING_VARIABLES",
     "RECORD_VARIABLES",
     "STATUS_FLAGS",
     "QUANTILES",
@@ -128,12 +135,35 @@ STOREY_COORDINATES = {
     "storey_building": (None, "building of the storey (left or right)"),
     "storey_number": ("1", "storey within its building, bottom to top, 1-based"),
 }
+#: Per-building outputs of studies of a row of buildings (``[[buildings]]``; an extra trailing
+#: ``building`` dimension from 0, left to right, a wall none): name -> (units, long_name,
+#: dtype).  ``peak_disp_left`` / ``..._right`` are the first building's and the last's.
+BUILDING_VARIABLES = {
+    "peak_disp": ("m", "peak absolute displacement of the building (its floors' largest)",
+                  "f8"),
+    "peak_ductility": ("1", "peak storey drift over yield drift of the building (NaN: elastic)",
+                       "f8"),
+    "peak_drift": ("1", "peak inter-storey drift ratio of the building (NaN: elastic or no "
+                   "heights)", "f8"),
+    "residual_drift": ("1", "largest inter-storey drift ratio of the building after the "
+                       "free-vibration tail (NaN: elastic or no heights)", "f8"),
+}  # fmt: skip
+#: Coordinates of the ``building`` dimension: name -> (units, long_name); text ones have none.
+BUILDING_COORDINATES = {
+    "building": ("1", "place of the building in the row, left to right, from 0"),
+    "building_model": (None, "structural model of the building (sdof or shear)"),
+}
 #: Coordinates of the ``contact`` dimension: name -> (units, long_name).
 CONTACT_COORDINATES = {
     "contact": ("1", "contact index (pair of floors at equal height), 1-based"),
     "contact_elevation": ("m", "elevation of the contact above the ground"),
     "contact_left_floor": ("1", "floor of the left building at the contact, 1-based"),
     "contact_right_floor": ("1", "floor of the right building at the contact, 1-based"),
+    "contact_pair": (
+        "1",
+        "building on the left of the contact, its place in the row from 0 "
+        "(the right one is the next)",
+    ),
 }
 #: Per-record variables of studies with an intensity axis or a suite/glob of records:
 #: name -> (units, long_name); text ones (no units) are coordinates of ``record``.
@@ -181,8 +211,11 @@ _PARAMETER_ATTRS = {
 
 def _param_attrs(key: str) -> dict:
     table, name = key.split(".", 1) if "." in key else ("", key)
+    if table == ROW_TABLE:  # "buildings.N.KEY": building N of a row
+        table, _, name = name.partition(".")
+        table = f"building {table}"
     units, long_name = _PARAMETER_ATTRS.get(name, ("1", name))
-    prefix = f"{table} " if table in ("left", "right", "record") else ""
+    prefix = f"{table} " if table.startswith(("left", "right", "record", "building")) else ""
     return {"units": units, "long_name": prefix + long_name, "scene_key": key}
 
 
@@ -260,7 +293,18 @@ def build_dataset(
         units, long_name, dtype = STOREY_VARIABLES[name]
         values = np.asarray(results[name]).astype(dtype, copy=False)
         data_vars[name] = ((*dims, "storey"), values, {"units": units, "long_name": long_name})
+    per_building = [name for name in BUILDING_VARIABLES if name in results]
+    for name in per_building:
+        units, long_name, dtype = BUILDING_VARIABLES[name]
+        values = np.asarray(results[name]).astype(dtype, copy=False)
+        data_vars[name] = ((*dims, "building"), values, {"units": units, "long_name": long_name})
     for name, (pdims, values) in parameters.items():
+        if name in BUILDING_COORDINATES:
+            if per_building:
+                units, long_name = BUILDING_COORDINATES[name]
+                attrs = {"long_name": long_name, **({"units": units} if units else {})}
+                coords[name] = (pdims, values, attrs)
+            continue
         if name in STOREY_COORDINATES:
             if per_storey:
                 units, long_name = STOREY_COORDINATES[name]

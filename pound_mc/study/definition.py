@@ -1,7 +1,7 @@
 """Study files: validation against the declared tables, and the plan of simulations.
 
-A study is a scene (``[record]`` or ``[[records]]``, ``[left]``, ``[right]``, ``[contact]``,
-``[integrator]``; see :mod:`pound_mc.scene`) plus
+A study is a scene (``[record]`` or ``[[records]]``, ``[left]`` and ``[right]`` or a row
+``[[buildings]]``, ``[contact]``, ``[integrator]``; see :mod:`pound_mc.scene`) plus
 
 ``[study]``
     ``name`` (letters, digits, ``-``, ``_``), ``seed`` (integer >= 0), optional
@@ -33,8 +33,9 @@ A study is a scene (``[record]`` or ``[[records]]``, ``[left]``, ``[right]``, ``
 
 A building's keys may be varied as its model allows (``left.period_s`` of an SDOF building,
 ``left.storey_stiffness_N_per_m`` of a shear building: a number stands for every storey; yield
-keys and ``post_yield_ratio`` of both); a key of the other model is refused.  A study that
-varies a shear building's keys computes its modes per simulation
+keys and ``post_yield_ratio`` of both); a key of the other model is refused.  In a row,
+building N's keys are ``"buildings.N.KEY"`` (N from 0, left to right; a wall is none).  A
+study that varies a shear building's keys, or gives a row, computes its modes per simulation
 (:class:`~pound_mc.study.engine.StudyEngine`), others once per study.
 
 Every key is declared once, with its type, bounds, default, unit and description, in
@@ -69,9 +70,12 @@ from pound_mc.study.schema import (
     MATERIAL_KEY,
     MAX_SAMPLES,
     NUMERIC_SCENE_KEYS,
+    ROW_KEY,
+    ROW_TABLE,
     SAMPLING,
     STUDY,
     TOP_LEVEL,
+    is_numeric_key,
 )
 
 __all__ = [
@@ -87,7 +91,7 @@ __all__ = [
 ]
 
 #: The scene tables a study shares between its records.
-_SCENE_TABLES = ("left", "right", "contact", "integrator")
+_SCENE_TABLES = ("left", "right", ROW_TABLE, "contact", "integrator")
 
 
 def grid_dim_name(key: str) -> str:
@@ -222,13 +226,18 @@ def set_key(data: dict, key: str, value) -> None:
     """Set ``"table.key"`` in a scene dict, dropping the key it replaces (``e`` <-> ``xi``).
 
     A number for a key the scene gives as a list (a shear building's storey lists) stands for
-    every element: ``[value] * len(list)``.
+    every element: ``[value] * len(list)``.  ``"buildings.N.KEY"`` sets building N's of a row.
     """
-    table, name = key.split(".", 1)
-    current = data.setdefault(table, {}).get(name)
+    row = ROW_KEY.match(key)
+    if row is not None:
+        owner, name = data[ROW_TABLE][int(row[1])], row[2]
+    else:
+        table, name = key.split(".", 1)
+        owner = data.setdefault(table, {})
+    current = owner.get(name)
     if isinstance(current, list) and not isinstance(value, list):
         value = [value] * len(current)
-    data[table][name] = value
+    owner[name] = value
     other = EXCLUSIVE.get(key)
     if other is not None:
         t2, n2 = other.split(".", 1)
@@ -328,18 +337,30 @@ def scene_model(data: dict, side: str) -> str:
     return table.get("model", "sdof") if isinstance(table, dict) else "sdof"
 
 
+def scene_models(data: dict) -> list[str]:
+    """The models of a scene's buildings from left to right (a row's, or left and right)."""
+    row = data.get(ROW_TABLE)
+    if isinstance(row, list):
+        return [b.get("model", "sdof") if isinstance(b, dict) else "sdof" for b in row]
+    return [scene_model(data, side) for side in ("left", "right")]
+
+
 def _top_level(data: dict, file, errors: list) -> None:
     """Unknown tables, and tables that are not tables."""
     for key in sorted(set(data) - set(TOP_LEVEL)):
         errors.append(InputError(f"unknown table; allowed {list(TOP_LEVEL)}", file=file, key=key))
     for key in sorted(set(data) & set(TOP_LEVEL)):
         value = data[key]
-        if key == "records":
+        if key in ("records", ROW_TABLE):
             ok = isinstance(value, list) and all(isinstance(r, dict) for r in value)
         else:
             ok = isinstance(value, dict)
         if not ok:
-            what = "an array of tables [[records]]" if key == "records" else f"a table [{key}]"
+            what = (
+                f"an array of tables [[{key}]]"
+                if key in ("records", ROW_TABLE)
+                else f"a table [{key}]"
+            )
             errors.append(InputError(f"must be {what}, got {value!r}", file=file, key=key))
 
 
@@ -376,7 +397,14 @@ def _quote_hint(key: str, value) -> str:
     """For ``contact.gap_m = ...`` unquoted (TOML's table ``contact``): quote the dotted key."""
     if not (isinstance(value, dict) and key in _SCENE_TABLES + ("record",)):
         return ""
-    quoted = ", ".join(f'"{key}.{name}" = ...' for name in value)
+
+    def dotted(prefix, v, depth):  # buildings.1.period_s is nested twice
+        if depth == 0 or not isinstance(v, dict):
+            return [prefix]
+        return [d for name, inner in v.items()
+                for d in dotted(f"{prefix}.{name}", inner, depth - 1)]  # fmt: skip
+
+    quoted = ", ".join(f'"{d}" = ...' for d in dotted(key, value, 2 if key == ROW_TABLE else 1))
     return f" (a dotted key must be quoted: {quoted})"
 
 
@@ -390,11 +418,12 @@ def _grid(spec: dict, file, errors: list) -> tuple[dict, dict]:
             if names is not None:
                 labels[key] = names
                 grid[key] = np.array([materials.MATERIALS.index(m) for m in names], dtype=float)
-        elif key not in NUMERIC_SCENE_KEYS and key not in INTENSITY_KEYS:
+        elif not is_numeric_key(key) and key not in INTENSITY_KEYS:
             errors.append(
                 InputError(
                     f"not a numeric scene key{_quote_hint(key, axis)}; a grid axis is one of "
-                    f"{sorted([*NUMERIC_SCENE_KEYS, *INTENSITY_KEYS])}",
+                    f"{sorted([*NUMERIC_SCENE_KEYS, *INTENSITY_KEYS])} (in a row, "
+                    '"buildings.N.KEY")',
                     file=file,
                     key=f"grid.{key}",
                 )
@@ -452,11 +481,11 @@ def _vary(vary: dict, grid: dict, labels: dict, file, errors: list) -> tuple[lis
             if variable is not None:
                 material_variables[key] = per_material
                 variables.append(variable)
-        elif key not in NUMERIC_SCENE_KEYS:
+        elif not is_numeric_key(key):
             errors.append(
                 InputError(
                     f"not a numeric scene key{_quote_hint(key, vspec)}; choose from "
-                    f"{sorted(NUMERIC_SCENE_KEYS)}",
+                    f'{sorted(NUMERIC_SCENE_KEYS)} (in a row, "buildings.N.KEY")',
                     file=file,
                     key=where,
                 )
@@ -492,30 +521,58 @@ def _vary(vary: dict, grid: dict, labels: dict, file, errors: list) -> tuple[lis
 
 
 def _structure_keys(scene: dict, grid: dict, variables: list, file, errors: list) -> list:
-    """A varied ``left.*`` / ``right.*`` key must be one its building's model may vary."""
+    """A varied building key must be one its building's model may vary.
+
+    ``left.*`` / ``right.*`` in a pair, ``"buildings.N.KEY"`` in a row (N one of its
+    buildings, from 0; a wall is none).
+    """
     varied = [(f"grid.{k}", k) for k in grid] + [
         (f"sampling.vary.{v.key}", v.key) for v in variables
     ]
+    row = scene.get(ROW_TABLE)
+    row = row if isinstance(row, list) else None
     refused = set()
     for where, key in varied:
-        side, _, name = key.partition(".")
-        if side not in ("left", "right"):
-            continue
-        model = scene_model(scene, side)
-        table = BUILDINGS.get(model) if isinstance(model, str) else None  # else: scene's error
-        allowed = sorted(f"{side}.{f.name}" for f in table.fields if f.varied) if table else []
-        if table is not None and key not in allowed:
-            errors.append(
-                InputError(
-                    f"not a structural key of a {model} building ([{side}] model = "
-                    f"'{model}'); vary one of {allowed}",
-                    file=file,
-                    key=where,
-                )
-            )
+        problem = _building_key_problem(scene, row, key)
+        if problem is not None:
+            errors.append(InputError(problem, file=file, key=where))
             grid.pop(key, None)
             refused.add(key)
     return [v for v in variables if v.key not in refused]
+
+
+def _building_key_problem(scene: dict, row: list | None, key: str) -> str | None:
+    """Why ``key`` cannot vary a building of ``scene`` (None: it can, or it is no building's)."""
+    match = ROW_KEY.match(key)
+    side, _, name = key.partition(".")
+    if match is None and side not in ("left", "right"):
+        return None
+    if row is not None and match is None:
+        return (f"the study gives a row of buildings ([[{ROW_TABLE}]]): vary building N's "
+                f'key as "{ROW_TABLE}.N.{name}" (N from 0, left to right)')  # fmt: skip
+    if row is None and match is not None:
+        return (
+            f"names a row's building, but the study gives [left] and [right], not [[{ROW_TABLE}]]"
+        )
+    if match is not None:
+        n, name = int(match[1]), match[2]
+        models = [b.get("model", "sdof") if isinstance(b, dict) else None for b in row]
+        buildings = [k for k, m in enumerate(models) if m != "wall"]
+        if n not in buildings:
+            where = "a wall, which is no building" if n < len(models) else "no such building"
+            return (f"building {n} is {where}: the row's buildings are "
+                    f"{', '.join(map(str, buildings))} (from 0, left to right)")  # fmt: skip
+        model, label, prefix = models[n], f"[[{ROW_TABLE}]] {n}", f"{ROW_TABLE}.{n}"
+    else:
+        model, label, prefix = scene_model(scene, side), f"[{side}]", side
+    table = BUILDINGS.get(model) if isinstance(model, str) else None  # else: scene's error
+    allowed = sorted(f"{prefix}.{f.name}" for f in table.fields if f.varied) if table else []
+    if table is not None and f"{prefix}.{name}" not in allowed:
+        return (
+            f"not a structural key of a {model} building ({label} model = '{model}'); "
+            f"vary one of {allowed}"
+        )
+    return None
 
 
 def _record_names(records: list[dict]) -> list[str]:

@@ -14,9 +14,7 @@ A study that varies a shear building's keys, or whose buildings can yield, runs 
 simulation as its own scene (:meth:`StudyEngine.scene_of`, modes computed for it); the
 results are still a function of the study and the index only.
 
-Longer than 600 lines because one engine maps the study's drawn samples to every path (SDOF
-batch, shear batch, scene by scene) and to the dataset's parameters, so that they cannot
-disagree.
+The records are read by :mod:`pound_mc.study.inputs`.
 """
 
 from __future__ import annotations
@@ -42,24 +40,26 @@ from pound_mc.integrators.accuracy import (
 from pound_mc.integrators.batch import check_inelastic_method
 from pound_mc.integrators.outputs import STATUS_OK
 from pound_mc.integrators.threads import numba_threads
-from pound_mc.motions import G, load_record, record_arrays
+from pound_mc.motions import G, record_arrays
 from pound_mc.motions.intensity import checked_sa_period, sa_g
 from pound_mc.motions.preprocessing import WINDOW_PEAK_WARN
 from pound_mc.physics.contact import default_relation, kernel_damping, reported_xi
 from pound_mc.physics.relations import restitution_of_xi
 from pound_mc.scene import Scene, scene_from_dict, simulate
 from pound_mc.scene import schema as scene_schema
-from pound_mc.scene.model import storey_results
+from pound_mc.scene.simulation import storey_results
 from pound_mc.study.dataset import (
+    BUILDING_VARIABLES,
     CONTACT_VARIABLES,
     INELASTIC_VARIABLES,
     RESULT_VARIABLES,
     RUN_VARIABLES,
     STOREY_VARIABLES,
 )
-from pound_mc.study.definition import INTENSITY_KEYS, MATERIAL_KEY, grid_dim_name, scene_model
+from pound_mc.study.definition import INTENSITY_KEYS, MATERIAL_KEY, grid_dim_name, scene_models
+from pound_mc.study.inputs import load_traces
 
-__all__ = ["StudyEngine", "load_records", "load_traces", "STEP_BUDGET"]
+__all__ = ["StudyEngine", "STEP_BUDGET"]
 
 #: The most integration steps one simulation may take (record duration over ``dt_s``); a study
 #: that needs more is refused before it runs (``check`` and ``run``): at about 0.3 us a step
@@ -128,49 +128,6 @@ def _dims_of(study, key: str) -> tuple[str, ...]:
     return ()
 
 
-def load_records(study) -> list[tuple[float, np.ndarray]]:
-    """Read and preprocess every record of ``study``: ``[(dt_s, acceleration), ...]``.
-
-    Raises
-    ------
-    InputError
-        Every record that cannot be read, keyed in the study file (``record.duration_s``,
-        ``records[2].source``); a problem inside a record file names that file too.
-    """
-    return [record_arrays(trace) for trace in load_traces(study)]
-
-
-def load_traces(study) -> list:
-    """Read and preprocess every record of ``study``: the obspy Traces (with their metadata).
-
-    Raises
-    ------
-    InputError
-        As :func:`load_records`.
-    """
-    fname = None if study.path is None else str(study.path)
-    base_dir = None if study.path is None else study.path.parent
-    out, errors = [], []
-    for i, record in enumerate(study.records):
-        spec = dict(record)
-        spec.pop("name", None)
-        spec.pop("sa_period_s", None)  # the period of the record.sa_g axis, not a step
-        source = spec.pop("source")
-        where = study.record_table(i) + "."
-        try:
-            out.append(load_record(source, base_dir=base_dir, **spec))
-        except InputError as exc:
-            exc = named_by(exc, fname, table=where[:-1])
-            errors.extend(getattr(exc, "errors", [exc]))
-        except (OSError, ValueError, TypeError) as exc:
-            errors.append(
-                InputError(f"cannot read {source!r}: {exc}", file=fname, key=where + "source")
-            )
-    if errors:
-        raise InputErrors(errors)
-    return out
-
-
 #: :meth:`StudyEngine.calibrate` times at least this many simulations, and for at least
 #: this long [s], unless told a number.
 CALIBRATION_SIZE, CALIBRATION_MIN_S = 64, 1.0
@@ -215,9 +172,10 @@ class StudyEngine:
         #: Whether a building is a shear building: then every simulation runs the modes of
         #: :attr:`arrays` (computed once) through the general batch, and the outputs include
         #: the per-contact arrays of :data:`~pound_mc.study.dataset.CONTACT_VARIABLES`.
-        self.mdof = any(
-            scene_model(study.scene, side) in ("shear", "wall") for side in ("left", "right")
-        )
+        #: Whether the study gives a row of buildings (``[[buildings]]``): each simulation then
+        #: runs its own scene, and the dataset holds each building's outputs.
+        self.row = self.scene.row is not None
+        self.mdof = self.row or any(m in ("shear", "wall") for m in scene_models(study.scene))
         self.arrays = self.scene.modal_arrays() if self.mdof else None
         #: Whether a building can yield: each simulation then runs its own scene (the inelastic
         #: kernels), and the dataset holds the storeys' outputs.
@@ -226,8 +184,12 @@ class StudyEngine:
             check_inelastic_method(self._base["integrator.method"], self.study.path)
         #: Whether each simulation runs its own scene (:meth:`scene_of`, its modes computed
         #: for it): with yielding buildings, and with a shear building whose keys vary.
-        self.per_scene = self.inelastic or (
-            self.mdof and any(key.split(".", 1)[0] in ("left", "right") for key in self._varied)
+        self.per_scene = (
+            self.inelastic
+            or self.row
+            or (
+                self.mdof and any(key.split(".", 1)[0] in ("left", "right") for key in self._varied)
+            )
         )
 
     def _intensities(self) -> None:
@@ -493,7 +455,15 @@ class StudyEngine:
         if self.per_storey:
             ns = self.scene.storey_arrays()[1].shape[0]
             out.update({name: ((ns,), dtype) for name, (_, _, dtype) in STOREY_VARIABLES.items()})
+        if self.row:
+            nb = len(self._row_buildings)
+            out.update({name: ((nb,), dtype) for name, (_, _, dtype) in BUILDING_VARIABLES.items()})
         return out
+
+    @property
+    def _row_buildings(self) -> list:
+        """The row's buildings from left to right (a wall is none)."""
+        return [b for b in self.scene.buildings if b.model != "wall"]
 
     @property
     def per_storey(self) -> bool:
@@ -529,6 +499,9 @@ class StudyEngine:
                 if self.per_storey:
                     for name, key in _STOREY_KEYS.items():
                         out[name][k] = res.storeys[key]
+                if self.row:
+                    for name in BUILDING_VARIABLES:
+                        out[name][k] = [b[name] for b in res.buildings]
         except InputError as exc:  # a law the method cannot step: the key, without the file
             raise named_by(exc, self.study.path) from None
         return out
@@ -708,6 +681,11 @@ class StudyEngine:
             out["material"] = ((grid_dim_name(MATERIAL_KEY),), names)
         if self.mdof:
             out.update(self.contact_coordinates())
+        if self.row:
+            dims = ("building",)
+            models = [b.model for b in self._row_buildings]
+            out["building"] = (dims, np.arange(len(models), dtype=np.int32))
+            out["building_model"] = (dims, np.asarray(models, dtype=object))
         if self.per_storey:
             table = self.scene.storey_arrays()[1]
             which = storey_results(table, np.zeros((table.shape[0], 2)))
@@ -759,6 +737,11 @@ class StudyEngine:
                 dims,
                 np.array([c.right_floor + 1 for c in contacts], np.int32),
             ),
+            **(
+                {"contact_pair": (dims, np.array([c.pair for c in contacts], np.int32))}
+                if self.row
+                else {}
+            ),  # fmt: skip
         }
 
     def _sampled(self, key: str, default) -> np.ndarray:

@@ -12,7 +12,7 @@ from __future__ import annotations
 from pound_mc.errors import InputError, InputErrors
 from pound_mc.scene import scene_from_dict
 from pound_mc.scene.schema import BUILDINGS, CONTACT, INTEGRATOR, Field
-from pound_mc.study.schema import INTENSITY_KEYS, MATERIAL_KEY
+from pound_mc.study.schema import INTENSITY_KEYS, MATERIAL_KEY, ROW_KEY, ROW_TABLE
 
 __all__ = ["EXCLUSIVE", "probe", "fixed_partner"]
 
@@ -34,7 +34,14 @@ def _scene_errors(data: dict, file) -> list[InputError]:
 def _field(scene: dict, key: str) -> Field | None:
     """The declaration of a varied scene key (``"left.period_s"``), or None if unknown."""
     table, name = key.split(".", 1)
-    if table in ("left", "right"):
+    row = ROW_KEY.match(key)
+    if row is not None:  # "buildings.N.KEY": building N of the row
+        buildings = scene.get(ROW_TABLE)
+        n, name = int(row[1]), row[2]
+        spec = buildings[n] if isinstance(buildings, list) and n < len(buildings) else None
+        model = spec.get("model", "sdof") if isinstance(spec, dict) else "sdof"
+        declared = BUILDINGS.get(model) if isinstance(model, str) else None
+    elif table in ("left", "right"):
         spec = scene.get(table)
         model = spec.get("model", "sdof") if isinstance(spec, dict) else "sdof"
         declared = BUILDINGS.get(model) if isinstance(model, str) else None
@@ -93,9 +100,14 @@ def probe(study, prefixes: list[str], file, errors: list) -> None:
         for key, value in first.items():
             table, leaf = key.split(".", 1)
             partner = EXCLUSIVE.get(key, "").partition(".")[2]
-            present = scene.get(table, {})
+            row = ROW_KEY.match(key)
+            if row is not None:  # building N of a row (a study's own check names a bad N)
+                leaf = row[2]
+                present = scene[ROW_TABLE][int(row[1])]
+            else:
+                present = scene.setdefault(table, {})
             if leaf not in present and partner not in present and key not in bad:
-                scene.setdefault(table, {})[leaf] = value
+                present[leaf] = value
         for err in _scene_errors(scene, file):
             key = err.key or ""
             if key in bad:

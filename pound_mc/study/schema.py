@@ -1,9 +1,10 @@
 """The study tables declared once, and the reference page and JSON Schema made from them.
 
 A study file is a scene (:mod:`pound_mc.scene.schema`: ``[record]`` or ``[[records]]``,
-``[left]``, ``[right]``, ``[contact]``, ``[integrator]``) plus ``[study]``, ``[grid]`` and
-``[sampling]`` with ``[sampling.vary]`` (:data:`pound_mc.study.sampling.VARY_TABLES`).  The
-validator (:func:`pound_mc.study.definition.study_from_text`) walks these declarations; the
+``[left]`` and ``[right]`` or a row ``[[buildings]]``, ``[contact]``, ``[integrator]``) plus
+``[study]``, ``[grid]`` and ``[sampling]`` with ``[sampling.vary]``
+(:data:`pound_mc.study.sampling.VARY_TABLES`).  The validator
+(:func:`pound_mc.study.definition.study_from_text`) walks these declarations; the
 same declarations write ``studies/SCHEMA.md`` (:func:`reference_markdown`) and
 ``studies/pound-mc.schema.json`` (:func:`json_schema`)::
 
@@ -15,6 +16,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import re
 import sys
 from pathlib import Path
 
@@ -31,6 +33,10 @@ __all__ = [
     "MAX_SAMPLES",
     "MATERIAL_KEY",
     "NUMERIC_SCENE_KEYS",
+    "ROW_TABLE",
+    "ROW_KEY",
+    "ROW_VARIED",
+    "is_numeric_key",
     "INTENSITY_KEYS",
     "GRID_DIGITS",
     "reference_markdown",
@@ -49,6 +55,25 @@ MAX_SEED = 2**64 - 1
 MATERIAL_KEY = "contact.material"
 #: Scene keys that may be a grid axis or a sampled variable (scalar numbers).
 NUMERIC_SCENE_KEYS = frozenset(scene_schema.varied_keys())
+#: The table of a row of buildings (``[[buildings]]``, left to right) in place of ``[left]``
+#: and ``[right]``; its keys are ``"buildings.N.KEY"`` (N from 0; a wall is no building).
+ROW_TABLE = "buildings"
+#: Building keys a study may vary in a row: ``KEY`` of ``"buildings.N.KEY"``.
+ROW_VARIED = tuple(k.split(".", 1)[1] for k in scene_schema.varied_keys() if k.startswith("left."))
+#: A row's varied key, ``"buildings.N.KEY"``: groups N and KEY.
+ROW_KEY = re.compile(r"^buildings\.(0|[1-9][0-9]*)\.([A-Za-z_]+)$")
+
+
+def is_numeric_key(key: str) -> bool:
+    """Whether ``key`` may be a grid axis or a sampled key: a scene key or a row's building key.
+
+    ``"buildings.N.KEY"`` with any ``N`` and a building ``KEY``: whether building ``N``
+    exists, and may vary ``KEY``, is the study's to check.
+    """
+    match = ROW_KEY.match(key)
+    return key in NUMERIC_SCENE_KEYS or (match is not None and match[2] in ROW_VARIED)
+
+
 #: Grid axes that scale every record to a target intensity [g] (a multiple-stripe analysis):
 #: ``{key: description}``.  Grid axes only (not sampled keys), at most one per study.
 INTENSITY_KEYS = {
@@ -117,6 +142,7 @@ TOP_LEVEL = {
     "records": scene_schema.RECORD,
     "left": scene_schema.BUILDINGS,
     "right": scene_schema.BUILDINGS,
+    ROW_TABLE: scene_schema.BUILDINGS,
     "contact": scene_schema.CONTACT,
     "integrator": scene_schema.INTEGRATOR,
     "grid": GRID_AXIS,
@@ -187,9 +213,13 @@ def reference_markdown() -> str:
     out += _table_markdown('[left] / [right], model = "shear"', scene_schema.SHEAR)
     out += _table_markdown('[right], model = "wall"', scene_schema.WALL)
     out += [
-        "A scene file may give a row of buildings instead of `[left]` and `[right]`: "
+        "A scene or study file may give a row of buildings instead of `[left]` and `[right]`: "
         "`[[buildings]]`, two or more tables of the forms above from left to right (a wall "
-        "only last), with a contact between neighbours (studies take `[left]` and `[right]`).",
+        "only last), with a contact between neighbours.  A study varies building N's keys as "
+        '`"buildings.N.KEY"` (N from 0, left to right; a wall is no building), e.g. '
+        '`"buildings.1.period_s"`; its dataset gains per-building outputs along a `building` '
+        "dimension (`peak_disp`, `peak_ductility`, `peak_drift`, `residual_drift`), and "
+        "`peak_disp_left` ... `..._right` are the first building's and the last's.",
         "",
     ]
     out += _table_markdown("[contact]", scene_schema.CONTACT)
@@ -198,7 +228,10 @@ def reference_markdown() -> str:
     out += _table_markdown("[study]", STUDY)
     out += _table_markdown('[grid]: "KEY" = { start, stop, num } or a list', GRID_AXIS)
     keys = ", ".join(f"`{k}`" for k in sorted(NUMERIC_SCENE_KEYS))
-    out += [f"Grid axes and sampled keys: {keys}; and the grid axis `{MATERIAL_KEY}`.", ""]
+    row = ", ".join(f"`{k}`" for k in ROW_VARIED)
+    out += [f"Grid axes and sampled keys: {keys}; in a row, `buildings.N.KEY` for KEY one of "
+            f"{row} (as building N's model allows); and the grid axis `{MATERIAL_KEY}`.",
+            ""]  # fmt: skip
     out += ["Intensity grid axes (one per study, grid only):", ""]
     out += [f"- `{k}` [g]: {v}." for k, v in INTENSITY_KEYS.items()] + [""]
     out += _table_markdown("[sampling]", SAMPLING)
@@ -290,6 +323,11 @@ def _contact_schema() -> dict:
     return out
 
 
+def _row_key_pattern() -> str:
+    """The JSON Schema pattern of a row's varied keys (``"buildings.N.KEY"``)."""
+    return ROW_KEY.pattern.replace("([A-Za-z_]+)", f"({'|'.join(ROW_VARIED)})")
+
+
 def json_schema() -> dict:
     """A JSON Schema (draft 2020-12) of study and scene files, for editors.
 
@@ -303,7 +341,12 @@ def json_schema() -> dict:
     grid = {
         "type": "object",
         "description": GRID_AXIS.description,
-        "propertyNames": {"enum": sorted([*NUMERIC_SCENE_KEYS, *INTENSITY_KEYS, MATERIAL_KEY])},
+        "propertyNames": {
+            "anyOf": [
+                {"enum": sorted([*NUMERIC_SCENE_KEYS, *INTENSITY_KEYS, MATERIAL_KEY])},
+                {"pattern": _row_key_pattern()},
+            ]
+        },  # fmt: skip
         "additionalProperties": grid_values,
         "properties": {
             MATERIAL_KEY: {
@@ -317,7 +360,12 @@ def json_schema() -> dict:
     vary = {
         "type": "object",
         "description": "Sampled scene keys and their distributions.",
-        "propertyNames": {"enum": sorted(NUMERIC_SCENE_KEYS)},
+        "propertyNames": {
+            "anyOf": [
+                {"enum": sorted(NUMERIC_SCENE_KEYS)},
+                {"pattern": _row_key_pattern()},
+            ]
+        },  # fmt: skip
         "additionalProperties": {
             "anyOf": [_table_schema(t) for t in sampling.VARY_TABLES.values()]
         },
@@ -342,7 +390,7 @@ def json_schema() -> dict:
             "right": {"anyOf": [*building["anyOf"], wall]},
             "buildings": {
                 "type": "array",
-                "description": "A row of buildings, left to right (scene files; a wall only last).",
+                "description": "A row of buildings, left to right (a wall only last).",
                 "prefixItems": [building],  # the first is no wall
                 "items": {"anyOf": [*building["anyOf"], wall]},
                 "minItems": 2,
@@ -352,12 +400,12 @@ def json_schema() -> dict:
             "grid": grid,
             "sampling": samp,
         },
-        # a pair or a row, not both; a row in scene files only (no [study])
+        # a pair or a row, not both
         "oneOf": [
             {"required": ["left", "right"], "not": {"required": ["buildings"]}},
             {
                 "required": ["buildings"],
-                "not": {"anyOf": [{"required": [k]} for k in ("left", "right", "study")]},
+                "not": {"anyOf": [{"required": [k]} for k in ("left", "right")]},
             },
         ],
         "additionalProperties": False,
