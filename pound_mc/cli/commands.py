@@ -220,7 +220,11 @@ def _records(sub: argparse._SubParsersAction) -> None:
         help="builtin:NAME, synthetic:MODEL, a bare builtin name or a file",
     )
     _json_and_plot(q, "acceleration and 5%%-damped PSA chart")
-    q.add_argument("--units", help="units of the file's values: g, gal or m/s^2")
+    q.add_argument(
+        "--units",
+        help="units of the file's values, overriding the header: g, gal, m/s^2, mm/s^2, in/s^2, "
+        "ft/s^2, kilogal (the spellings of the record units key)",
+    )
     q.add_argument("--component", help="component of a multi-trace file")
     q.add_argument("--seed", type=int, default=0, help="realisation of a synthetic motion")
     q.add_argument(

@@ -16,6 +16,7 @@ from pound_mc.analysis.style import output_path
 from pound_mc.errors import InputError
 from pound_mc.motions import (
     BUILTIN_RECORDS,
+    UNITS_FROM,
     G,
     builtin_catalogue,
     load_record,
@@ -76,9 +77,11 @@ def info_command(args) -> int:
         print(json.dumps(info))
         return 0
     print(f"{'record':<12} {info.get('source', source)}")
-    for key in ("event", "date", "station", "component", "format", "source_units"):
+    for key in ("event", "date", "station", "component", "format"):
         if key in info:
-            print(f"{key.replace('_', ' '):<12} {info[key]}")
+            print(f"{key:<12} {info[key]}")
+    if "source_units" in info:
+        print(f"{'source units':<12} {info['source_units']}{_units_origin(trace, info)}")
     dt, _ = record_arrays(trace)
     print(f"{'samples':<12} {info['npts']} at dt = {dt:g} s ({1.0 / dt:g} Hz)")
     print(f"{'duration':<12} {info['duration_s']:.4g} s")
@@ -86,6 +89,21 @@ def info_command(args) -> int:
     if args.plot:
         print(f"wrote {args.plot}")
     return 0
+
+
+def _units_origin(trace, info: dict) -> str:
+    """Where the record's units came from, as a parenthesis (empty where unknown)."""
+    origin = info.get("source_units_from")
+    if origin not in UNITS_FROM:
+        return ""
+    words = UNITS_FROM[origin]
+    if origin == "header":
+        header = trace.stats.pound.get("header") or []
+        if len(header) >= 3:
+            words += f", line 3: {header[2].strip()!r}"
+    elif origin == "units":
+        words = "given with --units"
+    return f" ({words})"
 
 
 def _plot(trace, info: dict, path: str) -> None:

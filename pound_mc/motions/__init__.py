@@ -24,7 +24,10 @@ from pound_mc.motions.readers import FORMAT_UNITS, read_at2, read_record
 from pound_mc.motions.synthetic import SYNTHETIC_MODELS
 from pound_mc.motions.traces import (
     MAX_DT_S,
+    UNIT_SPELLINGS,
     UNITS,
+    UNITS_FROM,
+    UNITS_TEXT,
     G,
     make_trace,
     record_arrays,
@@ -34,6 +37,9 @@ from pound_mc.motions.traces import (
 __all__ = [
     "G",
     "UNITS",
+    "UNIT_SPELLINGS",
+    "UNITS_FROM",
+    "UNITS_TEXT",
     "MAX_DT_S",
     "FORMAT_UNITS",
     "BUILTIN_RECORDS",

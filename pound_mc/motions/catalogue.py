@@ -300,8 +300,10 @@ def load_record(
         :mod:`pound_mc.motions.suites`).
     demean, duration_s, pga_g, resample_hz, filter
         As in :func:`preprocess`.
-    units : {"g", "gal", "m/s^2"}, optional
-        Units of the file's values, as in :func:`read_record`.
+    units : str, optional
+        Units of the file's values (``"g"``, ``"gal"``, ``"m/s^2"``, ``"mm/s^2"``,
+        ``"in/s^2"``, ``"ft/s^2"``, ``"kilogal"`` or another spelling in
+        :data:`~pound_mc.motions.traces.UNIT_SPELLINGS`), as in :func:`read_record`.
     component : str, optional
         Trace of a multi-trace file, as in :func:`read_record`.
     base_dir : str or os.PathLike, optional

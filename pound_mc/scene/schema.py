@@ -24,7 +24,7 @@ from typing import Any
 
 from pound_mc.errors import InputError, InputErrors, did_you_mean
 from pound_mc.integrators import METHODS
-from pound_mc.motions import UNITS, builtin_catalogue, suites, synthetic
+from pound_mc.motions import UNITS_TEXT, builtin_catalogue, suites, synthetic
 from pound_mc.physics import contact
 from pound_mc.physics.contact import CONTACT_MODELS
 from pound_mc.physics.materials import MATERIALS, PER_IMPACT_OUTSIDE
@@ -356,8 +356,13 @@ RECORD = Table(
               minimum=0.0, exclusive_minimum=True),
         Field("pga_g", "number", "Scale so that max |a| of the kept samples is pga_g * g.",
               unit="g", minimum=0.0, exclusive_minimum=True),
-        Field("units", "string", "Units of the file's values where the format does not say: "
-              + ", ".join(f"`{u}`" for u in UNITS) + " (or `cm/s^2`)."),
+        Field("units", "string", "Units of the file's values: " + UNITS_TEXT + ".  Overrides "
+              "the units an AT2 header's third line names (`UNITS OF G`, `IN CM/S/S`, ...: the "
+              "same spellings); an AT2 header that names none is in g (the PEER convention), "
+              "one that names units not listed here is refused until this key gives them.  "
+              "Required for formats without units (MiniSEED, SAC, ...); K-NET and Kinemetrics "
+              "EVT files carry their own.  `pound-mc records info` says which units a record "
+              "is read in and where they came from."),
         Field("component", "string", "Trace of a multi-trace file (e.g. `EW`, `HNE`), or a "
               "suite's component (e.g. `NORTHR/MUL009`)."),
         Field("sa_period_s", "number", "Period of the 5 %-damped spectral acceleration of the "
