@@ -33,7 +33,7 @@ from pound_mc.cli import main
 from pound_mc.integrators.accuracy import STATUS_INACCURATE
 from pound_mc.integrators.outputs import INELASTIC_OUTPUTS
 from pound_mc.physics.relations import xi_from_e
-from pound_mc.study.runner import PAUSE_ENV
+from pound_mc.study.files import PAUSE_ENV
 from studies import study_text
 
 # ------------------------------------------------------------------------- interrupt drill

@@ -21,7 +21,7 @@ from test_drills import _at2_text
 from pound_mc.analysis.plot_numerics import time_history_chart
 from pound_mc.cli import main
 from pound_mc.scene import load_scene, simulate
-from pound_mc.study.runner import output_lock
+from pound_mc.study.files import output_lock
 from studies import Whole, study_text
 
 _OPTIONS = ["--no-progress", "--no-plot"]
@@ -149,7 +149,7 @@ def test_wrong_type_output_path(make_study, tmp_path, kind):
 
 def test_disk_full_while_writing_chunks_and_dataset(make_study, tmp_path, monkeypatch):
     """Class 7: ENOSPC and "NetCDF: HDF error" were tracebacks and left ``.part`` files."""
-    import pound_mc.study.runner as runner
+    import pound_mc.study.files as files
 
     study = _tiny(make_study)
     out = tmp_path / "out"
@@ -158,7 +158,7 @@ def test_disk_full_while_writing_chunks_and_dataset(make_study, tmp_path, monkey
         raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
 
     with monkeypatch.context() as patch:
-        patch.setattr(runner.os, "fsync", full)
+        patch.setattr(files.os, "fsync", full)
         rc, _, err = _run("run", study, "--out", out, *_OPTIONS)
     _assert_clean_error(rc, err, "No space left on device", str(out / "small"))
     assert not list(out.rglob("*.part"))

