@@ -22,6 +22,7 @@ from pound_mc.analysis.risk_chart import fragility_panels, required_gap_chart
 from pound_mc.errors import InputError
 from pound_mc.integrators import METHODS
 from pound_mc.integrators.accuracy import STATUS_INACCURATE
+from pound_mc.integrators.outputs import STATUS_OK
 from pound_mc.physics.contact import CONTACT_MODELS
 from pound_mc.study.dataset import STATUS_FLAGS
 from pound_mc.study.definition import load_study
@@ -111,10 +112,26 @@ def run_command(args) -> int:
     print(f"wrote {report.path}")
     for line in status_warnings(report.path):
         print(line, file=sys.stderr)
+    if all_failed(report.path):  # nothing to chart: every run unstable or not converged
+        print(f"pound-mc run: error: {study.path}: every simulation failed (unstable or not "
+              "converged): no result to analyse; refine integrator.dt_s (substeps with "
+              "adaptive) or check the scene", file=sys.stderr)  # fmt: skip
+        return ALL_FAILED_STATUS
     if not args.no_plot:
         for png in _charts(study, report.path, Path(args.out)):
             print(f"wrote {png}")
     return 0
+
+
+#: Exit status of a run in which every simulation failed (DESIGN.md section 10).
+ALL_FAILED_STATUS = 3
+
+
+def all_failed(path: Path) -> bool:
+    """Whether every simulation of the dataset at ``path`` is unstable or not converged."""
+    with xr.open_dataset(path) as ds:
+        status = ds["status"].values
+    return bool(status.size) and not np.isin(status, (STATUS_OK, STATUS_INACCURATE)).any()
 
 
 def status_warnings(path: Path) -> list[str]:

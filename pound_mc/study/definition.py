@@ -51,13 +51,13 @@ from __future__ import annotations
 import copy
 import dataclasses
 import hashlib
-import tomllib
+import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from pound_mc.errors import InputError, InputErrors
+from pound_mc.errors import InputError, InputErrors, parse_toml, read_text_file
 from pound_mc.physics import materials
 from pound_mc.scene.schema import BUILDINGS, check_table
 from pound_mc.study import records as records_mod
@@ -599,10 +599,7 @@ def study_from_text(text: str, *, file: str | Path | None = None) -> Study:
         Listing every problem found, each with the file and key.
     """
     fname = None if file is None else str(file)
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise InputError(f"not valid TOML: {exc}", file=fname) from None
+    data = parse_toml(text, fname)
     errors: list[InputError] = []
     _top_level(data, fname, errors)
     if errors:  # the tables themselves are malformed: checking their keys would only add noise
@@ -639,22 +636,50 @@ def study_from_text(text: str, *, file: str | Path | None = None) -> Study:
         record_meta=meta if any(meta) else [],
     )
     records_mod.check_intensity(study, prefixes, fname, errors)
+    if errors:
+        raise InputErrors(errors)
+    check_size(study)  # before anything the size allocates (the probe draws the samples)
     probe(study, prefixes, fname, errors)
     if errors:
         raise InputErrors(errors)
     return study
 
 
+def check_size(study: Study) -> None:
+    """Refuse a study whose results could not fit in this machine's memory, before anything.
+
+    The least a simulation holds (:data:`~pound_mc.study.dataset.RESULT_VARIABLES` and
+    :data:`~pound_mc.study.dataset.RUN_VARIABLES`, twice: the arrays and the dataset) times
+    the simulations, against the physical memory; the run checks its full layout again
+    (:func:`~pound_mc.study.runner.run_study`).  Names the grid axis or ``sampling.n`` that
+    makes the study largest.
+    """
+    from pound_mc.study.dataset import RESULT_VARIABLES, RUN_VARIABLES  # (it imports this)
+
+    per_sim = 2 * sum(np.dtype(d).itemsize for *_, d in
+                      (*RESULT_VARIABLES.values(), *RUN_VARIABLES.values()))  # fmt: skip
+    need = study.n_simulations * per_sim
+    have = physical_memory()
+    if have is None or need <= have:
+        return
+    sizes = {f"grid.{k}": v.size for k, v in study.grid.items()} | {"sampling.n": study.n}
+    largest = max(sizes, key=sizes.get)
+    raise InputError(
+        f"{study.n_simulations:,} simulations need at least {need / 2**30:,.1f} GiB of memory "
+        f"for their results, more than this machine's {have / 2**30:,.1f} GiB; make the grid "
+        "or the number of samples smaller", file=None if study.path is None else str(study.path),
+        key=largest)  # fmt: skip
+
+
+def physical_memory() -> int | None:
+    """Bytes of physical memory of this machine, if the system says."""
+    try:
+        return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    except (AttributeError, ValueError, OSError):
+        return None
+
+
 def load_study(path: str | Path) -> Study:
     """Read and validate a study file (see the module docstring for the schema)."""
     path = Path(path)
-    if path.is_symlink() and not path.exists():
-        raise InputError("symbolic link that leads nowhere (a loop, or its target is missing)",
-                         file=str(path))  # fmt: skip
-    try:
-        text = path.read_text(encoding="utf-8-sig")  # a leading BOM dropped: TOML has none
-    except FileNotFoundError:
-        raise InputError("study file not found", file=str(path)) from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"cannot read study file: {exc}", file=str(path)) from None
-    return study_from_text(text, file=path)
+    return study_from_text(read_text_file(path, "study file"), file=path)

@@ -34,7 +34,6 @@ from __future__ import annotations
 
 import io
 import itertools
-import os
 import signal
 import sys
 import threading
@@ -52,6 +51,7 @@ from tqdm.auto import tqdm
 from pound_mc.errors import InputError
 from pound_mc.integrators.threads import numba_threads
 from pound_mc.study.dataset import build_dataset, write_netcdf
+from pound_mc.study.definition import physical_memory
 from pound_mc.study.engine import StudyEngine
 from pound_mc.study.files import output_lock, pause_at, remove_parts, write_bytes_atomically
 from pound_mc.study.resume import (
@@ -205,17 +205,9 @@ def memory_estimate(study, layout: dict) -> int:
     return 2 * study.n_simulations * per_sim
 
 
-def _physical_memory() -> int | None:
-    """Bytes of physical memory of this machine, if the system says."""
-    try:
-        return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
-    except (AttributeError, ValueError, OSError):
-        return None
-
-
 def _check_memory(study, layout: dict) -> None:
     """Refuse a study whose results do not fit in memory before anything is written."""
-    need, have = memory_estimate(study, layout), _physical_memory()
+    need, have = memory_estimate(study, layout), physical_memory()
     if have is not None and need > have:
         raise InputError(
             f"{study.n_simulations:,} simulations need about {need / 2**30:,.1f} GiB of memory "

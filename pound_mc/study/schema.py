@@ -31,6 +31,7 @@ __all__ = [
     "SAMPLING",
     "TOP_LEVEL",
     "MAX_SAMPLES",
+    "MAX_AXIS_VALUES",
     "MATERIAL_KEY",
     "NUMERIC_SCENE_KEYS",
     "ROW_TABLE",
@@ -45,6 +46,8 @@ __all__ = [
     "MAX_SEED",
 ]
 
+#: Most values of one grid axis: a spectrum of a million points is a typing error.
+MAX_AXIS_VALUES = 10**6
 #: Largest number of samples per grid point (2^24: Sobol designs and memory stay sane).
 MAX_SAMPLES = 2**24
 #: Largest seed: the dataset keeps ``seed`` and ``sampling_seed`` as netCDF attributes, whose
@@ -97,7 +100,7 @@ STUDY = Table(
               maximum=MAX_SEED),
         Field("description", "string", "Free text, kept in the dataset.", default=""),
         Field("chunk_size", "integer", "Simulations per chunk file (default about 1/50 of the "
-              "study, between 256 and 8192).", minimum=1),
+              "study, between 256 and 8192).", minimum=1, maximum=MAX_SAMPLES),
     ),
 )  # fmt: skip
 
@@ -116,7 +119,8 @@ GRID_AXIS = Table(
         Field("start", "number", "First value.", unit="as the key", required=True),
         Field("stop", "number", "Last value (differs from start when num > 1).",
               unit="as the key", required=True),
-        Field("num", "integer", "Number of values.", required=True, minimum=1),
+        Field("num", "integer", "Number of values.", required=True, minimum=1,
+              maximum=MAX_AXIS_VALUES),
     ),
 )  # fmt: skip
 
