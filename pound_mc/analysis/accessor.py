@@ -442,6 +442,33 @@ class PoundAccessor:
         """
         return _required_gap(self._ds, probability, **kwargs)
 
+    def risk(self, hazard, **kwargs: Any) -> xr.Dataset:
+        """Mean annual rate of an event per gap at a site, and the gap that meets a target.
+
+        ``hazard``: a :class:`~pound_mc.analysis.hazard.HazardCurve`, the path of a hazard
+        CSV file (columns ``im`` [g], ``annual_rate``) or ``(k0, k)`` of ``k0 im^-k``; the
+        keywords are :func:`pound_mc.analysis.site_risk.risk`'s (``event``, ``method``,
+        ``target_rate`` or ``target_probability`` with ``years``, ...).
+        """
+        from pound_mc.analysis.hazard import HazardCurve, power_law, read_hazard
+        from pound_mc.analysis.site_risk import risk
+
+        if isinstance(hazard, tuple):
+            hazard = power_law(*hazard)
+        elif not isinstance(hazard, HazardCurve):
+            hazard = read_hazard(hazard)
+        return risk(self._ds, hazard, **kwargs)
+
+    def code_gaps(self, **kwargs: Any) -> xr.Dataset:
+        """The rules' and codes' gaps of the study's buildings, and how often runs pound there.
+
+        See :func:`pound_mc.analysis.site_risk.code_gaps` (``asce=(R, Cd, Ie)``,
+        ``ec8=(q, qd, same_levels)``); every run is simulated again at each rule's gap.
+        """
+        from pound_mc.analysis.site_risk import code_gaps
+
+        return code_gaps(self._ds, **kwargs)
+
     def status_counts(self) -> pd.Series:
         """Number of simulations per status (the dataset's ``status`` flags).
 

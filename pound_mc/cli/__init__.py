@@ -52,8 +52,12 @@ def _quiet_library_warnings() -> None:
     """
     warnings.filterwarnings("ignore", category=RuntimeWarning, module=r"numpy(\..*)?$")
     warnings.filterwarnings("ignore", module=r"obspy(\..*)?$")
-    warnings.filterwarnings("ignore", message=r".*(All-NaN|Mean of empty|invalid value|"
-                            r"divide by zero|Degrees of freedom).*", category=RuntimeWarning)
+    warnings.filterwarnings(
+        "ignore",
+        message=r".*(All-NaN|Mean of empty|invalid value|"
+        r"divide by zero|Degrees of freedom).*",
+        category=RuntimeWarning,
+    )
 
 
 def main(argv: list[str] | None = None) -> int:
