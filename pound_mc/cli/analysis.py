@@ -347,8 +347,11 @@ def fragility_command(args) -> int:
         except InputError as exc:
             raise InputError(exc.message, file=str(path), key=exc.key) from None
     rest = list(fit["theta"].dims)
+    units = fit["theta"].attrs.get("units", "1")
+    im_units = "g" if fit.attrs["im"] in ("sa_g", "pga_g") or units == "1" else units
     out = {
         "im": fit.attrs["im"],
+        "im_units": im_units,
         "event": fit.attrs["event"],
         "dims": rest,
         "coords": {d: np.asarray(fit[d].values).tolist() for d in rest},
@@ -390,8 +393,10 @@ def fragility_command(args) -> int:
         if msgs[k]:
             print(head + f"no fit ({msgs[k]})")
         else:
-            print(head + f"theta = {flat_theta[k]:.4g} [{tci[k, 0]:.4g}, {tci[k, 1]:.4g}], "
-                  f"beta = {flat_beta[k]:.3g} [{bci[k, 0]:.3g}, {bci[k, 1]:.3g}]")  # fmt: skip
+            runs = np.asarray(out["n_total"]).reshape(flat_theta.size, -1)[k]
+            print(head + f"theta = {flat_theta[k]:.4g} {im_units} [{tci[k, 0]:.4g}, "
+                  f"{tci[k, 1]:.4g}], beta = {flat_beta[k]:.3g} [{bci[k, 0]:.3g}, "
+                  f"{bci[k, 1]:.3g}]; runs per stripe {', '.join(map(str, runs))}")  # fmt: skip
             if notes[k]:
                 print(f"    {notes[k]}")
     return 0
