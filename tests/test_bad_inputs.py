@@ -243,3 +243,15 @@ def test_cluster_faults_are_one_line():
     other = type("CommClosedError", (Exception,), {})
     assert "\n" not in _fault(other("x" * 500 + "\nsecond line"))
     assert len(_fault(other("x" * 500))) < 200
+
+
+def test_the_size_floor_is_the_datasets():
+    """``check_size``'s floor per simulation is what the dataset holds of each, twice."""
+    import numpy as np
+
+    from pound_mc.study.dataset import RESULT_VARIABLES, RUN_VARIABLES
+    from pound_mc.study.schema import MIN_BYTES_PER_SIMULATION
+
+    held = sum(np.dtype(d).itemsize for *_, d in (*RESULT_VARIABLES.values(),
+                                                  *RUN_VARIABLES.values()))  # fmt: skip
+    assert MIN_BYTES_PER_SIMULATION == 2 * held

@@ -31,6 +31,7 @@ import pandas as pd
 import xarray as xr
 from matplotlib.axes import Axes
 
+from pound_mc.analysis.hazard import HazardCurve, power_law, read_hazard
 from pound_mc.analysis.plot import (
     distribution_chart,
     probability_chart,
@@ -47,6 +48,8 @@ from pound_mc.analysis.risk import fragility as _fragility
 from pound_mc.analysis.risk import required_gap as _required_gap
 from pound_mc.analysis.risk_chart import fragility_panels, required_gap_chart
 from pound_mc.analysis.selection import MATERIAL_DIM, dim_name, no_value_message, selection
+from pound_mc.analysis.site_risk import code_gaps
+from pound_mc.analysis.site_risk import risk as site_risk
 from pound_mc.analysis.style import pyplot_figures, value_text
 from pound_mc.errors import InputError
 from pound_mc.scene import Scene, SimulationResult
@@ -450,14 +453,11 @@ class PoundAccessor:
         keywords are :func:`pound_mc.analysis.site_risk.risk`'s (``event``, ``method``,
         ``target_rate`` or ``target_probability`` with ``years``, ...).
         """
-        from pound_mc.analysis.hazard import HazardCurve, power_law, read_hazard
-        from pound_mc.analysis.site_risk import risk
-
         if isinstance(hazard, tuple):
             hazard = power_law(*hazard)
         elif not isinstance(hazard, HazardCurve):
             hazard = read_hazard(hazard)
-        return risk(self._ds, hazard, **kwargs)
+        return site_risk(self._ds, hazard, **kwargs)
 
     def code_gaps(self, **kwargs: Any) -> xr.Dataset:
         """The rules' and codes' gaps of the study's buildings, and how often runs pound there.
@@ -465,8 +465,6 @@ class PoundAccessor:
         See :func:`pound_mc.analysis.site_risk.code_gaps` (``asce=(R, Cd, Ie)``,
         ``ec8=(q, qd, same_levels)``); every run is simulated again at each rule's gap.
         """
-        from pound_mc.analysis.site_risk import code_gaps
-
         return code_gaps(self._ds, **kwargs)
 
     def status_counts(self) -> pd.Series:

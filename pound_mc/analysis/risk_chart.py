@@ -24,6 +24,7 @@ from matplotlib.lines import Line2D
 
 from pound_mc.analysis.fragility import fit_fragility
 from pound_mc.analysis.fragility_chart import fragility_chart, stripe_counts
+from pound_mc.analysis.gaps import RulesDoNotApply
 from pound_mc.analysis.plot import (
     CONTACT_DIM,
     _hold,
@@ -35,6 +36,7 @@ from pound_mc.analysis.plot import (
 )
 from pound_mc.analysis.risk import GAP_DIM, _counts, _intensity_dim, left_out_why, required_gap
 from pound_mc.analysis.risk import counted as counted_mask
+from pound_mc.analysis.site_risk import code_gaps
 from pound_mc.analysis.style import (
     _name_and_units,
     axis_label,
@@ -381,9 +383,6 @@ def _own_rule_gaps(ds, line, hold, base_dir) -> tuple[dict, dict]:
     :func:`pound_mc.analysis.site_risk.code_gaps` (every run simulated again at each rule's
     gap); ``{}`` twice where the rules do not describe the study (shear buildings, a wall).
     """
-    from pound_mc.analysis.gaps import RulesDoNotApply
-    from pound_mc.analysis.site_risk import code_gaps
-
     try:
         table = code_gaps(ds, base_dir=base_dir)
     except RulesDoNotApply:

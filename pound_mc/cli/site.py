@@ -13,6 +13,7 @@ from pound_mc.analysis.gaps import RulesDoNotApply
 from pound_mc.analysis.hazard import power_law, read_hazard
 from pound_mc.analysis.risk import left_out_why
 from pound_mc.analysis.risk import required_gap as probability_gap
+from pound_mc.analysis.site_chart import risk_chart
 from pound_mc.analysis.site_risk import code_gaps, design_intensity, risk
 from pound_mc.cli.analysis import _jsonable, _open_dataset
 from pound_mc.errors import InputError
@@ -103,8 +104,6 @@ def risk_command(args) -> int:
                                        for r in gaps["rule"].values}  # fmt: skip
         info["design_im"] = {k: float(v) for k, v in gaps.attrs["design_im"].items()}
     if args.plot:
-        from pound_mc.analysis.site_chart import risk_chart
-
         risk_chart(out, args.plot, code=gaps)
     if args.json:
         print(json.dumps(info, indent=1))

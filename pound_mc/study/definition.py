@@ -69,6 +69,7 @@ from pound_mc.study.schema import (
     INTENSITY_KEYS,
     MATERIAL_KEY,
     MAX_SAMPLES,
+    MIN_BYTES_PER_SIMULATION,
     NUMERIC_SCENE_KEYS,
     ROW_KEY,
     ROW_TABLE,
@@ -636,9 +637,8 @@ def study_from_text(text: str, *, file: str | Path | None = None) -> Study:
         record_meta=meta if any(meta) else [],
     )
     records_mod.check_intensity(study, prefixes, fname, errors)
-    if errors:
-        raise InputErrors(errors)
-    check_size(study)  # before anything the size allocates (the probe draws the samples)
+    if not errors:  # before anything the size allocates (the probe draws the samples)
+        check_size(study)
     probe(study, prefixes, fname, errors)
     if errors:
         raise InputErrors(errors)
@@ -648,17 +648,12 @@ def study_from_text(text: str, *, file: str | Path | None = None) -> Study:
 def check_size(study: Study) -> None:
     """Refuse a study whose results could not fit in this machine's memory, before anything.
 
-    The least a simulation holds (:data:`~pound_mc.study.dataset.RESULT_VARIABLES` and
-    :data:`~pound_mc.study.dataset.RUN_VARIABLES`, twice: the arrays and the dataset) times
-    the simulations, against the physical memory; the run checks its full layout again
+    The least a simulation holds (:data:`~pound_mc.study.schema.MIN_BYTES_PER_SIMULATION`)
+    times the simulations, against the physical memory; the run checks its full layout again
     (:func:`~pound_mc.study.runner.run_study`).  Names the grid axis or ``sampling.n`` that
     makes the study largest.
     """
-    from pound_mc.study.dataset import RESULT_VARIABLES, RUN_VARIABLES  # (it imports this)
-
-    per_sim = 2 * sum(np.dtype(d).itemsize for *_, d in
-                      (*RESULT_VARIABLES.values(), *RUN_VARIABLES.values()))  # fmt: skip
-    need = study.n_simulations * per_sim
+    need = study.n_simulations * MIN_BYTES_PER_SIMULATION
     have = physical_memory()
     if have is None or need <= have:
         return

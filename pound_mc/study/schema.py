@@ -32,6 +32,7 @@ __all__ = [
     "TOP_LEVEL",
     "MAX_SAMPLES",
     "MAX_AXIS_VALUES",
+    "MIN_BYTES_PER_SIMULATION",
     "MATERIAL_KEY",
     "NUMERIC_SCENE_KEYS",
     "ROW_TABLE",
@@ -46,6 +47,10 @@ __all__ = [
     "MAX_SEED",
 ]
 
+#: The least memory one simulation's results hold [bytes]: the per-simulation outputs and run
+#: settings of :mod:`pound_mc.study.dataset` (98 bytes), twice (the arrays and the dataset);
+#: the tests hold it to them.
+MIN_BYTES_PER_SIMULATION = 196
 #: Most values of one grid axis: a spectrum of a million points is a typing error.
 MAX_AXIS_VALUES = 10**6
 #: Largest number of samples per grid point (2^24: Sobol designs and memory stay sane).
