@@ -20,6 +20,7 @@ import pound_mc  # noqa: F401  (registers ds.pound)
 from pound_mc.analysis.sensitivity import MIN_BLOCKS, sobol_indices
 from pound_mc.analysis.sensitivity_chart import panel_positions
 from pound_mc.cli import main
+from pound_mc.errors import InputErrors
 from pound_mc.study import sampling
 from pound_mc.study.dataset import build_dataset, write_netcdf
 from pound_mc.study.definition import load_study
@@ -135,6 +136,13 @@ def test_a_base_n_that_is_not_a_power_of_two_is_one_clear_error(make_study, n, c
         assert len(err) == 1, err
         assert str(path) in err[0] and "sampling.n" in err[0] and "power of two" in err[0]
     assert not (path.parent / "out").exists()
+
+
+def test_a_refused_base_n_is_reported_with_the_other_problems(make_study):
+    path = make_study(sampling={"n": 100, "method": "saltelli"}, contact={"e": 2.0})
+    with pytest.raises(InputErrors) as info:
+        load_study(path)
+    assert {"sampling.n", "contact.e"} <= {e.key for e in info.value.errors}
 
 
 def test_saltelli_needs_a_sampled_key(make_study, capsys):

@@ -594,33 +594,35 @@ def _samples(spec: dict, variables: list, file, errors: list) -> tuple[int, int 
 
     ``saltelli`` takes ``n`` as the base N: a power of two >= 2 (SALib's design and the
     balance of its Sobol' points ask for it), at least one sampled key, and N (D + 2) samples
-    within :data:`~pound_mc.study.schema.MAX_SAMPLES`.
+    within :data:`~pound_mc.study.schema.MAX_SAMPLES`.  Where it is refused, the samples of the
+    smallest design stand in, so the probe still checks the sampled keys' values and every
+    problem is reported at once.
     """
     n = spec.get("n", 1)
-    if spec.get("method") != "saltelli" or any(e.key == "sampling.n" for e in errors):
-        return n, None
-    if not variables:
-        errors.append(InputError('method = "saltelli" needs at least one sampled key in '
-                                 "[sampling.vary]", file=file, key="sampling.vary"))  # fmt: skip
-        return n, None
     d = len(variables)
-    if not sampling.is_saltelli_base(n):
-        errors.append(
-            InputError(
-                f'must be a power of two >= 2 with method = "saltelli" (the base N of '
-                f"Saltelli's design, which runs N (D + 2) = N x {d + 2} samples), got {n}; "
-                f"e.g. {max(2, 1 << n.bit_length() - 1)} or {max(4, 1 << n.bit_length())}",
-                file=file,
-                key="sampling.n",
-            )
+    if spec.get("method") != "saltelli":
+        return n, None
+    problem = None
+    if not variables:
+        problem = ('method = "saltelli" needs at least one sampled key in [sampling.vary]',
+                   "sampling.vary")  # fmt: skip
+    elif any(e.key == "sampling.n" for e in errors):  # n itself refused already
+        pass
+    elif not sampling.is_saltelli_base(n):
+        problem = (
+            f'must be a power of two >= 2 with method = "saltelli" (the base N of Saltelli\'s '
+            f"design, which runs N (D + 2) = N x {d + 2} samples), got {n}; e.g. "
+            f"{max(2, 1 << n.bit_length() - 1)} or {max(4, 1 << n.bit_length())}",
+            "sampling.n",
         )
-        return n, None
-    total = sampling.saltelli_samples(n, d)
-    if total > MAX_SAMPLES:
-        errors.append(InputError(f"N (D + 2) = {n} x {d + 2} = {total:,} samples, more than "
-                                 f"{MAX_SAMPLES:,}", file=file, key="sampling.n"))  # fmt: skip
-        return n, None
-    return total, n
+    elif sampling.saltelli_samples(n, d) > MAX_SAMPLES:
+        problem = (f"N (D + 2) = {n} x {d + 2} = {sampling.saltelli_samples(n, d):,} samples, "
+                   f"more than {MAX_SAMPLES:,}", "sampling.n")  # fmt: skip
+    else:
+        return sampling.saltelli_samples(n, d), n
+    if problem is not None:
+        errors.append(InputError(problem[0], file=file, key=problem[1]))
+    return sampling.saltelli_samples(2, d), None
 
 
 def study_from_text(text: str, *, file: str | Path | None = None) -> Study:
