@@ -10,6 +10,7 @@ Registered on ``import pound_mc``::
     ds.pound.probability()                     # fraction of samples with an impact [-]
     ds.pound.fragility(im="sa_g")              # lognormal fragility per other grid axis
     ds.pound.required_gap(probability=0.1)     # gap for a target probability, and the rules
+    ds.pound.sensitivity(output="peak_force")  # Sobol' S1 and ST (saltelli studies)
     ds.pound.plot.spectrum(ax=ax)              # draws on ax, returns the Axes
     ds.pound.plot.spectrum_panels()            # a panel per material (jankowski_spectrum)
     ds.pound.worst("peak_force")               # the simulation with the largest peak force
@@ -48,6 +49,8 @@ from pound_mc.analysis.risk import fragility as _fragility
 from pound_mc.analysis.risk import required_gap as _required_gap
 from pound_mc.analysis.risk_chart import fragility_panels, required_gap_chart
 from pound_mc.analysis.selection import MATERIAL_DIM, dim_name, no_value_message, selection
+from pound_mc.analysis.sensitivity import sensitivity as _sensitivity
+from pound_mc.analysis.sensitivity_chart import sensitivity_chart
 from pound_mc.analysis.site_risk import code_gaps
 from pound_mc.analysis.site_risk import risk as site_risk
 from pound_mc.analysis.style import pyplot_figures, value_text
@@ -254,6 +257,17 @@ class PoundPlot:
 
         One panel per combination of the other grid axes: ``ax`` is a sequence of as many
         Axes; one panel returns its Axes.
+        """,
+    )
+
+    sensitivity = _chart_method(
+        "sensitivity",
+        sensitivity_chart,
+        "np.ndarray",
+        """Sobol' indices as bars (:func:`pound_mc.analysis.sensitivity_chart.sensitivity_chart`).
+
+        S1 and ST of every sampled key with their intervals, a panel per value of ``by``
+        (default the first grid axis, at most six); ``output`` as :meth:`PoundAccessor.sensitivity`.
         """,
     )
 
@@ -466,6 +480,16 @@ class PoundAccessor:
         ``ec8=(q, qd, same_levels)``); every run is simulated again at each rule's gap.
         """
         return code_gaps(self._ds, **kwargs)
+
+    def sensitivity(self, output: str = "peak_force", **kwargs) -> xr.Dataset:
+        """Sobol' first- and total-order indices of ``output`` (a ``saltelli`` study).
+
+        See :func:`pound_mc.analysis.sensitivity.sensitivity`: ``S1``, ``ST``, ``S1_ci``,
+        ``ST_ci`` [1] along ``record``, the grid axes and ``variable`` (the sampled study keys),
+        with ``n_used``, ``n_left_out`` and ``message``.  ``output``: ``"peak_force"``,
+        ``"pounding"``, ``"ductility"`` or a per-simulation variable.
+        """
+        return _sensitivity(self._ds, output, **kwargs)
 
     def status_counts(self) -> pd.Series:
         """Number of simulations per status (the dataset's ``status`` flags).

@@ -32,6 +32,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "fragility": ("pound_mc.cli.analysis", "fragility_command"),
     "risk": ("pound_mc.cli.site", "risk_command"),
     "required-gap": ("pound_mc.cli.site", "required_gap_command"),
+    "sensitivity": ("pound_mc.cli.sensitivity", "sensitivity_command"),
     "init": ("pound_mc.cli.study", "init_command"),
 }
 
@@ -348,7 +349,7 @@ def _study(sub: argparse._SubParsersAction) -> None:
 
 
 def _analysis(sub: argparse._SubParsersAction) -> None:
-    """Results: ``plot`` and ``report``."""
+    """Results: ``plot``, ``fragility``, ``sensitivity`` and ``report``."""
     p = _command(
         sub,
         "plot",
@@ -434,6 +435,21 @@ def _analysis(sub: argparse._SubParsersAction) -> None:
     )
     _code_options(p)
     p.add_argument("--json", action="store_true", help="print one JSON object")
+
+    p = _command(
+        sub,
+        "sensitivity",
+        help="Sobol' first- and total-order indices of a saltelli study's output",
+    )
+    p.add_argument("file", metavar="RESULT.nc")
+    p.add_argument(
+        "--output",
+        default="peak_force",
+        metavar="VAR",
+        help="peak_force (default), pounding, ductility or a per-simulation variable",
+    )
+    p.add_argument("--n-boot", type=int, default=1000, metavar="N", help="bootstrap resamples")
+    _json_and_plot(p, "bar chart of S1 and ST per sampled key, with their intervals")
 
     p = _command(sub, "report", help="write a self-contained HTML results page of a study")
     p.add_argument("file", metavar="RESULT.nc")

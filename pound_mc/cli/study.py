@@ -19,6 +19,7 @@ from pound_mc.analysis.inelastic_chart import inelastic_chart, yielding_sides
 from pound_mc.analysis.plot import CONTACT_DIM, GAP_DIM, distribution_chart, spectrum_panels
 from pound_mc.analysis.profiles import contacts_chart
 from pound_mc.analysis.risk_chart import fragility_panels, required_gap_chart
+from pound_mc.analysis.sensitivity_chart import sensitivity_chart
 from pound_mc.errors import InputError
 from pound_mc.integrators import METHODS
 from pound_mc.integrators.accuracy import STATUS_INACCURATE
@@ -181,11 +182,16 @@ def _charts(study, path: Path, out: Path) -> list[Path]:
     separation rules and the required gap (``_required_gap.png``); with an intensity axis the
     fragility curves; with more than one contact (shear buildings) the peak force per contact
     (``_contacts.png``).  A study without ``[grid]`` has no axis to draw a spectrum against: its
-    chart is the distribution of the peak force over the samples.
+    chart is the distribution of the peak force over the samples.  A study sampled with
+    Saltelli's design also gets the Sobol' indices of its peak force (``_sensitivity.png``,
+    :func:`~pound_mc.analysis.sensitivity_chart.sensitivity_chart`).
     """
     written = []
     with xr.open_dataset(path) as ds:
         ds.load()
+        if study.method == "saltelli":
+            written.append(out / f"{study.name}_sensitivity.png")
+            sensitivity_chart(ds, written[-1])
         if not study.grid:
             written.append(out / f"{study.name}_distribution.png")
             distribution_chart(ds, written[-1])

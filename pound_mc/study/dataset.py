@@ -256,11 +256,12 @@ def build_dataset(
         Extra global attributes.
     """
     dims = ("record", *(grid_dim_name(k) for k in study.grid), "sample")
+    sample_attrs, saltelli = _saltelli_attrs(study)
     coords = {
         "record": ("record", np.asarray(study.record_names, dtype=object), {
             "long_name": "ground-motion record", "cf_role": "timeseries_id"}),
         "sample": ("sample", np.arange(study.n, dtype=np.int32), {
-            "long_name": "Monte Carlo sample index", "units": "1"}),
+            "long_name": "Monte Carlo sample index", "units": "1", **sample_attrs}),
     }  # fmt: skip
     for key, values in study.grid.items():
         coords[grid_dim_name(key)] = (grid_dim_name(key), values, _param_attrs(key))
@@ -363,9 +364,33 @@ def build_dataset(
         "sampling_method": study.method,
         "sampling_seed": study.sampling_seed,
         "sampled_variables": "; ".join(f"{v.key}: {v.source}" for v in study.variables),
+        **saltelli,
         **(provenance or {}),
     }
     return ds
+
+
+def _saltelli_attrs(study) -> tuple[dict, dict]:
+    """Saltelli's design as the sensitivity analysis reads it back (``method = "saltelli"``).
+
+    The ``sample`` coordinate's ``comment`` (how its N (D + 2) samples are laid out) and the
+    global attributes ``saltelli_base_n`` (N), ``saltelli_n_variables`` (D) and
+    ``saltelli_variables`` (the sampled study keys in the design's column order, ``"; "``
+    between them); empty for the other designs.
+    """
+    if study.base_n is None:
+        return {}, {}
+    d = len(study.variables)
+    comment = (
+        f"Saltelli's design (SALib, first and total order): sample = {d + 2} b + r for base "
+        f"point b (0..{study.base_n - 1}); r = 0 is matrix A's row, r = j (1..{d}) A's row with "
+        f"column j from B, r = {d + 1} B's row"
+    )
+    return {"comment": comment}, {
+        "saltelli_base_n": int(study.base_n),
+        "saltelli_n_variables": d,
+        "saltelli_variables": "; ".join(v.key for v in study.variables),
+    }
 
 
 def study_folder(ds: xr.Dataset, fallback: str | Path | None = None) -> Path | None:

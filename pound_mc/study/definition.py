@@ -27,9 +27,12 @@ A study is a scene (``[record]`` or ``[[records]]``, ``[left]`` and ``[right]`` 
     (:func:`pound_mc.study.records.expand_records`).
     Validation counts a suite's components from its metadata and a glob's files.
 ``[sampling]``
-    ``n`` samples per grid point and record, ``method`` (``random`` | ``lhs`` | ``sobol``,
-    default ``sobol``), optional ``seed`` (default: the study's), and ``[sampling.vary]``
-    (:mod:`pound_mc.study.sampling`).
+    ``n`` samples per grid point and record, ``method`` (``random`` | ``lhs`` | ``sobol`` |
+    ``saltelli``, default ``sobol``), optional ``seed`` (default: the study's), and
+    ``[sampling.vary]`` (:mod:`pound_mc.study.sampling`).  With ``saltelli`` ``n`` is the
+    base N of Saltelli's design, a power of two >= 2, and the study runs N (D + 2) samples at
+    every grid point (D sampled keys, at least one): :attr:`Study.n` is that number,
+    :attr:`Study.base_n` is N.
 
 A building's keys may be varied as its model allows (``left.period_s`` of an SDOF building,
 ``left.storey_stiffness_N_per_m`` of a shear building: a number stands for every storey; yield
@@ -135,6 +138,8 @@ class Study:
     #: Per record, what a suite tells of it (``event``, ``station``, ...; empty dicts for other
     #: records); non-empty only when a table was expanded (a suite or a glob).
     record_meta: list[dict] = field(default_factory=list)
+    #: Base N of Saltelli's design (``method = "saltelli"``; ``n`` is then N (D + 2)), else None.
+    base_n: int | None = None
 
     @property
     def intensity_key(self) -> str | None:
@@ -584,6 +589,42 @@ def _record_names(records: list[dict]) -> list[str]:
     return names
 
 
+def _samples(spec: dict, variables: list, file, errors: list) -> tuple[int, int | None]:
+    """Samples per grid point, and Saltelli's base N (None for the other designs).
+
+    ``saltelli`` takes ``n`` as the base N: a power of two >= 2 (SALib's design and the
+    balance of its Sobol' points ask for it), at least one sampled key, and N (D + 2) samples
+    within :data:`~pound_mc.study.schema.MAX_SAMPLES`.  Where it is refused, the samples of the
+    smallest design stand in, so the probe still checks the sampled keys' values and every
+    problem is reported at once.
+    """
+    n = spec.get("n", 1)
+    d = len(variables)
+    if spec.get("method") != "saltelli":
+        return n, None
+    problem = None
+    if not variables:
+        problem = ('method = "saltelli" needs at least one sampled key in [sampling.vary]',
+                   "sampling.vary")  # fmt: skip
+    elif any(e.key == "sampling.n" for e in errors):  # n itself refused already
+        pass
+    elif not sampling.is_saltelli_base(n):
+        problem = (
+            f'must be a power of two >= 2 with method = "saltelli" (the base N of Saltelli\'s '
+            f"design, which runs N (D + 2) = N x {d + 2} samples), got {n}; e.g. "
+            f"{max(2, 1 << n.bit_length() - 1)} or {max(4, 1 << n.bit_length())}",
+            "sampling.n",
+        )
+    elif sampling.saltelli_samples(n, d) > MAX_SAMPLES:
+        problem = (f"N (D + 2) = {n} x {d + 2} = {sampling.saltelli_samples(n, d):,} samples, "
+                   f"more than {MAX_SAMPLES:,}", "sampling.n")  # fmt: skip
+    else:
+        return sampling.saltelli_samples(n, d), n
+    if problem is not None:
+        errors.append(InputError(problem[0], file=file, key=problem[1]))
+    return sampling.saltelli_samples(2, d), None
+
+
 def study_from_text(text: str, *, file: str | Path | None = None) -> Study:
     """Parse and validate a study from TOML text.
 
@@ -615,6 +656,7 @@ def study_from_text(text: str, *, file: str | Path | None = None) -> Study:
     variables, material_variables = _vary(vary, grid, labels, fname, errors)
     variables = _structure_keys(scene, grid, variables, fname, errors)
     fixed_partner(scene, grid, variables, fname, errors)
+    n, base_n = _samples(spec, variables, fname, errors)
     study = Study(
         path=None if file is None else Path(file),
         name=head["name"],
@@ -624,7 +666,7 @@ def study_from_text(text: str, *, file: str | Path | None = None) -> Study:
         scene=scene,
         records=records,
         grid=grid,
-        n=spec.get("n", 1),
+        n=n,
         method=spec.get("method", "sobol"),
         sampling_seed=spec.get("seed", head["seed"]),
         variables=variables,
@@ -635,6 +677,7 @@ def study_from_text(text: str, *, file: str | Path | None = None) -> Study:
         grid_labels=labels,
         material_variables=material_variables,
         record_meta=meta if any(meta) else [],
+        base_n=base_n,
     )
     records_mod.check_intensity(study, prefixes, fname, errors)
     if not errors:  # before anything the size allocates (the probe draws the samples)

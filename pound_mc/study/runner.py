@@ -171,7 +171,10 @@ def plan_text(study, chunk_size: int | None = None, seconds_per_simulation: floa
         names = study.grid_labels.get(key)
         span = ", ".join(names) if names else f"{values.min():g} .. {values.max():g}"
         lines.append(f"  grid      : {key} = {count_text(values.size, 'value')} {span}")
-    lines.append(f"  sampling  : n = {study.n}, method {study.method}, seed {study.sampling_seed}")
+    n = f"n = {study.n}"
+    if study.base_n is not None:  # Saltelli's design: N (D + 2) samples
+        n = f"n = {study.n} (base N = {study.base_n} x {len(study.variables) + 2})"
+    lines.append(f"  sampling  : {n}, method {study.method}, seed {study.sampling_seed}")
     for v in study.variables:
         lines.append(f"    {v.key}: {v.source}")
     n = study.n_simulations

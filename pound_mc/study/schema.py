@@ -134,9 +134,11 @@ SAMPLING = Table(
     "Random variables: `n` samples at every grid point and record, the same design points "
     "everywhere (common random numbers).",
     (
-        Field("n", "integer", "Samples per grid point and record.", default=1, minimum=1,
-              maximum=MAX_SAMPLES),
-        Field("method", "string", "Design of the samples.", default="sobol",
+        Field("n", "integer", "Samples per grid point and record; with `method = "
+              "\"saltelli\"` the base N, a power of two >= 2: N (D + 2) samples for D sampled "
+              "keys.", default=1, minimum=1, maximum=MAX_SAMPLES),
+        Field("method", "string", "Design of the samples; `saltelli`: Saltelli's design "
+              "(SALib) for Sobol' sensitivity indices (`pound-mc sensitivity`).", default="sobol",
               choices=tuple(sorted(sampling.DESIGNS))),
         Field("seed", "integer", "Seed of the design (default: the study's seed).", minimum=0,
               maximum=MAX_SEED),
