@@ -39,7 +39,7 @@ from pound_mc.study.runner import (
 from pound_mc.study.warmup import cache_directory, compile_kernels, warm_up
 
 #: Fixed cost per chunk of a local run (writing its file, Python around the batch call) [s],
-#: measured on a 2-core machine (README, "Throughput and scaling"); added to the estimate.
+#: measured on a 2-core machine (docs/performance.md); added to the estimate.
 CHUNK_OVERHEAD_S = 0.003
 #: ``check`` warns when one simulation takes longer than this [s]: such a study is
 #: effectively endless (a step far too short, a record far too long).
