@@ -10,7 +10,7 @@ from __future__ import annotations
 import argparse
 
 from pound_mc.physics.materials import MATERIALS
-from pound_mc.physics.relations import RELATIONS
+from pound_mc.physics.names import RELATION_NAMES
 
 __all__ = ["COMMANDS", "KINDS", "HelpFormatter", "add_commands"]
 
@@ -88,7 +88,8 @@ COMPILE_DESCRIPTION = (
 INIT_DESCRIPTION = (
     "Write a shipped study file NAME.toml, and the scene files it reads, into the "
     "current folder (or --dir), ready for pound-mc check and pound-mc run. Without "
-    "NAME, list the shipped studies."
+    "NAME, list the shipped studies. With --new NAME, write a new study NAME.toml from a "
+    "commented template to edit: every table with its common keys and what they take."
 )
 
 #: Sub-commands with a description for their ``--help`` (the others show their help line).
@@ -197,7 +198,7 @@ def _physics(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--relation",
         default="jankowski2008",
-        help=f"relation for 'xi' in --json ({', '.join(RELATIONS)}; default jankowski2008)",
+        help=f"relation for 'xi' in --json ({', '.join(RELATION_NAMES)}; default jankowski2008)",
     )
     p.add_argument("--json", action="store_true", help="print one JSON object")
 
@@ -344,6 +345,7 @@ def _study(sub: argparse._SubParsersAction) -> None:
         sub, "init", help="write a shipped study (and its scene files) into the current folder"
     )
     p.add_argument("name", nargs="?", metavar="NAME", help="shipped study (e.g. quickstart)")
+    p.add_argument("--new", metavar="NAME", help="write a commented template study NAME.toml")
     p.add_argument("--dir", default=".", metavar="DIR", help="folder to write into")
     p.add_argument("--force", action="store_true", help="overwrite files that exist")
 

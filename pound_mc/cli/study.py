@@ -37,10 +37,11 @@ from pound_mc.study.runner import (
     plan_text,
     run_study,
 )
+from pound_mc.study.schema import STUDY
 from pound_mc.study.warmup import cache_directory, compile_kernels, warm_up
 
 #: Fixed cost per chunk of a local run (writing its file, Python around the batch call) [s],
-#: measured on a 2-core machine (README, "Throughput and scaling"); added to the estimate.
+#: measured on a 2-core machine (docs/performance.md); added to the estimate.
 CHUNK_OVERHEAD_S = 0.003
 #: ``check`` warns when one simulation takes longer than this [s]: such a study is
 #: effectively endless (a step far too short, a record far too long).
@@ -302,8 +303,43 @@ def shipped_studies() -> dict[str, Path]:
     return {p.stem: p for p in sorted(folder.glob("*.toml"))}
 
 
+def study_template(name: str) -> str:
+    """The text of a new study ``name``: the commented template of the package data.
+
+    Raises
+    ------
+    InputError
+        ``name`` is not a study name (letters, digits, ``-`` and ``_``).
+    """
+    if problem := STUDY["name"].problem(name):
+        raise InputError(problem, key="--new")
+    template = resources.files("pound_mc") / "templates" / "study.toml"
+    return template.read_text(encoding="utf-8").replace("{name}", name)
+
+
+def _init_new(args) -> int:
+    """``pound-mc init --new NAME``: write the commented template as ``NAME.toml``."""
+    if args.name:
+        raise InputError(f"give a shipped study ({args.name}) or --new NAME, not both")
+    name = args.new.removesuffix(".toml")
+    text = study_template(name)
+    path = Path(args.dir) / f"{name}.toml"
+    if path.exists() and not args.force:
+        raise InputError("exists; pass --force to overwrite it", file=str(path))
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(text, encoding="utf-8")
+    print(f"wrote {path}")
+    print(f"next: edit it, then pound-mc check {path} && pound-mc run {path}")
+    return 0
+
+
 def init_command(args) -> int:
-    """``pound-mc init [NAME]``: write a shipped study (and the scenes it reads) into a folder."""
+    """``pound-mc init [NAME]``: write a shipped study (and the scenes it reads) into a folder.
+
+    ``--new NAME`` writes a new study from the commented template instead.
+    """
+    if args.new is not None:
+        return _init_new(args)
     studies = shipped_studies()
     if not args.name:
         print("shipped studies (pound-mc init NAME writes NAME.toml here):")

@@ -530,7 +530,7 @@ CONTACT = Table(
 
 INTEGRATOR = Table(
     "integrator",
-    "The time integration (README, \"Integrators\").",
+    "The time integration (docs/integrators.md).",
     (
         Field("method", "string", "Integration method.", default="adaptive",
               choices=tuple(METHODS)),

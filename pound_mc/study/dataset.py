@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from pound_mc.errors import OutputError
+from pound_mc.errors import InputError, OutputError
 from pound_mc.integrators.accuracy import STATUS_INACCURATE
 from pound_mc.integrators.outputs import STATUS_OK
 from pound_mc.study.definition import grid_dim_name
@@ -48,6 +48,7 @@ __all__ = [
     "STATUS_FLAGS",
     "QUANTILES",
     "build_dataset",
+    "open_dataset",
     "write_netcdf",
     "pounding_counted",
     "study_file",
@@ -448,3 +449,35 @@ def write_netcdf(ds: xr.Dataset, path: str | Path) -> Path:
         reason = getattr(exc, "strerror", None) or str(exc)
         raise OutputError(f"cannot write the dataset: {reason}", file=str(path)) from None
     return path
+
+
+def open_dataset(path: str | Path) -> xr.Dataset:
+    """Open the study dataset ``pound-mc run`` wrote at ``path`` (``OUT/NAME.nc``).
+
+    The file is opened lazily, as :func:`xarray.open_dataset` does; the ``ds.pound`` accessor
+    is registered by ``import pound_mc``.
+
+    Raises
+    ------
+    pound_mc.errors.InputError
+        ``path`` is no file, not a netCDF dataset, or not a pound-mc study dataset (no
+        ``peak_force``, ``impacts`` or ``status``); the message names the file.
+    """
+    path = Path(path)
+    if not path.is_file():
+        what = "is a folder" if path.is_dir() else "no such file"
+        raise InputError(f"{what}; give a study dataset (pound-mc run writes OUT/NAME.nc)",
+                         file=str(path))  # fmt: skip
+    try:
+        ds = xr.open_dataset(path)
+    except (OSError, ValueError, TypeError):
+        raise InputError(
+            "is not a netCDF dataset (pound-mc run writes one as OUT/NAME.nc)", file=str(path)
+        ) from None
+    missing = [v for v in ("peak_force", "impacts", "status") if v not in ds]
+    if missing:
+        ds.close()
+        raise InputError(
+            f"is not a pound-mc study dataset: no variable {missing[0]!r}", file=str(path)
+        )
+    return ds
