@@ -31,9 +31,6 @@ Peak force, penetration, floor displacements and storey drifts are continuous-ti
 (cubic Hermite on each step); floor accelerations are maxima over the steps' ends.  The
 energies (input, damping, contact work, the plastic load's work and the hysteretic
 dissipation) are integrated with the state, at its order.
-
-Longer than 600 lines because the step, its error norm, the event location and the outputs of
-every structure meet in one compiled loop, each in a helper of its own below.
 """
 
 from __future__ import annotations
@@ -52,9 +49,10 @@ from pound_mc.integrators.adaptive import (
     _locate_switch,
     _open_contact,
     _store_history,
+    _stored_energy,
 )
 from pound_mc.integrators.hysteretic import S_ALPHA, S_BW, S_K, S_YIELD, storey_outputs
-from pound_mc.integrators.laws import force, stored
+from pound_mc.integrators.laws import force
 from pound_mc.integrators.storey_laws import (
     LAW_BILINEAR,
     LAW_BOUC_WEN,
@@ -416,6 +414,102 @@ def _yielding(store, dmat, n):
     return hd_, hk, hal, huy, hbw, hlaw
 
 
+@jit(inline=True)
+def _initial_state(q, v, hd_, huy, m):
+    """The state ``y = [q, v, z]`` (``m`` values) at the start: no plastic drift.
+
+    ``z = u``, the yielding storeys' drifts (rows ``hd_`` in modal coordinates), within their
+    yield drifts ``huy``.
+    """
+    n = q.size
+    y = np.empty(m)
+    for j in range(n):
+        y[j] = q[j]
+        y[n + j] = v[j]
+    for s in range(huy.size):
+        # no plastic drift at the start (z = u, within the yield drift)
+        y[2 * n + s] = min(max(rowdot(hd_, s, q), -huy[s]), huy[s])
+    return y
+
+
+@jit(inline=True)
+def _error_scales(ag, omega, xf0, xfd0):
+    """Scales of the error norm at the start, and the highest circular frequency [rad/s].
+
+    The static displacement and velocity of the record's peak ``ag`` in the most flexible
+    mode, raised to the response's own peaks as they come (here: the initial state's floor
+    displacements ``xf0`` and velocities ``xfd0``).  Returns ``(xscale, vscale, wmax)``.
+    """
+    agmax = 0.0
+    for i in range(ag.size):
+        agmax = max(agmax, abs(ag[i]))
+    wmin = np.inf
+    wmax = 0.0
+    for j in range(omega.size):
+        wmin = min(wmin, omega[j])
+        wmax = max(wmax, omega[j])
+    xscale = max(agmax / (wmin * wmin), 1e-12)
+    vscale = max(agmax / wmin, 1e-12)
+    for f in range(xf0.size):  # an initial state sets the scale where the ground is still
+        xscale = max(xscale, abs(xf0[f]))
+        vscale = max(vscale, abs(xfd0[f]))
+    return xscale, vscale, wmax
+
+
+@jit(inline=True)
+def _accept(y, y1, y1q, kk, ek, fk, peaks, xfd0, psi, gap, phase, dscale, xscale, vscale):
+    """An accepted step: its end (``y1``, the last stage's rates) starts the next step.
+
+    The error scales rise to the response's peaks: the floors' (``peaks``, velocities
+    ``xfd0``) and each closed contact's penetration (``dscale``, in place); returns the new
+    ``(xscale, vscale)``.
+    """
+    for f in range(peaks.size):
+        xscale = max(xscale, peaks[f])
+        vscale = max(vscale, abs(xfd0[f]))
+    for c in range(gap.size):
+        if phase[c] != 0:
+            dscale[c] = max(dscale[c], rowdot(psi, c, y1q) - gap[c])
+    for j in range(y.size):
+        y[j] = y1[j]
+        kk[0, j] = kk[6, j]
+    for r in range(_N_RATES):
+        ek[0, r] = ek[6, r]
+    for c in range(gap.size):
+        fk[0, c] = fk[6, c]
+    return xscale, vscale
+
+
+@jit(inline=True)
+def _switch(kind, c_ev, s_ev, y, yv, n, psi, xi, beta, meff, zhd, phase, pending, model, relation,
+            substeps, dt_rec, settings, cd, ep, dscale, branch, hlaw, huy, h_next):  # fmt: skip
+    """The switch at a step's end: of contact ``c_ev`` (``kind``) or of storey ``s_ev``.
+
+    An onset starts an episode (:func:`~pound_mc.integrators.adaptive._open_contact`), whose
+    penetration scale starts at its onset velocity times its sub-step and bounds the next step
+    ``h_next`` [s]; a storey takes its branch after the switch and its ``z`` in ``y``.
+    Returns the next step.
+    """
+    if c_ev >= 0:
+        if kind == _ONSET:
+            hc = _open_contact(c_ev, yv, psi, xi, beta, meff, zhd, phase, pending,
+                               model, relation, substeps, dt_rec, settings, cd,
+                               ep)  # fmt: skip
+            dscale[c_ev] = max(1e-15, abs(ep[c_ev, outputs.EP_V0]) * hc)
+            h_next = min(h_next, hc)
+        elif kind == _TO_RESTITUTION:
+            phase[c_ev] = 2
+        elif kind == _SEPARATION:
+            phase[c_ev] = 0
+        else:
+            phase[c_ev] = 1
+    else:
+        branch[s_ev], y[2 * n + s_ev] = storey_switch(
+            hlaw[s_ev], branch[s_ev], y[2 * n + s_ev], 0.0, huy[s_ev]
+        )
+    return h_next
+
+
 @jit(entry=True)
 def adaptive_rk(
     ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi, settings,
@@ -425,10 +519,10 @@ def adaptive_rk(
 
     Arguments as :func:`~pound_mc.integrators.hysteretic.newmark_hysteretic`: ``dmat`` the
     storeys' drift rows in modal coordinates, ``store`` the storey table, ``sout`` the storeys'
-    peak and final drifts.  Longer than 150 lines because the loop keeps its scalar state
-    (energies, clocks, step size) in locals across accepted, rejected and cut steps.  The loop
-    works on views without an owner (:func:`~pound_mc.integrators.toolkit.borrow`, kept alive
-    by ``owned``), as :func:`~pound_mc.integrators.adaptive.adaptive` does.
+    peak and final drifts.  The loop keeps its scalar state (energies, clocks, step size) in
+    locals across accepted, rejected and cut steps, and works on views without an owner
+    (:func:`~pound_mc.integrators.toolkit.borrow`, kept alive by ``owned``), as
+    :func:`~pound_mc.integrators.adaptive.adaptive` does.
     """
     model = settings.model
     relation = settings.relation
@@ -446,13 +540,7 @@ def adaptive_rk(
     hn = hk.size
     branch = np.zeros(hn, dtype=np.int64)
     m = 2 * n + hn
-    y = np.empty(m)
-    for j in range(n):
-        y[j] = q[j]
-        y[n + j] = v[j]
-    for s in range(hn):
-        # no plastic drift at the start (z = u, within the yield drift)
-        y[2 * n + s] = min(max(rowdot(hd_, s, q), -huy[s]), huy[s])
+    y = _initial_state(q, v, hd_, huy, m)
     kk = np.zeros((7, m))
     ek = np.zeros((7, _N_RATES))
     fk = np.zeros((7, nc))
@@ -513,21 +601,7 @@ def adaptive_rk(
     fk0, fk6 = borrow(fk[0]), borrow(fk[6])
     ag, omega, zeta, gamma = borrow(ag), borrow(omega), borrow(zeta), borrow(gamma)
     phi, psi, gap, dmat = borrow(phi), borrow(psi), borrow(gap), borrow(dmat)
-    # scales of the error norm: the static displacement and velocity of the record's peak in
-    # the most flexible mode, raised to the response's own peaks as they come
-    agmax = 0.0
-    for i in range(npts):
-        agmax = max(agmax, abs(ag[i]))
-    wmin = np.inf
-    wmax = 0.0
-    for j in range(n):
-        wmin = min(wmin, omega[j])
-        wmax = max(wmax, omega[j])
-    xscale = max(agmax / (wmin * wmin), 1e-12)
-    vscale = max(agmax / wmin, 1e-12)
-    for f in range(nf):  # an initial state sets the scale where the ground is still
-        xscale = max(xscale, abs(xf0[f]))
-        vscale = max(vscale, abs(xfd0[f]))
+    xscale, vscale, wmax = _error_scales(ag, omega, xf0, xfd0)
     e_in = 0.0
     e_d = 0.0
     w_c = 0.0
@@ -600,40 +674,15 @@ def adaptive_rk(
             track_floors(phi_t, flo, fhi, xf0, xfd0, y1q, y1v, hs, peaks, xb, xdb)
             _storey_peaks(dmat, dlo, dhi, y1q, y1v, hs, u0, du0, peak_u)
             _floor_accels(phi_t, flo, fhi, a1v, ag0 + slope * (s + hs), peak_acc, xb)
-            for f in range(nf):
-                xscale = max(xscale, peaks[f])
-                vscale = max(vscale, abs(xfd0[f]))
-            for c in range(nc):
-                if phase[c] != 0:
-                    dscale[c] = max(dscale[c], rowdot(psi, c, y1q) - gap[c])
-            for j in range(m):
-                y[j] = y1[j]
-                kk[0, j] = kk[6, j]
-            for r in range(_N_RATES):
-                ek[0, r] = ek[6, r]
-            for c in range(nc):
-                fk[0, c] = fk[6, c]
+            xscale, vscale = _accept(y, y1, y1q, kk, ek, fk, peaks, xfd0, psi, gap, phase, dscale,
+                                     xscale, vscale)  # fmt: skip
             s += hs
             fresh = False
             if switch and t_ev <= hs:
                 fresh = True
-                if c_ev >= 0:
-                    if kind == _ONSET:
-                        hc = _open_contact(c_ev, yv, psi, xi, beta, meff, zhd, phase, pending,
-                                           model, relation, substeps, dt_rec, settings, cd,
-                                           ep)  # fmt: skip
-                        dscale[c_ev] = max(1e-15, abs(ep[c_ev, outputs.EP_V0]) * hc)
-                        h_next = min(h_next, hc)
-                    elif kind == _TO_RESTITUTION:
-                        phase[c_ev] = 2
-                    elif kind == _SEPARATION:
-                        phase[c_ev] = 0
-                    else:
-                        phase[c_ev] = 1
-                else:
-                    branch[s_ev], y[2 * n + s_ev] = storey_switch(
-                        hlaw[s_ev], branch[s_ev], y[2 * n + s_ev], 0.0, huy[s_ev]
-                    )
+                h_next = _switch(kind, c_ev, s_ev, y, yv, n, psi, xi, beta, meff, zhd, phase,
+                                 pending, model, relation, substeps, dt_rec, settings, cd, ep,
+                                 dscale, branch, hlaw, huy, h_next)  # fmt: skip
             # every step's end: a switch, or a turn the end values hid, settled (no Zeno)
             _settle(y, ag0 + slope * s, n, omega, zeta, gamma, psi, gap, beta, cd, zhd, phase,
                     model, hd_, hlo, hhi, hk, hal, huy, hbw, hlaw, branch, rate, kk, ek, fk, wmax,
@@ -649,10 +698,7 @@ def adaptive_rk(
         v[j] = y[n + j]
     if store_h and status == outputs.STATUS_OK:
         _store_history(npts - 1, q, v, phi, psi, gap, beta, cd, zhd, phase, model, hx, hd, hf)
-    stored_energy = 0.0
-    for c in range(nc):
-        if phase[c] != 0:
-            stored_energy += stored(model, rowdot(psi, c, q) - gap[c], beta[c])
+    stored_energy = _stored_energy(q, psi, gap, beta, phase, model)
     drift = np.empty(ns)
     for s in range(ns):
         drift[s] = rowdot(dmat, s, q)
