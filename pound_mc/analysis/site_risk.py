@@ -149,27 +149,33 @@ def gap_for_rate(gaps, rates, target: float) -> tuple[float, str]:
 
 
 def _rates(hazard, x, n_event, n_total, method, n_boot, seed, ci):
-    """The rate at one combination, its interval ``(lo, hi)`` and why there is none."""
+    """The rate at one combination, its interval ``(lo, hi)`` and why there is none.
+
+    Also the intensities the rate leans on: the stripes', and a fit's ``theta e^(+-2 beta)``.
+    """
+    reach = (float(np.min(x)), float(np.max(x)))
     if method == "stripes":
         p = n_event / np.where(n_total > 0, n_total, np.nan)
         rate = rate_stripes(hazard, x, p)
         if n_boot == 0 or not np.all(n_total > 0):
-            return rate, (math.nan, math.nan), ""
+            return rate, (math.nan, math.nan), "", reach
         rng = np.random.default_rng(seed)  # binomial resampling of each stripe
         boot = [rate_stripes(hazard, x, rng.binomial(n_total, p) / n_total)
                 for _ in range(n_boot)]  # fmt: skip
         lo, hi = np.quantile(boot, [(1 - ci) / 2, (1 + ci) / 2])
-        return rate, (float(lo), float(hi)), ""
+        return rate, (float(lo), float(hi)), "", reach
     try:
         fit = fit_fragility(x, n_event, n_total, n_boot=n_boot, seed=seed, ci=ci)
     except InputError as exc:
-        return math.nan, (math.nan, math.nan), exc.message
+        return math.nan, (math.nan, math.nan), exc.message, reach
     rate = float(rate_lognormal(hazard, fit.theta, fit.beta))
+    reach = (min(reach[0], fit.theta * math.exp(-2 * fit.beta)),
+             max(reach[1], fit.theta * math.exp(2 * fit.beta)))  # fmt: skip
     if fit.theta_boot.size == 0 or fit.theta_boot.size < fit.n_boot:
-        return rate, (math.nan, math.nan), ""
+        return rate, (math.nan, math.nan), "", reach
     boot = rate_lognormal(hazard, fit.theta_boot, fit.beta_boot)
     lo, hi = np.nanquantile(boot, [(1 - ci) / 2, (1 + ci) / 2])
-    return rate, (float(lo), float(hi)), ""
+    return rate, (float(lo), float(hi)), "", reach
 
 
 def risk(
@@ -235,9 +241,11 @@ def risk(
     rate = np.full(shape, np.nan)
     rate_ci = np.full((*shape, 2), np.nan)
     message = np.full(shape, "", dtype=object)
+    spread = [float(x.min()), float(x.max())]  # the intensities the rates lean on
     for index in itertools.product(*(range(n) for n in shape)):
-        rate[index], rate_ci[index], message[index] = _rates(
+        rate[index], rate_ci[index], message[index], (low, high) = _rates(
             hazard, x, n_event[index], n_total[index], method, n_boot, seed, ci)  # fmt: skip
+        spread = [min(spread[0], low), max(spread[1], high)]
     unit = "year-1"
     out = xr.Dataset(
         {
@@ -261,14 +269,6 @@ def risk(
     if years is not None:
         out["probability"] = (rest, probability_in(rate, years), {"units": "1", "long_name":
                               f"probability of {event} in {years:g} years"})  # fmt: skip
-    lows = rate_ci[..., 0][np.isfinite(rate)] if rate.size else np.zeros(0)
-    spread = [x.min(), x.max()]
-    if method == "fragility" and lows.size:  # where the fragility's weight lies: theta e^(+-2b)
-        fits = [fit_fragility(x, n_event[i], n_total[i], n_boot=0) for i in
-                itertools.product(*(range(n) for n in shape)) if not message[i]]  # fmt: skip
-        if fits:
-            spread = [min(spread[0], *(f.theta * math.exp(-2 * f.beta) for f in fits)),
-                      max(spread[1], *(f.theta * math.exp(2 * f.beta) for f in fits))]  # fmt: skip
     out.attrs["extrapolation"] = hazard.extrapolated(*spread)
     if target is not None and GAP_DIM in rest:
         _risk_gap(out, rest, target)
