@@ -54,7 +54,6 @@ from __future__ import annotations
 import copy
 import dataclasses
 import hashlib
-import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -65,6 +64,7 @@ from pound_mc.physics import materials
 from pound_mc.scene.schema import BUILDINGS, check_table
 from pound_mc.study import records as records_mod
 from pound_mc.study import sampling
+from pound_mc.study.limits import physical_memory
 from pound_mc.study.probe import EXCLUSIVE, fixed_partner, probe
 from pound_mc.study.schema import (
     GRID_AXIS,
@@ -707,14 +707,6 @@ def check_size(study: Study) -> None:
         f"for their results, more than this machine's {have / 2**30:,.1f} GiB; make the grid "
         "or the number of samples smaller", file=None if study.path is None else str(study.path),
         key=largest)  # fmt: skip
-
-
-def physical_memory() -> int | None:
-    """Bytes of physical memory of this machine, if the system says."""
-    try:
-        return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
-    except (AttributeError, ValueError, OSError):
-        return None
 
 
 def load_study(path: str | Path) -> Study:

@@ -51,9 +51,9 @@ from tqdm.auto import tqdm
 from pound_mc.errors import InputError
 from pound_mc.integrators.threads import numba_threads
 from pound_mc.study.dataset import build_dataset, write_netcdf
-from pound_mc.study.definition import physical_memory
 from pound_mc.study.engine import StudyEngine
 from pound_mc.study.files import output_lock, pause_at, remove_parts, write_bytes_atomically
+from pound_mc.study.limits import physical_memory
 from pound_mc.study.resume import (
     MANIFEST,
     ChunkOfOtherInputs,

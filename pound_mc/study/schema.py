@@ -24,6 +24,7 @@ from pound_mc.physics import materials
 from pound_mc.scene import schema as scene_schema
 from pound_mc.scene.schema import Field, Table
 from pound_mc.study import sampling
+from pound_mc.study.limits import MAX_AXIS_VALUES, MAX_SAMPLES, MIN_BYTES_PER_SIMULATION
 
 __all__ = [
     "STUDY",
@@ -47,14 +48,6 @@ __all__ = [
     "MAX_SEED",
 ]
 
-#: The least memory one simulation's results hold [bytes]: the per-simulation outputs and run
-#: settings of :mod:`pound_mc.study.dataset` (98 bytes), twice (the arrays and the dataset);
-#: the tests hold it to them.
-MIN_BYTES_PER_SIMULATION = 196
-#: Most values of one grid axis: a spectrum of a million points is a typing error.
-MAX_AXIS_VALUES = 10**6
-#: Largest number of samples per grid point (2^24: Sobol designs and memory stay sane).
-MAX_SAMPLES = 2**24
 #: Largest seed: the dataset keeps ``seed`` and ``sampling_seed`` as netCDF attributes, whose
 #: widest integer type is an unsigned 64-bit one.
 MAX_SEED = 2**64 - 1
