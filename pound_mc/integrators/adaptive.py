@@ -193,7 +193,29 @@ def _screen_onsets(q, v, q1, v1, p0s, slope, s, hh, dc0, ddc0, dc1, ddc1, omega,
             if hi < tau_on:
                 tau_on = hi
                 c_on = c
+        elif d0 > 0.0:
+            hi = _resumed(d0, dd0, dc1[c], ddc1[c], hh)
+            if hi < tau_on:
+                tau_on = hi
+                c_on = c
     return c_on, tau_on
+
+
+@jit(inline=True)
+def _resumed(d0, dd0, d1, dd1, hh):
+    """Where an open contact that starts a step penetrating closes again (inf: it does not).
+
+    It penetrates since a separation located within the root's error: where it grows at the
+    start, the contact resumes there (0); where it turns and grows again inside the step, at
+    its minimum (the cubic Hermite root of its rate).  Without this the buildings would pass
+    through each other without force until the penetration next crossed zero (extreme drill:
+    a shear pair at zero gap, peak force 15 % low, four impacts of six).
+    """
+    if dd0 > 0.0:
+        return 0.0
+    if d1 > 0.0 and dd1 > 0.0:
+        return hermite_root(dd0, 0.0, dd1, 0.0, hh)
+    return np.inf
 
 
 @jit(inline=True)
@@ -305,6 +327,9 @@ def _locate_switch(q, v, q1, v1, a0, a1, psi, psi_t, clo, chi, gap, phase, hs, p
             d1 = pw1[c] - gap[c]
             if d1 > 0.0 and d0 <= 0.0:
                 te = hermite_root(d0, rowdot(psi, c, v), d1, rowdot(psi, c, v1), hs)
+                kd = _ONSET
+            elif d0 > 0.0:
+                te = _resumed(d0, rowdot(psi, c, v), d1, rowdot(psi, c, v1), hs)
                 kd = _ONSET
         elif phase[c] == 1:
             dd0 = rowdot(psi, c, v)

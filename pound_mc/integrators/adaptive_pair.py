@@ -49,6 +49,7 @@ from pound_mc.integrators.outputs import (
     ONSET_PEAK,
     ONSET_S,
     ONSET_ZHD,
+    PEAK_DISP_LEFT,
     PRE_E0,
     PRE_E_D,
     PRE_E_IN,
@@ -604,8 +605,10 @@ def adaptive_pair(
     status = STATUS_OK
     store = hx.shape[0] > 0
     mode = int(pre[PRE_MODE]) if pre.size > 0 else 0
-    # the peak force alone: no energies and no floor peaks (neither moves the state)
+    # the accuracy check's run: no energies (they do not move the state); the floors' peaks
+    # only from a contact onset (PRE_RESUME_ONSET: the peak force and the floors' peaks)
     lean = mode == PRE_RESUME_PEAK or mode == PRE_RESUME_ONSET
+    floors = not lean or mode == PRE_RESUME_ONSET
     # the screen of the local bounds (_contact_bound) covers their tightness at _FINE, which
     # only ``same_fine`` needs: a lean run (the check's own run) reports none, and its screen
     # covers the bounds themselves, the larger share (every bound is slack there, bit for bit)
@@ -671,6 +674,8 @@ def adaptive_pair(
                     break  # the general step below takes this grid step
                 steps += 1
                 if not lean:
+                    run = _quiet_add(run, hh, slope, p0s, p1s, en0, nv0, nv1, km)
+                if floors:
                     # a floor extremum that may be a new peak: found here as the general step
                     # would (the state does not depend on it)
                     pk0 = _quiet_floor_peak(f0, 0, xf0, xfd0, xb0, xdb0, pk0, q0, q1, v0, v1,
@@ -679,7 +684,6 @@ def adaptive_pair(
                     pk1 = _quiet_floor_peak(f1, 1, xf1, xfd1, xb1, xdb1, pk1, q0, q1, v0, v1,
                                             p0s, slope, hh, w0, z0, g0, w1, z1, g1,
                                             herm_tol)  # fmt: skip
-                    run = _quiet_add(run, hh, slope, p0s, p1s, en0, nv0, nv1, km)
                     pk0 = max(pk0, abs(xb0))
                     pk1 = max(pk1, abs(xb1))
                     xf0, xfd0, xf1, xfd1 = xb0, xdb0, xb1, xdb1
@@ -774,7 +778,7 @@ def adaptive_pair(
                         return
                     if onsets and same_fine:  # the check's run is this one up to here
                         _snapshot_onset(out[N_OUT + 1 :], i, s, k_grid, steps - 1, q0, q1, v0,
-                                        v1, peak_f, cd, zhd)  # fmt: skip
+                                        v1, peak_f, cd, zhd, pk0, pk1)  # fmt: skip
                     p1s = ag0 + slope * (s + hh)
                     nq0, nv0 = advance(q0, v0, -g0 * p0s, -g0 * p1s, w0, z0, hh)
                     nq1, nv1 = advance(q1, v1, -g1 * p0s, -g1 * p1s, w1, z1, hh)
@@ -786,6 +790,7 @@ def adaptive_pair(
                                                     km)  # fmt: skip
                     e_in += de_in
                     e_d += de_d
+                if floors:
                     # peak floor displacements: where the cubic Hermite bound says an extremum
                     # inside the step may be a new peak, find it on the exact solution
                     pk0 = _floor_peak(f0, 0, xf0, xfd0, f0 * nq0, f0 * nv0, pk0, q0, q1, v0, v1,
@@ -920,7 +925,7 @@ def adaptive_pair(
                         impacts += 1.0  # the episode is an impact
                         pending = False
                         nlog = log_impact_in(logs, nlog, v_ep)
-                if not lean:
+                if floors:
                     # peak floor displacements over the sub-step (Hermite)
                     pk0 = _track_floor(f0 * q0, f0 * v0, f0 * nq0, f0 * nv0, hs, pk0)
                     pk1 = _track_floor(f1 * q1, f1 * v1, f1 * nq1, f1 * nv1, hs, pk1)
@@ -976,6 +981,9 @@ def adaptive_pair(
         return
     if lean:
         peak_only(out, cout, peak_f, status)
+        if floors and status == STATUS_OK:
+            out[PEAK_DISP_LEFT + side[0]] = pk0
+            out[PEAK_DISP_LEFT + side[1]] = pk1
         return
     if store and status == STATUS_OK:
         _store_pair(npts - 1, q0, q1, v0, v1, f0, f1, ps0, ps1, gp, b, cd, zhd, phase, model,
@@ -1103,9 +1111,9 @@ def _snapshot_pair(pre, i, e_in, e_d, steps, e0, q0, q1, v0, v1, pk0, pk1):
 
 
 @jit(inline=True)
-def _snapshot_onset(pre, i, s, k_grid, steps, q0, q1, v0, v1, peak_f, cd, zhd):
-    """A ``PRE_RESUME_ONSET`` start: the state at a linear step's start (peak force alone)."""
-    _snapshot_pair(pre, i, 0.0, 0.0, steps, 0.0, q0, q1, v0, v1, 0.0, 0.0)
+def _snapshot_onset(pre, i, s, k_grid, steps, q0, q1, v0, v1, peak_f, cd, zhd, pk0, pk1):
+    """A ``PRE_RESUME_ONSET`` start: a linear step's start (state, peak force, floors' peaks)."""
+    _snapshot_pair(pre, i, 0.0, 0.0, steps, 0.0, q0, q1, v0, v1, pk0, pk1)
     pre[ONSET_S] = s
     pre[ONSET_GRID] = k_grid
     pre[ONSET_PEAK] = peak_f
