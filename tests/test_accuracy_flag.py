@@ -148,3 +148,69 @@ def test_judged_change_of_runs_without_impacts_and_failed_second_runs():
     assert change[0] == 0.0
     assert change[1] == pytest.approx(1.0)  # an impact in one run only: judged
     assert change[2] == np.inf  # a second run that failed (NaN outputs)
+
+
+def test_check_run_from_an_onset_gives_the_floor_peaks_of_a_full_run():
+    # adaptive's finer run (twice the sub-steps) of an SDOF pair starts at the last contact
+    # onset up to which it is the run (pre mode 4) and skips the energies; its peak force and
+    # floors' peaks must be a full finer run's, bit for bit (B1-like pairs, 8 and 16 sub-steps:
+    # some diverge at the first impact, some later, some never)
+    from test_adaptive_pair import b1_like_pairs
+
+    from pound_mc.integrators import batch, kernel_settings, simulate_sdof_pairs
+    from pound_mc.integrators.outputs import (
+        N_OUT,
+        ONSET_SIZE,
+        PEAK_DISP_LEFT,
+        PEAK_DISP_RIGHT,
+        PEAK_FORCE,
+        PRE_RESUME,
+        PRE_RESUME_ONSET,
+        PRE_RUN_TO_CONTACT,
+        pre_size,
+    )
+    from pound_mc.motions import record_arrays
+    from pound_mc.scene import load_scene
+
+    dt, acc = record_arrays(load_scene("studies/scenes/b1.toml").load_record())
+    arrays = b1_like_pairs([0.3, 0.4, 0.7], [0.01] * 4)
+    n = arrays[0].size
+    every = np.arange(n, dtype=np.int64)
+    runs = {}
+    for substeps in (8, 16):
+        settings = kernel_settings("jankowski", "adaptive", substeps=substeps)
+        shared = np.zeros((n, pre_size(2, 2)))
+        runs[substeps] = np.zeros((n, N_OUT + 1 + ONSET_SIZE))
+        for mode in (PRE_RUN_TO_CONTACT, PRE_RESUME):
+            batch._sdof_adaptive(acc, dt, *arrays, settings, runs[substeps], every, every,
+                                 shared, mode, 0, n)  # fmt: skip
+    fine = np.empty((n, N_OUT + 1))
+    batch._sdof_adaptive(acc, dt, *arrays, kernel_settings("jankowski", "adaptive", substeps=16),
+                         fine, every, every, runs[8][:, N_OUT + 1 :], PRE_RESUME_ONSET, 0,
+                         n)  # fmt: skip
+    for k in (PEAK_FORCE, PEAK_DISP_LEFT, PEAK_DISP_RIGHT):
+        np.testing.assert_array_equal(fine[:, k], runs[16][:, k])
+    assert not np.array_equal(runs[8][:, PEAK_DISP_LEFT], runs[16][:, PEAK_DISP_LEFT])
+    # the batch's check and simulate's (each from its run's onset) judge alike: the same
+    # changes, so the same statuses with any tolerance; held at a tolerance of 1e-5, which
+    # flags some of these pairs and not others
+    names = ("left_period_s", "left_damping_ratio", "left_mass_kg", "right_period_s",
+             "right_damping_ratio", "right_mass_kg", "gap_m", "beta", "xi", "dt_s")  # fmt: skip
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr("pound_mc.integrators.accuracy.TOLERANCE", 1e-5)
+        out = simulate_sdof_pairs(acc, dt, **dict(zip(names, arrays, strict=True)), substeps=8)
+        one = []
+        for k in range(n):
+            p = {name: float(a[k]) for name, a in zip(names, arrays, strict=True)}
+            scene = scene_from_dict({
+                "record": {"source": "builtin:knet-akt013"},
+                **{side: {"model": "sdof", **{key: p[f"{side}_{key}"] for key in
+                                               ("period_s", "damping_ratio", "mass_kg")}}
+                   for side in ("left", "right")},
+                "contact": {"model": "jankowski", "gap_m": p["gap_m"], "beta": p["beta"],
+                            "xi": p["xi"]},
+                "integrator": {"dt_s": p["dt_s"], "substeps": 8},
+            })  # fmt: skip
+            one.append(int(simulate(scene, record=(dt, acc)).outputs["status"]))
+    assert out["status"].tolist() == one
+    assert 0 < one.count(STATUS_INACCURATE) < n

@@ -206,8 +206,9 @@ def _resumed(d0, dd0, d1, dd1, hh):
     """Where an open contact that starts a step penetrating closes again (inf: it does not).
 
     It penetrates since a separation located within the root's error: where it grows at the
-    start, the contact resumes there (0); where it turns and grows again inside the step, at
-    its minimum (the cubic Hermite root of its rate).  Without this the buildings would pass
+    start, the contact resumes there (0); where it turns and grows again inside the step, near
+    its minimum (the root of a cubic through its rates at the ends; the penetration there is
+    of the root's error, no force to speak of).  Without this the buildings would pass
     through each other without force until the penetration next crossed zero (extreme drill:
     a shear pair at zero gap, peak force 15 % low, four impacts of six).
     """

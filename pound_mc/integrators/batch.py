@@ -80,6 +80,7 @@ from pound_mc.integrators.settings import (
 from pound_mc.integrators.toolkit import MAX_STEPS
 
 __all__ = [
+    "FINER_SIZE",
     "METHODS",
     "OUTPUTS",
     "CONTACT_OUTPUTS",
@@ -104,8 +105,7 @@ class KernelResult(NamedTuple):
     outputs: dict
     contacts: dict
     history: tuple | None
-    #: Peak displacement [m] of each building code (``side``: 0 the first, 1 the last,
-    #: 2... a row's others), NaN unless ok.
+    #: Peak displacement [m] of each building code (``side``: 0 the first, 1 the last, 2...)
     code_peaks: np.ndarray
 
 
@@ -292,6 +292,8 @@ def _named(out):
 
 #: The empty ``pre`` of a plain run (kernels never write an empty array).
 _NO_PRE = np.zeros(0)
+#: Length of :func:`run_kernel`'s ``finer_start``.
+FINER_SIZE = 1 + ONSET_SIZE
 
 
 @functools.lru_cache(maxsize=64)
@@ -326,7 +328,8 @@ def run_kernel(
     restitution: dict | None = None,
     storey_out=None,
     contact_steps_flag: bool = True,
-    same_finer=None,
+    finer_start=None,
+    resume=None,
 ) -> KernelResult:
     """Run one simulation on prepared modal arrays.
 
@@ -358,10 +361,14 @@ def run_kernel(
         Flag a fixed-step run ``inaccurate`` where its shortest contact lasts fewer than
         :data:`~pound_mc.integrators.accuracy.MIN_STEPS_PER_CONTACT` steps (the criterion of a
         run without the accuracy check; :func:`pound_mc.scene.simulate` runs the check).
-    same_finer : numpy.ndarray, optional
-        One value that receives 1.0 where ``adaptive``'s accuracy check would take this run's
-        very sub-steps (an SDOF pair none of whose sub-steps a bound set by ``substeps`` would
-        shorten at the finer setting: the finer run would be this one, bit for bit), else 0.
+    finer_start : numpy.ndarray, optional
+        :data:`FINER_SIZE` values that receive (``adaptive`` on an SDOF pair, else NaN) 1.0
+        where the accuracy check's finer run would be this run, bit for bit (no sub-step
+        shortened by a bound set by ``substeps``), else 0; then the state at the last contact
+        onset up to which it is this run.
+    resume : numpy.ndarray, optional
+        ``finer_start[1:]`` of a run of the same pair: run from there (``PRE_RESUME_ONSET``),
+        for the peak force and the floors' peaks alone (the accuracy check's finer run).
     """
     settings = kernel_settings(model, method, relation=relation, dt_s=dt_s, substeps=substeps,
                                restitution=restitution)  # fmt: skip
@@ -378,8 +385,13 @@ def run_kernel(
     run = _RUNS[settings.method]
     if run is _run_adaptive and pair and storeys is None:
         run = _run_adaptive_pair
-    # past the outputs: each code's peak (a row), or whether the finer run is this (pairs)
-    out = np.empty(N_OUT + (n_codes if n_codes > 2 else int(run is _run_adaptive_pair)))
+    # past the outputs: each code's peak (a row), or a pair's finer_start
+    onsets = ONSET_SIZE if finer_start is not None and resume is None else 0
+    out = np.empty(N_OUT + (n_codes if n_codes > 2 else (1 + onsets) * (run is _run_adaptive_pair)))
+    pre = _NO_PRE
+    if resume is not None and run is _run_adaptive_pair:
+        pre = np.array(resume, dtype=np.float64)
+        pre[PRE_MODE] = PRE_RESUME_ONSET
     cout = np.empty((nc, N_COUT))
     if history:  # NaN where a run that stopped (unstable, not converged) did not reach
         hx, hd, hf = (np.full((ag.size, k), np.nan) for k in (nf, nc, nc))
@@ -401,7 +413,7 @@ def run_kernel(
         np.ascontiguousarray(side, dtype=np.int64), np.ascontiguousarray(psi, dtype=f8),
         np.ascontiguousarray(gap, dtype=f8), np.ascontiguousarray(meff, dtype=f8),
         np.ascontiguousarray(beta, dtype=f8), np.ascontiguousarray(xi, dtype=f8),
-        settings, q, v, out, cout, hx, hd, hf, _NO_PRE,
+        settings, q, v, out, cout, hx, hd, hf, pre,
     )  # fmt: skip
     fixed_restitution(out, settings, xi[0] if np.size(xi) else 0.0)
     if settings.method != ADAPTIVE and contact_steps_flag:
@@ -410,8 +422,10 @@ def run_kernel(
     outputs = dict(zip(OUTPUTS, out[:N_OUT].tolist(), strict=True))
     contacts = dict(zip(CONTACT_OUTPUTS, cout.T.copy(), strict=True))
     code_peaks = out[N_OUT:].copy() if n_codes > 2 else out[[PEAK_DISP_LEFT, PEAK_DISP_RIGHT]]
-    if same_finer is not None:
-        same_finer[0] = 1.0 if run is _run_adaptive_pair and out[N_OUT] == 1.0 else 0.0
+    if finer_start is not None:
+        finer_start[:] = np.nan
+        if run is _run_adaptive_pair:
+            finer_start[: out.size - N_OUT] = out[N_OUT:]
     return KernelResult(outputs, contacts, (hx, hd, hf) if history else None, code_peaks)
 
 
@@ -597,9 +611,8 @@ def _sdof_adaptive_batch(acc, dt_rec, arrays, settings, dt_s) -> tuple:
     Simulations that differ only in contact parameters share their linear response up to the
     first contact (periods, damping ratios, masses, gap and step define a group): it is run
     once per group into ``shared``, and every simulation resumes from its group's row.
-    Returns the outputs; past them a slot (1 where the accuracy check's finer run would take
-    the run's very sub-steps) and the state from which that run may start
-    (``PRE_RESUME_ONSET``: it is the run's up to there).
+    Returns the outputs; past them a slot (1 where the accuracy check's finer run would be the
+    run) and the state from which that run may start (``PRE_RESUME_ONSET``).
     """
     arrays = [*arrays, np.array(dt_s, dtype=np.float64, order="C")]
     nsim = arrays[0].size

@@ -25,6 +25,7 @@ from pound_mc.integrators.accuracy import (
     judged_change,
     substep_check_due,
 )
+from pound_mc.integrators.batch import FINER_SIZE
 from pound_mc.integrators.outputs import INELASTIC_OUTPUTS, STATUS_OK
 from pound_mc.scene import schema
 from pound_mc.scene.model import Scene
@@ -248,37 +249,44 @@ def building_results(scene: Scene, code_peaks, table=None, storey_out=None) -> l
     return out
 
 
-def _checked_status(res: SimulationResult, kernel, same: bool, table) -> int:
+def _checked_status(res: SimulationResult, kernel, start, table) -> int:
     """The status of an ``ok`` run after the accuracy check (:mod:`pound_mc.integrators.accuracy`).
 
     ``kernel(**settings)``: :func:`~pound_mc.integrators.run_kernel` of the run's scene and
-    record; ``same``: whether ``adaptive``'s finer run would be the run itself.
+    record; ``start``: the run's ``finer_start`` (``adaptive`` on an SDOF pair: whether its
+    finer run would be the run itself, and where that run may start, else NaN).
     """
     scene, o = res.scene, res.outputs
+    resume = None
     if scene.method == "adaptive":
-        if same or not substep_check_due(o["peak_force"], o["status"]):
+        if start[0] == 1.0 or not substep_check_due(o["peak_force"], o["status"]):
             return int(o["status"])
         second = {"method": "adaptive", "dt_s": scene.dt_s,
                   "substeps": scene.substeps * ADAPTIVE_SUBSTEPS_FACTOR}  # fmt: skip
+        if not np.isnan(start[0]):  # from the last onset up to which it is the run
+            resume = start[1:]
     else:
         second = {"method": "adaptive", "dt_s": COMPANION_DT_S, "substeps": COMPANION_SUBSTEPS}
     storey_out = None if table is None else np.empty((table.shape[0], 2))
-    other = kernel(**second, storey_out=storey_out)
+    other = kernel(**second, storey_out=storey_out, resume=resume)
     buildings = building_results(scene, other.code_peaks, table, storey_out)
-    change = judged_change(_judged(o, res.contacts, res.buildings),
-                           _judged(other.outputs, other.contacts, buildings))  # fmt: skip
+    contacts = resume is None  # a resumed run gives the peak force and the floors' peaks
+    change = judged_change(_judged(o, res.contacts, res.buildings, contacts),
+                           _judged(other.outputs, other.contacts, buildings, contacts))  # fmt: skip
     return int(flag_inaccurate([o["status"]], None, np.inf, 0.0, change=change)[0])
 
 
-def _judged(outputs: dict, contacts: dict, buildings: list) -> dict:
+def _judged(outputs: dict, contacts: dict, buildings: list, per_contact: bool = True) -> dict:
     """A run's judged quantities (:func:`~pound_mc.integrators.accuracy.judged_change`)."""
-    return {
+    got = {
         "peak_force": [outputs["peak_force"]],
         "impacts": [outputs["impacts"]],
-        "contact_peak_force": [contacts["peak_force"]],
         "peak_disp": [[b["peak_disp"] for b in buildings]],
         "peak_ductility": [[b["peak_ductility"] for b in buildings]],
     }
+    if per_contact:  # an SDOF pair's one contact is its peak force
+        got["contact_peak_force"] = [contacts["peak_force"]]
+    return got
 
 
 def simulate(
@@ -343,10 +351,10 @@ def simulate(
     kernel = functools.partial(run_kernel, acc, dt_rec, **arrays, model=scene.contact_model,
                                relation=scene.relation, storeys=storeys,
                                restitution=scene.restitution_rule())  # fmt: skip
-    same = np.zeros(1)  # whether adaptive's finer run would be this one
+    start = np.empty(FINER_SIZE)  # where adaptive's finer run may start (SDOF pairs)
     outputs, contacts, hist, code_peaks = kernel(
         method=m, dt_s=dt_s, substeps=substeps, history=history, storey_out=storey_out,
-        contact_steps_flag=not check, same_finer=same,
+        contact_steps_flag=not check, finer_start=start,
     )  # fmt: skip
     if (m, dt_s, substeps) != (scene.method, scene.dt_s, scene.substeps):
         scene = replace(scene, method=m, dt_s=dt_s, substeps=substeps)
@@ -354,7 +362,7 @@ def simulate(
     table = None if storeys is None else np.asarray(storeys[1], dtype=float)
     res.buildings = building_results(scene, code_peaks, table, storey_out)
     if check and outputs["status"] == STATUS_OK:
-        outputs["status"] = _checked_status(res, kernel, same[0] == 1.0, table)
+        outputs["status"] = _checked_status(res, kernel, start, table)
     if storey_out is not None:
         owner = None
         if scene.row is not None:  # a row's buildings by their place in it
