@@ -30,8 +30,9 @@ cache (default ``outputs/accuracy_drill_refs.json``), so a second drill reuses t
     python -m pound_mc.numerics.accuracy_drill --full     # >= 800 runs per method (~10 min
                                                           # of runs, ~45 min of references)
 
-Exit status 0 when no ``ok`` run is more than 1 % off and at most 2 % of the runs within 0.5 %
-are flagged, else 1.
+Exit status 0 when no ``ok`` run is more than 1 % off (in every judged quantity, and in the
+peak force, peak displacements and ductilities alone) and at most 2 % of the runs within 0.5 %
+in every judged quantity are flagged, else 1.
 """
 
 from __future__ import annotations
@@ -358,9 +359,11 @@ def summarise(rows, error: str = "error") -> list[dict]:
     return out
 
 
-def _passed(summary) -> bool:
+def _passed(summary, false_alarms: bool = True) -> bool:
+    """No ``ok`` run more than 1 % off (and at most 2 % of those within 0.5 % flagged)."""
     alls = [s for s in summary if s["structure"] == "all"]
-    return all(s["ok_off_1pct"] == 0 and s["within_flagged"] <= 0.02 * s["within_0.5pct"]
+    return all(s["ok_off_1pct"] == 0 and (not false_alarms or
+                                          s["within_flagged"] <= 0.02 * s["within_0.5pct"])
                for s in alls)  # fmt: skip
 
 
@@ -405,7 +408,9 @@ def main(argv=None) -> int:
     if args.json:
         Path(args.json).write_text(json.dumps({"summary": summary, "summary_pair": pair,
                                                "runs": rows}, indent=1))  # fmt: skip
-    return 0 if _passed(summary) and _passed(pair) else 1
+    # a run within 0.5 % in the pair's quantities may be off in a contact's peak force, which
+    # the flag judges too: false alarms are counted over every judged quantity
+    return 0 if _passed(summary) and _passed(pair, false_alarms=False) else 1
 
 
 if __name__ == "__main__":
