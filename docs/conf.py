@@ -29,13 +29,17 @@ extensions = [
     "sphinx.ext.autodoc",
     "sphinx.ext.napoleon",
     "sphinx.ext.mathjax",
+    # MathJax from the package, copied into _static/mathjax: formulas render offline, no CDN
+    "sphinx-mathjax-offline",
 ]
 source_suffix = {".md": "myst-nb", ".ipynb": "myst-nb"}
 exclude_patterns = ["_build", "jupyter_execute"]
 nb_execution_mode = "force" if QUICKSTART.is_file() else "off"
 nb_execution_timeout = 600
 nb_execution_raise_on_error = True
-myst_enable_extensions = ["dollarmath"]
+# what a cell prints on stderr (library notices such as tqdm's about notebook widgets) is left out
+nb_output_stderr = "remove"
+myst_enable_extensions = ["dollarmath", "deflist"]
 myst_heading_anchors = 3
 suppress_warnings = ["myst.header", "myst.xref_missing"]
 
@@ -47,5 +51,7 @@ autodoc_member_order = "bysource"
 autodoc_typehints = "description"
 autodoc_default_options = {"members": True, "undoc-members": False}
 
-html_theme = "alabaster"
+html_theme = "furo"
 html_title = f"pound-mc {release}"
+html_static_path = ["_static"]
+html_css_files = ["pound-mc.css"]  # a wider column: code lines of 100 characters fit

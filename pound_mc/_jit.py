@@ -187,6 +187,8 @@ SCALAR_KERNEL_MODULES = frozenset(
     "pound_mc." + name
     for name in (
         "integrators.adaptive_pair",
+        "integrators.adaptive_pair_contact",
+        "integrators.adaptive_pair_linear",
         "integrators.laws",
         "integrators.toolkit",
         "integrators.outputs",

@@ -215,3 +215,92 @@ def test_storey_law_rates_and_switches():
     assert settled_branch(LAW_BILINEAR, 1, uy, -1e-20, -3.0, uy, 1e-12) == 0
     assert settled_branch(LAW_BILINEAR, 0, 1.001 * uy, 0.1, 0.0, uy, 1e-12) == 1
     assert settled_branch(LAW_BOUC_WEN, 1, 0.0, 1e-20, -3.0, uy, 1e-12) == -1
+
+
+# ------------------------------------------------------------------ exact spells, closed forms
+
+#: One mode (0.5 s, 5 %, participation 1.2) with one bilinear storey (its drift the mode's
+#: coordinate, unit modal mass): 3 mm of plastic drift load the mode while the storey is elastic.
+_W, _ZETA, _GAMMA, _UY, _ALPHA = 2.0 * np.pi / 0.5, 0.05, 1.2, 0.05, 0.1
+_UP = 0.003
+
+
+def _spell(q0, v0, ag0, slope, dt_rec=0.02, uy=_UY):
+    """One call of ``exact_spell`` on the one-mode building from the state ``q0, v0``."""
+    from pound_mc.integrators.elastic_spells import SPELL_CHUNK, exact_spell, spell_steps
+    from pound_mc.integrators.toolkit import row_spans
+
+    one = np.ones((1, 1))
+    omega, zeta, gamma = np.array([_W]), np.array([_ZETA]), np.array([_GAMMA])
+    m_lin, h_lin, coef = spell_steps(omega, zeta, dt_rec, 16)
+    y = np.array([q0, v0, q0 - _UP])  # z = u - u_p
+    lo, hi = row_spans(one)
+    clo, chi = row_spans(np.zeros((1, 0)))
+    sf = np.zeros((6, 1))
+    sf[1, 0], sf[2, 0] = q0, v0  # the floor's values at the start
+    ss = np.zeros((5, 1))
+    ss[0, 0], ss[1, 0] = q0, v0  # the storey's
+    en = np.zeros(5)
+    y1 = np.zeros(3)
+    spare = np.zeros((2, 1))
+    out = exact_spell(
+        y, y1, y[:1], y[1:2], y1[:1], y1[1:2], spare[0], 1, coef, 0, m_lin, h_lin, dt_rec, ag0,
+        slope, spare[1], omega, zeta, gamma, one, one, lo, hi, np.zeros((1, 0)), clo, chi,
+        np.zeros(0), np.zeros(0), np.zeros(0), np.zeros(0), np.zeros(0), one, lo, hi,
+        np.array([_W**2]), np.array([_ALPHA]), np.array([uy]), np.array([0]), one, lo, hi,
+        sf[1], sf[2], ss[0], ss[1], ss[2], ss[3], sf[0], ss[4], sf[5], sf[3], sf[4], 1e-5,
+        np.zeros((SPELL_CHUNK, 2)), np.zeros((4 * SPELL_CHUNK, 3), dtype=np.int64),
+        np.zeros(4 * SPELL_CHUNK), en,
+    )  # fmt: skip
+    return out, y, en, sf[0, 0], ss[4, 0], h_lin
+
+
+def _ode(q0, v0, ag0, slope, t_end):
+    """SciPy's solution of the one-mode equation with its energies (input, damping)."""
+    from scipy.integrate import solve_ivp
+
+    load = (1.0 - _ALPHA) * _W**2 * _UP  # the plastic drift's load on the mode
+
+    def rhs(t, s):
+        ag = ag0 + slope * t
+        a = -2.0 * _ZETA * _W * s[1] - _W**2 * s[0] - _GAMMA * ag + load
+        return [s[1], a, -_GAMMA * ag * s[1], 2.0 * _ZETA * _W * s[1] ** 2]
+
+    return solve_ivp(rhs, (0.0, t_end), [q0, v0, 0.0, 0.0], method="DOP853", rtol=1e-13,
+                     atol=1e-16, dense_output=True), load  # fmt: skip
+
+
+@pytest.mark.nojit
+def test_exact_spell_is_the_exact_solution():
+    # reference: SciPy's DOP853 at rtol 1e-13 on the mode's equation, its energies integrated
+    # with it; the velocity turns inside the interval (a peak between the steps' ends)
+    q0, v0, ag0, slope = 0.01, 0.02, 1.0, -50.0
+    (s, k, blocked, xmax, vmax), y, en, peak_x, peak_u, _h = _spell(q0, v0, ag0, slope)
+    sol, load = _ode(q0, v0, ag0, slope, 0.02)
+    want = sol.y[:, -1]
+    assert (s, blocked) == (0.02, False) and k > 1
+    assert y[0] == pytest.approx(want[0], rel=1e-11) and y[1] == pytest.approx(want[1], rel=1e-9)
+    assert y[2] == pytest.approx(want[0] - _UP, rel=1e-11)  # z follows the drift
+    assert en[0] == pytest.approx(want[2], rel=1e-9)  # input energy
+    assert en[1] == pytest.approx(want[3], rel=1e-9)  # damping energy
+    assert en[3] == pytest.approx(load * (want[0] - q0), rel=1e-11)  # the plastic load's work
+    t = np.linspace(0.0, 0.02, 20001)
+    qs = sol.sol(t)[0]
+    assert 0 < np.argmax(qs) < t.size - 1  # the peak is inside the interval
+    assert peak_x == pytest.approx(qs.max(), rel=1e-12) and peak_u == peak_x
+    assert xmax == peak_x and vmax == pytest.approx(abs(want[1]), rel=1e-9)
+
+
+@pytest.mark.nojit
+def test_exact_spell_leaves_a_yield_to_the_runge_kutta_steps():
+    # z = u - u_p rises from 3 mm through a 5 mm yield drift at 13.9 ms (SciPy, as above): the
+    # spell stops at the start of the step that holds the yield, on the exact solution there
+    q0, v0, uy = 0.006, 0.15, 0.005
+    (s, k, blocked, _x, _v), y, _en, _p, _u, h_lin = _spell(q0, v0, 0.0, 0.0, uy=uy)
+    sol, _load = _ode(q0, v0, 0.0, 0.0, 0.02)
+    t = np.linspace(0.0, 0.02, 20001)
+    t_yield = t[np.argmax(sol.sol(t)[0] - _UP >= uy)]
+    assert blocked and k == 1 and s == h_lin
+    assert s <= t_yield <= s + h_lin
+    assert y[0] == pytest.approx(sol.sol(s)[0], rel=1e-11)
+    assert y[2] == pytest.approx(sol.sol(s)[0] - _UP, rel=1e-11) and y[2] < uy

@@ -10,6 +10,7 @@ Registered on ``import pound_mc``::
     ds.pound.probability()                     # fraction of samples with an impact [-]
     ds.pound.fragility(im="sa_g")              # lognormal fragility per other grid axis
     ds.pound.required_gap(probability=0.1)     # gap for a target probability, and the rules
+    ds.pound.sensitivity(output="peak_force")  # Sobol' S1 and ST (saltelli studies)
     ds.pound.plot.spectrum(ax=ax)              # draws on ax, returns the Axes
     ds.pound.plot.spectrum_panels()            # a panel per material (jankowski_spectrum)
     ds.pound.worst("peak_force")               # the simulation with the largest peak force
@@ -24,36 +25,22 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pandas as pd
 import xarray as xr
-from matplotlib.axes import Axes
 
-from pound_mc.analysis.plot import (
-    distribution_chart,
-    probability_chart,
-    quantiles_over,
-    restitution_chart,
-    save,
-    spectrum_chart,
-    spectrum_panels,
-)
-from pound_mc.analysis.plot_numerics import time_history_chart
-from pound_mc.analysis.profiles import contacts_chart, profile_chart
-from pound_mc.analysis.risk import counted
-from pound_mc.analysis.risk import fragility as _fragility
-from pound_mc.analysis.risk import required_gap as _required_gap
-from pound_mc.analysis.risk_chart import fragility_panels, required_gap_chart
-from pound_mc.analysis.selection import MATERIAL_DIM, dim_name, no_value_message, selection
-from pound_mc.analysis.style import pyplot_figures, value_text
 from pound_mc.errors import InputError
-from pound_mc.scene import Scene, SimulationResult
-from pound_mc.scene import simulate as simulate_scene
-from pound_mc.study.dataset import RECORD_VARIABLES, study_file
-from pound_mc.study.definition import grid_dim_name, study_from_text
-from pound_mc.study.engine import StudyEngine
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+
+    from pound_mc.scene import Scene, SimulationResult
+
+# ``import pound_mc`` registers this accessor, and ``pound-mc --help`` imports ``pound_mc``: so
+# this module loads xarray alone, and each method imports the charts (matplotlib), the
+# analysis (scipy) and the scenes and studies (numba) it uses when it is first called.
 
 __all__ = ["PoundAccessor", "PoundPlot", "scene_at"]
 
@@ -66,6 +53,8 @@ def _select(obj, ds: xr.Dataset, sel: dict):
     ``sel`` may name a dimension by its study key and a material by name
     (:func:`~pound_mc.analysis.selection.selection`).
     """
+    from pound_mc.analysis.selection import MATERIAL_DIM, selection
+
     sel = selection(ds, sel)
     unknown = sorted(set(sel) - set(ds.dims))
     if unknown:
@@ -82,6 +71,8 @@ def _select(obj, ds: xr.Dataset, sel: dict):
 
 def _position(ds: xr.Dataset, dim: str, value) -> int:
     """Position along ``dim`` of ``value``: the nearest for numbers, the equal one otherwise."""
+    from pound_mc.analysis.selection import MATERIAL_DIM, no_value_message
+
     method = "nearest" if ds[dim].dtype.kind in "fiu" and dim != MATERIAL_DIM else None
     i = int(ds.indexes[dim].get_indexer([value], method=method)[0])
     if i < 0:
@@ -129,6 +120,11 @@ def scene_at(
     index : dict
         The integer position of the simulation along every dimension of ``peak_force``.
     """
+    from pound_mc.analysis.selection import selection
+    from pound_mc.study.dataset import study_file
+    from pound_mc.study.definition import grid_dim_name, study_from_text
+    from pound_mc.study.engine import StudyEngine
+
     if study_path is None:
         study_path = study_file(ds)  # in the study's own folder: its relative records
     text = ds.attrs.get("study_text")
@@ -164,6 +160,8 @@ def _axes_of(fig, ax):
     Those given, or the new figure's less its colour bars; either less the spare ones a chart
     hid (the last row of a panel grid).
     """
+    from matplotlib.axes import Axes
+
     if ax is not None:
         axes = np.asarray([ax] if isinstance(ax, Axes) else list(ax), dtype=object).ravel()
     else:
@@ -172,15 +170,36 @@ def _axes_of(fig, ax):
     return axes[0] if axes.size == 1 else axes
 
 
-def _chart_method(name: str, chart: Callable, returns: str, doc: str, **fixed: Any) -> Callable:
-    """A :class:`PoundPlot` method ``name`` that draws ``chart`` of the dataset.
+def _chart(name: str) -> Callable:
+    """The chart function ``name`` of the analysis modules, imported now (matplotlib with it)."""
+    from pound_mc.analysis import plot, profiles, risk_chart, sensitivity_chart
+
+    charts = {
+        "sensitivity_chart": sensitivity_chart.sensitivity_chart,
+        "spectrum_chart": plot.spectrum_chart,
+        "spectrum_panels": plot.spectrum_panels,
+        "probability_chart": plot.probability_chart,
+        "distribution_chart": plot.distribution_chart,
+        "fragility_panels": risk_chart.fragility_panels,
+        "required_gap_chart": risk_chart.required_gap_chart,
+        "contacts_chart": profiles.contacts_chart,
+        "profile_chart": profiles.profile_chart,
+    }
+    return charts[name]
+
+
+def _chart_method(name: str, chart: str, returns: str, doc: str, **fixed: Any) -> Callable:
+    """A :class:`PoundPlot` method ``name`` that draws the chart named ``chart`` of the dataset.
 
     The method takes ``path``, ``ax`` and the chart's keywords (``fixed`` ones given here), and
     returns what :func:`_axes_of` gives; ``returns`` is its return annotation, ``doc`` its
-    docstring.
+    docstring.  The chart's module is imported at the first call (:func:`_chart`).
     """
 
     def method(self, path: str | Path | None = None, *, ax: Axes | None = None, **kwargs: Any):
+        from pound_mc.analysis.selection import dim_name, selection
+        from pound_mc.analysis.style import pyplot_figures
+
         ds = self._ds
         if kwargs.get("sel"):  # study keys and material names, as --sel takes them
             kwargs["sel"] = selection(ds, kwargs["sel"])
@@ -188,7 +207,7 @@ def _chart_method(name: str, chart: Callable, returns: str, doc: str, **fixed: A
             if isinstance(kwargs.get(option), str):
                 kwargs[option] = dim_name(ds, kwargs[option])
         with pyplot_figures(path is None, unless_set=True):
-            return _axes_of(chart(ds, path, ax=ax, **fixed, **kwargs), ax)
+            return _axes_of(_chart(chart)(ds, path, ax=ax, **fixed, **kwargs), ax)
 
     method.__name__ = name
     method.__qualname__ = f"PoundPlot.{name}"
@@ -214,7 +233,7 @@ class PoundPlot:
 
     spectrum = _chart_method(
         "spectrum",
-        spectrum_chart,
+        "spectrum_chart",
         "Axes",
         """Impact force spectrum (:func:`pound_mc.analysis.plot.spectrum_chart`).
 
@@ -226,7 +245,7 @@ class PoundPlot:
     )
     spectrum_panels = _chart_method(
         "spectrum_panels",
-        spectrum_panels,
+        "spectrum_panels",
         "np.ndarray",
         """Impact force spectrum with a panel per material (``plot.spectrum_panels``).
 
@@ -238,14 +257,14 @@ class PoundPlot:
     )
     probability = _chart_method(
         "probability",
-        probability_chart,
+        "probability_chart",
         "Axes",
         "Pounding probability against gap (:func:`pound_mc.analysis.plot.probability_chart`).",
     )
 
     fragility = _chart_method(
         "fragility",
-        fragility_panels,
+        "fragility_panels",
         "np.ndarray",
         """Fragility panels (:func:`pound_mc.analysis.risk_chart.fragility_panels`).
 
@@ -254,15 +273,26 @@ class PoundPlot:
         """,
     )
 
+    sensitivity = _chart_method(
+        "sensitivity",
+        "sensitivity_chart",
+        "np.ndarray",
+        """Sobol' indices as bars (:func:`pound_mc.analysis.sensitivity_chart.sensitivity_chart`).
+
+        S1 and ST of every sampled key with their intervals, a panel per value of ``by``
+        (default the first grid axis, at most six); ``output`` as :meth:`PoundAccessor.sensitivity`.
+        """,
+    )
+
     required_gap = _chart_method(
         "required_gap",
-        required_gap_chart,
+        "required_gap_chart",
         "Axes",
         "Probability against gap with the required gap marked (``required_gap_chart``).",
     )
     distribution = _chart_method(
         "distribution",
-        distribution_chart,
+        "distribution_chart",
         "np.ndarray",
         """Peak force distribution (:func:`pound_mc.analysis.plot.distribution_chart`).
 
@@ -271,20 +301,20 @@ class PoundPlot:
     )
     contacts = _chart_method(
         "contacts",
-        contacts_chart,
+        "contacts_chart",
         "Axes",
         "Peak force at each contact (:func:`pound_mc.analysis.profiles.contacts_chart`).",
     )
     drift = _chart_method(
         "drift",
-        profile_chart,
+        "profile_chart",
         "np.ndarray",
         "Peak storey drift profiles (:func:`pound_mc.analysis.profiles.profile_chart`).",
         quantity="drift",
     )
     ductility = _chart_method(
         "ductility",
-        profile_chart,
+        "profile_chart",
         "np.ndarray",
         "Peak ductility profiles (:func:`pound_mc.analysis.profiles.profile_chart`).",
         quantity="ductility",
@@ -294,6 +324,9 @@ class PoundPlot:
         self, path: str | Path | None = None, *, ax: Axes | None = None, **kwargs: Any
     ) -> Axes:
         """Restitution relations with the study's sampled ``e`` and ``e_effective`` marked."""
+        from pound_mc.analysis.physics_charts import restitution_chart
+        from pound_mc.analysis.style import pyplot_figures
+
         ds = self._ds
         samples = None
         if "e" in ds and "e_effective" in ds:
@@ -319,6 +352,10 @@ class PoundPlot:
         See :func:`scene_at` for the arguments; three panels (displacements, penetration,
         force); the figure's title names the simulation.
         """
+        from pound_mc.analysis.plot import save
+        from pound_mc.analysis.plot_numerics import time_history_chart
+        from pound_mc.analysis.style import pyplot_figures, value_text
+
         result, index = self._ds.pound.simulate(
             record=record, sample=sample, study_path=study_path, **coords
         )
@@ -385,6 +422,8 @@ class PoundAccessor:
             Dims ``quantile`` and the dims left after the selection, less ``sample`` (and
             ``record`` when pooled); the variable's units; NaN where no run ended ok.
         """
+        from pound_mc.analysis.plot import quantiles_over
+
         ds = self._ds
         values = ds[variable].where(self.ok)
         values = _select(values, ds, sel)
@@ -412,6 +451,8 @@ class PoundAccessor:
         xarray.DataArray
             Pounding probability [-] over the dims left, less ``sample``.
         """
+        from pound_mc.analysis.risk import counted
+
         ds = self._ds
         pounded = ds["impacts"] > 0
         if threshold is not None:
@@ -433,14 +474,57 @@ class PoundAccessor:
         ``beta_ci`` along the remaining axes (``event``: ``"pounding"``, ``"peak_force>N"``,
         ``"ductility>X"``).
         """
-        return _fragility(self._ds, im, event, **kwargs)
+        from pound_mc.analysis.risk import fragility
+
+        return fragility(self._ds, im, event, **kwargs)
 
     def required_gap(self, probability: float = 0.1, **kwargs) -> xr.Dataset:
         """Smallest gap with pounding probability at or below ``probability``, with the rules.
 
         See :func:`pound_mc.analysis.risk.required_gap`.
         """
-        return _required_gap(self._ds, probability, **kwargs)
+        from pound_mc.analysis.risk import required_gap
+
+        return required_gap(self._ds, probability, **kwargs)
+
+    def risk(self, hazard, **kwargs: Any) -> xr.Dataset:
+        """Mean annual rate of an event per gap at a site, and the gap that meets a target.
+
+        ``hazard``: a :class:`~pound_mc.analysis.hazard.HazardCurve`, the path of a hazard
+        CSV file (columns ``im`` [g], ``annual_rate``) or ``(k0, k)`` of ``k0 im^-k``; the
+        keywords are :func:`pound_mc.analysis.site_risk.risk`'s (``event``, ``method``,
+        ``target_rate`` or ``target_probability`` with ``years``, ...).
+        """
+        from pound_mc.analysis.hazard import HazardCurve, power_law, read_hazard
+        from pound_mc.analysis.site_risk import risk as site_risk
+
+        if isinstance(hazard, tuple):
+            hazard = power_law(*hazard)
+        elif not isinstance(hazard, HazardCurve):
+            hazard = read_hazard(hazard)
+        return site_risk(self._ds, hazard, **kwargs)
+
+    def code_gaps(self, **kwargs: Any) -> xr.Dataset:
+        """The rules' and codes' gaps of the study's buildings, and how often runs pound there.
+
+        See :func:`pound_mc.analysis.site_risk.code_gaps` (``asce=(R, Cd, Ie)``,
+        ``ec8=(q, qd, same_levels)``); every run is simulated again at each rule's gap.
+        """
+        from pound_mc.analysis.site_risk import code_gaps
+
+        return code_gaps(self._ds, **kwargs)
+
+    def sensitivity(self, output: str = "peak_force", **kwargs) -> xr.Dataset:
+        """Sobol' first- and total-order indices of ``output`` (a ``saltelli`` study).
+
+        See :func:`pound_mc.analysis.sensitivity.sensitivity`: ``S1``, ``ST``, ``S1_ci``,
+        ``ST_ci`` [1] along ``record``, the grid axes and ``variable`` (the sampled study keys),
+        with ``n_used``, ``n_left_out`` and ``message``.  ``output``: ``"peak_force"``,
+        ``"pounding"``, ``"ductility"`` or a per-simulation variable.
+        """
+        from pound_mc.analysis.sensitivity import sensitivity
+
+        return sensitivity(self._ds, output, **kwargs)
 
     def status_counts(self) -> pd.Series:
         """Number of simulations per status (the dataset's ``status`` flags).
@@ -477,6 +561,8 @@ class PoundAccessor:
         Per record: the record's own variables (:data:`~pound_mc.study.dataset.RECORD_VARIABLES`,
         ``scale_factor`` per record and intensity), not the summaries over its samples.
         """
+        from pound_mc.study.dataset import RECORD_VARIABLES
+
         dims = set(self._ds["peak_force"].dims)
         return [
             name
@@ -591,7 +677,9 @@ class PoundAccessor:
             Integer position of the simulation along every dimension of ``peak_force``
             (``ds.peak_force[index]`` is the stored result).
         """
+        from pound_mc.scene import simulate
+
         scene, rec, index = scene_at(
             self._ds, record=record, sample=sample, study_path=study_path, **coords
         )
-        return simulate_scene(scene, record=rec, history=history), index
+        return simulate(scene, record=rec, history=history), index

@@ -22,7 +22,7 @@ from pound_mc.study.dataset import study_folder
 from pound_mc.study.definition import Study, grid_dim_name, study_from_text
 from pound_mc.study.engine import StudyEngine
 
-__all__ = ["RulesDoNotApply", "study_gaps"]
+__all__ = ["RulesDoNotApply", "engine_of", "study_gaps"]
 
 
 class RulesDoNotApply(InputError):
@@ -45,7 +45,23 @@ def _linear_peaks(records, rec_idx, periods, dampings, substeps) -> np.ndarray:
     return out
 
 
-def study_gaps(study_or_dataset, *, base_dir=None, substeps: int = 8):
+def engine_of(study_or_dataset, *, base_dir=None) -> StudyEngine:
+    """The engine of a study, or of the study a dataset was run from (its ``study_text``).
+
+    ``base_dir``: the folder of relative record paths for a dataset (default the one it
+    says, :func:`~pound_mc.study.dataset.study_folder`).  The records are read here.
+    """
+    if isinstance(study_or_dataset, Study):
+        return StudyEngine(study_or_dataset)
+    text = study_or_dataset.attrs.get("study_text")
+    if not text:
+        raise InputError("the dataset has no study_text attribute", key="study_text")
+    base_dir = study_folder(study_or_dataset) if base_dir is None else base_dir
+    file = None if base_dir is None else str(base_dir) + "/dataset-study.toml"
+    return StudyEngine(study_from_text(text, file=file))
+
+
+def study_gaps(study_or_dataset, *, base_dir=None, substeps: int = 8, engine=None):
     """The three required gaps for every simulation of a study.
 
     The periods and damping ratios of each simulation (fixed, grid axes or sampled) are those
@@ -64,6 +80,9 @@ def study_gaps(study_or_dataset, *, base_dir=None, substeps: int = 8):
     substeps : int, default 8
         Evaluation points per sample interval
         (:func:`pound_mc.physics.separation.peak_displacements`).
+    engine : pound_mc.study.engine.StudyEngine, optional
+        The study's engine, if already built (:func:`engine_of`): its records are not read
+        again.
 
     Raises
     ------
@@ -80,16 +99,8 @@ def study_gaps(study_or_dataset, *, base_dir=None, substeps: int = 8):
         samples (e.g. ``ds.gap_abs.mean(("record", "sample"))``) are what a chart of
         pounding probability against ``contact_gap_m`` marks.
     """
-    if isinstance(study_or_dataset, Study):
-        study = study_or_dataset
-    else:
-        text = study_or_dataset.attrs.get("study_text")
-        if not text:
-            raise InputError("the dataset has no study_text attribute", key="study_text")
-        base_dir = study_folder(study_or_dataset) if base_dir is None else base_dir
-        file = None if base_dir is None else str(base_dir) + "/dataset-study.toml"
-        study = study_from_text(text, file=file)
-    engine = StudyEngine(study)
+    engine = engine_of(study_or_dataset, base_dir=base_dir) if engine is None else engine
+    study = engine.study
     p = engine.parameters(np.arange(study.n_simulations))
     lacking = [side for side in ("left", "right") if f"{side}.period_s" not in p]
     if lacking:

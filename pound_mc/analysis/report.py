@@ -25,6 +25,7 @@ from pound_mc.analysis import (
     risk_chart,
 )
 from pound_mc.analysis.inelastic_chart import inelastic_chart, yielding_sides
+from pound_mc.analysis.sensitivity_chart import sensitivity_chart
 from pound_mc.analysis.style import (
     output_path,
     pyplot_figures,
@@ -250,6 +251,18 @@ def _figures(ds: xr.Dataset, base_dir, history: bool, forces: bool = True) -> li
         )
     if not forces:
         return figures
+    if ds.attrs.get("sampling_method") == "saltelli":
+        figures.append(
+            _figure_html(
+                "sensitivity",
+                sensitivity_chart(ds),
+                "Sobol' indices of the peak impact force (SALib, Saltelli's design): first "
+                "order S1 (the sampled key alone) and total order ST (with its interactions) "
+                "of every sampled key with their 95 % bootstrap intervals; a panel per value of "
+                "the first grid axis (at most six), first record, other grid axes at their "
+                "first value.",
+            )
+        )
     if int(((ds["impacts"] > 0) & ds.pound.ok).sum()):
         figures.append(
             _figure_html(

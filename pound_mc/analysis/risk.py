@@ -11,8 +11,10 @@ samples) is at or below a target (:func:`pound_mc.analysis.gap_probability.requi
 the separation rules' gaps beside it (:func:`pound_mc.analysis.gaps.study_gaps`).
 
 Events (``event=``): ``"pounding"`` (at least one impact), ``"peak_force>N"`` (a peak impact
-force above N newtons) and ``"ductility>X"`` (a peak ductility ``peak_ductility_left`` or
-``peak_ductility_right`` above X; refused for datasets without these outputs).
+force above N newtons), ``"ductility>X"`` (a peak ductility ``peak_ductility_left`` or
+``peak_ductility_right`` above X) and ``"drift>X"`` (a peak inter-storey drift ratio
+``peak_drift_left`` or ``peak_drift_right`` above X); the last two are refused for datasets
+without these outputs.
 """
 
 from __future__ import annotations
@@ -46,7 +48,8 @@ INTENSITY_DIMS = ("sa_g", "pga_g")
 #: Dataset dimension of the initial gap.
 GAP_DIM = "contact_gap_m"
 _DUCTILITY = ("peak_ductility_left", "peak_ductility_right")
-_EVENT = re.compile(r"^\s*(peak_force|ductility)\s*>\s*([-+0-9.eE]+)\s*$")
+_DRIFT = ("peak_drift_left", "peak_drift_right")
+_EVENT = re.compile(r"^\s*(peak_force|ductility|drift)\s*>\s*([-+0-9.eE]+)\s*$")
 
 
 def _is_pounding(event) -> bool:
@@ -73,19 +76,21 @@ def event_mask(ds: xr.Dataset, event: str = "pounding") -> xr.DataArray:
         threshold = math.nan
     if match is None or not math.isfinite(threshold):
         raise InputError(
-            f"unknown event {event!r}; use pounding, peak_force>N (newtons) or ductility>X",
+            f"unknown event {event!r}; use pounding, peak_force>N (newtons), ductility>X or "
+            "drift>X (a drift ratio)",
             key="--event",
         )
     if match.group(1) == "peak_force":
         return ds["peak_force"] > threshold
-    missing = [name for name in _DUCTILITY if name not in ds]
+    names = _DUCTILITY if match.group(1) == "ductility" else _DRIFT
+    missing = [name for name in names if name not in ds]
     if missing:
         raise InputError(
-            f"the event {event!r} needs the ductility outputs {', '.join(_DUCTILITY)}, which "
-            "this dataset does not have (its buildings are elastic)",
+            f"the event {event!r} needs the outputs {', '.join(names)}, which this dataset "
+            "does not have (its buildings are elastic)",
             key="--event",
         )
-    return (ds[_DUCTILITY[0]] > threshold) | (ds[_DUCTILITY[1]] > threshold)
+    return (ds[names[0]] > threshold) | (ds[names[1]] > threshold)
 
 
 def _intensity_dim(ds: xr.Dataset, im: str | None) -> str:

@@ -24,7 +24,9 @@ from matplotlib.lines import Line2D
 
 from pound_mc.analysis.fragility import fit_fragility
 from pound_mc.analysis.fragility_chart import fragility_chart, stripe_counts
+from pound_mc.analysis.gaps import RulesDoNotApply
 from pound_mc.analysis.plot import (
+    CONTACT_DIM,
     _hold,
     _line_label,
     _reduce_rule,
@@ -34,6 +36,7 @@ from pound_mc.analysis.plot import (
 )
 from pound_mc.analysis.risk import GAP_DIM, _counts, _intensity_dim, left_out_why, required_gap
 from pound_mc.analysis.risk import counted as counted_mask
+from pound_mc.analysis.site_risk import code_gaps
 from pound_mc.analysis.style import (
     _name_and_units,
     axis_label,
@@ -255,7 +258,10 @@ def required_gap_chart(
         labels = {value_text(ds, line, i): ({**hold, line: i}, i) for i in range(ds.sizes[line])}
     drawn = [ln for ln in ax.lines if ln.get_label() in labels]
     ruled = {}  # rule -> its gap [mm] per line index (or one for every line)
-    for name, value in rule_gaps(ds, rules, base_dir=base_dir).items():
+    shares = {}  # rule -> the share of runs pounding at their own rule gap, per line index
+    if rules == "auto" and "study_text" in ds.attrs and CONTACT_DIM not in ds.dims:
+        ruled, shares = _own_rule_gaps(ds, line, hold, base_dir)
+    for name, value in ({} if shares else rule_gaps(ds, rules, base_dir=base_dir)).items():
         arr = _reduce_rule(value, ds, line, None, hold) * 1e3
         if arr.size != 1 and (line is None or arr.size != ds.sizes[line]):
             raise ValueError(
@@ -292,16 +298,26 @@ def required_gap_chart(
         rules_row = []
         for name, arr in ruled.items():
             value = float(arr[0] if arr.size == 1 else arr[i])
-            rules_row.append(_mm(value) if np.isfinite(value) else "-")
-            if np.isfinite(value) and xs[0] <= value <= xs[-1] and np.all(np.isfinite(ys)):
+            share = None if name not in shares else float(shares[name][0 if i is None else i])
+            text = _mm(value) if np.isfinite(value) else "-"
+            rules_row.append(text if share is None else f"{text} ({100 * share:.0f}%)")
+            # the mark: at the share of runs that pound at their own rule gap (each run
+            # simulated there); for rules given as numbers, on the line
+            y = share if share is not None else (
+                np.interp(value, xs, ys) if xs[0] <= value <= xs[-1] else np.nan)  # fmt: skip
+            if np.isfinite(value) and np.isfinite(y) and np.all(np.isfinite(ys)):
                 ax.plot(
                     [value],
-                    [np.interp(value, xs, ys)],
+                    [y],
                     ls="none",
                     color="black",
                     mew=1.3,
                     zorder=4,
-                    label=f"{name} rule's gap on each line",
+                    label=(
+                        f"{name}: median gap, at the share of runs pounding at their own"
+                        if share is not None
+                        else f"{name} rule's gap on each line"
+                    ),
                     **RULE_MARKS.get(name, {"marker": "*"}),
                 )
         cells[ln] = (ln.get_label(), cell, *rules_row)
@@ -347,13 +363,39 @@ def required_gap_chart(
             f"diamonds: the gap at which each line (straight between the gaps studied) falls "
             f"to P = {probability:g}"
         )
-    if ruled:
+    if shares:
+        marks += (
+            "\nblack marks: each rule's median gap, at the share of runs that pound at their "
+            "own rule gap (in brackets)"
+        )
+    elif ruled:
         marks += (
             "\nblack marks: the separation rules' gaps on each line (median over records and "
             "samples)"
         )
     ax.set_title(headline + "\n" + marks, fontsize=8)
     return save(fig, path)
+
+
+def _own_rule_gaps(ds, line, hold, base_dir) -> tuple[dict, dict]:
+    """The rules' median gaps [mm] per line and the share of runs pounding at their own.
+
+    :func:`pound_mc.analysis.site_risk.code_gaps` (every run simulated again at each rule's
+    gap); ``{}`` twice where the rules do not describe the study (shear buildings, a wall).
+    """
+    try:
+        table = code_gaps(ds, base_dir=base_dir)
+    except RulesDoNotApply:
+        return {}, {}
+    picked = {d: i for d, i in hold.items() if d in table.dims}
+    table = table.isel(picked)
+    gaps, shares = {}, {}
+    for rule in table["rule"].values:
+        g, e = table["code_gap"].sel(rule=rule), table["code_gap_exceedance"].sel(rule=rule)
+        name = str(rule).upper()
+        gaps[name] = np.atleast_1d(g.values if line is None else g.transpose(line).values) * 1e3
+        shares[name] = np.atleast_1d(e.values if line is None else e.transpose(line).values)
+    return gaps, shares
 
 
 #: Where the note of :func:`_short_note` may go: anchor (axes fraction), alignment; in order

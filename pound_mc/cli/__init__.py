@@ -12,6 +12,7 @@ import argparse
 import importlib
 import os
 import sys
+import warnings
 from pathlib import Path
 
 from pound_mc._version import __version__
@@ -42,6 +43,23 @@ def command_function(name: str):
     return getattr(importlib.import_module(module), function)
 
 
+def _quiet_library_warnings() -> None:
+    """Silence the libraries' warnings a command's own messages already cover.
+
+    numpy's about NaN reductions (a summary over runs that all failed is NaN, which the run's
+    status lines say) and obspy's about the files it reads (the record checks name the file
+    and what is wrong); a warning of the tool itself still shows.
+    """
+    warnings.filterwarnings("ignore", category=RuntimeWarning, module=r"numpy(\..*)?$")
+    warnings.filterwarnings("ignore", module=r"obspy(\..*)?$")
+    warnings.filterwarnings(
+        "ignore",
+        message=r".*(All-NaN|Mean of empty|invalid value|"
+        r"divide by zero|Degrees of freedom).*",
+        category=RuntimeWarning,
+    )
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the command line; returns the exit status (2 for bad input)."""
     parser = build_parser()
@@ -50,7 +68,9 @@ def main(argv: list[str] | None = None) -> int:
         command_parser = getattr(args, "command_parser", None) or parser
         command_parser.error(f"unrecognized arguments: {' '.join(extra)}")
     try:
-        status = command_function(args.handler)(args)
+        with warnings.catch_warnings():
+            _quiet_library_warnings()
+            status = command_function(args.handler)(args)
     except InputError as exc:
         scene = getattr(args, "scene", None)  # simulate: its record's errors, and the kernels'
         if scene is not None and (exc.file or exc.key) and not isinstance(exc, OutputError):

@@ -12,7 +12,6 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-import xarray as xr
 
 from pound_mc.analysis import plot, plot_numerics, profiles, risk_chart
 from pound_mc.analysis.report import write_report
@@ -21,7 +20,7 @@ from pound_mc.analysis.selection import MATERIAL_DIM, dim_name, selection
 from pound_mc.analysis.style import output_path, require_simulations
 from pound_mc.errors import InputError, OutputError
 from pound_mc.scene import load_scene, simulate
-from pound_mc.study.dataset import study_folder
+from pound_mc.study.dataset import open_dataset, study_folder
 
 
 def _parse_sel(items) -> dict:
@@ -95,18 +94,7 @@ def _open_dataset(path: Path):
     """The study dataset at ``path``, or an :class:`InputError` saying what is wrong with it."""
     if not path.is_file():
         raise _no_file(path, "a study dataset (pound-mc run writes OUT/NAME.nc)")
-    try:
-        ds = xr.open_dataset(path)
-    except (OSError, ValueError, TypeError):
-        raise InputError(
-            "is not a netCDF dataset (pound-mc run writes one as OUT/NAME.nc)", file=str(path)
-        ) from None
-    missing = [v for v in ("peak_force", "impacts", "status") if v not in ds]
-    if missing:
-        ds.close()
-        raise InputError(
-            f"is not a pound-mc study dataset: no variable {missing[0]!r}", file=str(path)
-        )
+    ds = open_dataset(path)
     try:
         require_simulations(ds, file=str(path))
     except InputError:
@@ -347,8 +335,11 @@ def fragility_command(args) -> int:
         except InputError as exc:
             raise InputError(exc.message, file=str(path), key=exc.key) from None
     rest = list(fit["theta"].dims)
+    units = fit["theta"].attrs.get("units", "1")
+    im_units = "g" if fit.attrs["im"] in ("sa_g", "pga_g") or units == "1" else units
     out = {
         "im": fit.attrs["im"],
+        "im_units": im_units,
         "event": fit.attrs["event"],
         "dims": rest,
         "coords": {d: np.asarray(fit[d].values).tolist() for d in rest},
@@ -390,8 +381,10 @@ def fragility_command(args) -> int:
         if msgs[k]:
             print(head + f"no fit ({msgs[k]})")
         else:
-            print(head + f"theta = {flat_theta[k]:.4g} [{tci[k, 0]:.4g}, {tci[k, 1]:.4g}], "
-                  f"beta = {flat_beta[k]:.3g} [{bci[k, 0]:.3g}, {bci[k, 1]:.3g}]")  # fmt: skip
+            runs = np.asarray(out["n_total"]).reshape(flat_theta.size, -1)[k]
+            print(head + f"theta = {flat_theta[k]:.4g} {im_units} [{tci[k, 0]:.4g}, "
+                  f"{tci[k, 1]:.4g}], beta = {flat_beta[k]:.3g} [{bci[k, 0]:.3g}, "
+                  f"{bci[k, 1]:.3g}]; runs per stripe {', '.join(map(str, runs))}")  # fmt: skip
             if notes[k]:
                 print(f"    {notes[k]}")
     return 0

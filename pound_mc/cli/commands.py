@@ -10,7 +10,7 @@ from __future__ import annotations
 import argparse
 
 from pound_mc.physics.materials import MATERIALS
-from pound_mc.physics.relations import RELATIONS
+from pound_mc.physics.names import RELATION_NAMES
 
 __all__ = ["COMMANDS", "KINDS", "HelpFormatter", "add_commands"]
 
@@ -30,6 +30,9 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "plot": ("pound_mc.cli.analysis", "plot_command"),
     "report": ("pound_mc.cli.analysis", "report_command"),
     "fragility": ("pound_mc.cli.analysis", "fragility_command"),
+    "risk": ("pound_mc.cli.site", "risk_command"),
+    "required-gap": ("pound_mc.cli.site", "required_gap_command"),
+    "sensitivity": ("pound_mc.cli.sensitivity", "sensitivity_command"),
     "init": ("pound_mc.cli.study", "init_command"),
 }
 
@@ -85,7 +88,8 @@ COMPILE_DESCRIPTION = (
 INIT_DESCRIPTION = (
     "Write a shipped study file NAME.toml, and the scene files it reads, into the "
     "current folder (or --dir), ready for pound-mc check and pound-mc run. Without "
-    "NAME, list the shipped studies."
+    "NAME, list the shipped studies. With --new NAME, write a new study NAME.toml from a "
+    "commented template to edit: every table with its common keys and what they take."
 )
 
 #: Sub-commands with a description for their ``--help`` (the others show their help line).
@@ -101,7 +105,8 @@ SHARED_ARGUMENTS: dict[str, tuple[str, dict]] = {
     "im": ("--im", dict(metavar="DIM",
                         help="intensity dimension of the fragility (default sa_g or pga_g)")),
     "event": ("--event", dict(default="pounding",
-                              help="pounding (default), peak_force>N (newtons) or ductility>X")),
+                              help="pounding (default), peak_force>N (newtons), ductility>X or "
+                              "drift>X (drift ratio)")),
 }  # fmt: skip
 
 
@@ -119,6 +124,19 @@ class HelpFormatter(argparse.RawDescriptionHelpFormatter):
         ):
             return text
         return text + " (default: %(default)s)"
+
+
+def _code_options(parser: argparse.ArgumentParser) -> None:
+    """The code-gap factors of ``risk`` and ``required-gap`` (ASCE 7-22, EN 1998-1)."""
+    parser.add_argument("--asce", metavar="R,CD,IE", help="ASCE/SEI 7-22 12.12.2 separation "
+                        "with these R, Cd and Ie")  # fmt: skip
+    parser.add_argument("--ec8", metavar="Q[,QD]", help="EN 1998-1:2004 4.4.2.7 separation "
+                        "with this behaviour factor q (and qd, default q)")  # fmt: skip
+    parser.add_argument(
+        "--same-levels",
+        action="store_true",
+        help="floors at the same elevations (EN 1998-1's factor 0.7)",
+    )
 
 
 def _json_and_plot(parser: argparse.ArgumentParser, plot_help: str) -> None:
@@ -180,7 +198,7 @@ def _physics(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--relation",
         default="jankowski2008",
-        help=f"relation for 'xi' in --json ({', '.join(RELATIONS)}; default jankowski2008)",
+        help=f"relation for 'xi' in --json ({', '.join(RELATION_NAMES)}; default jankowski2008)",
     )
     p.add_argument("--json", action="store_true", help="print one JSON object")
 
@@ -327,12 +345,13 @@ def _study(sub: argparse._SubParsersAction) -> None:
         sub, "init", help="write a shipped study (and its scene files) into the current folder"
     )
     p.add_argument("name", nargs="?", metavar="NAME", help="shipped study (e.g. quickstart)")
+    p.add_argument("--new", metavar="NAME", help="write a commented template study NAME.toml")
     p.add_argument("--dir", default=".", metavar="DIR", help="folder to write into")
     p.add_argument("--force", action="store_true", help="overwrite files that exist")
 
 
 def _analysis(sub: argparse._SubParsersAction) -> None:
-    """Results: ``plot`` and ``report``."""
+    """Results: ``plot``, ``fragility``, ``sensitivity`` and ``report``."""
     p = _command(
         sub,
         "plot",
@@ -376,6 +395,63 @@ def _analysis(sub: argparse._SubParsersAction) -> None:
     _shared(p, "im", "event")
     p.add_argument("--n-boot", type=int, default=1000, metavar="N", help="bootstrap replicates")
     p.add_argument("--json", action="store_true", help="print one JSON object")
+
+    p = _command(sub, "risk", help="annual rate of an event per gap at a site, and the gap that "
+                 "meets a target")  # fmt: skip
+    p.add_argument("file", metavar="RESULT.nc")
+    _shared(p, "im", "event")
+    hazard = p.add_mutually_exclusive_group(required=True)
+    hazard.add_argument(
+        "--hazard", metavar="FILE.csv", help="hazard curve: columns im [g] and annual_rate [1/year]"
+    )
+    hazard.add_argument(
+        "--hazard-power", metavar="K0,K", help="hazard curve annual_rate = K0 im^-K"
+    )
+    p.add_argument("--target-rate", type=float, metavar="R", help="target annual rate [1/year]")
+    p.add_argument(
+        "--target-probability",
+        type=float,
+        metavar="P",
+        help="target probability of the event in --years years",
+    )
+    p.add_argument("--years", type=float, metavar="Y", help="years of --target-probability")
+    p.add_argument(
+        "--method",
+        default="fragility",
+        choices=("fragility", "stripes"),
+        help="integrate the fitted fragility or the stripes themselves",
+    )
+    _code_options(p)
+    p.add_argument("--n-boot", type=int, default=1000, metavar="N", help="bootstrap replicates")
+    _json_and_plot(p, "chart of the annual rate against the gap")
+
+    p = _command(sub, "required-gap", help="the gap that keeps the pounding probability under "
+                 "P, per intensity, beside the rules' and codes' gaps")  # fmt: skip
+    p.add_argument("file", metavar="RESULT.nc")
+    p.add_argument(
+        "--probability",
+        type=float,
+        default=0.1,
+        metavar="P",
+        help="target probability of pounding at each intensity",
+    )
+    _code_options(p)
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+
+    p = _command(
+        sub,
+        "sensitivity",
+        help="Sobol' first- and total-order indices of a saltelli study's output",
+    )
+    p.add_argument("file", metavar="RESULT.nc")
+    p.add_argument(
+        "--output",
+        default="peak_force",
+        metavar="VAR",
+        help="peak_force (default), pounding, ductility or a per-simulation variable",
+    )
+    p.add_argument("--n-boot", type=int, default=1000, metavar="N", help="bootstrap resamples")
+    _json_and_plot(p, "bar chart of S1 and ST per sampled key, with their intervals")
 
     p = _command(sub, "report", help="write a self-contained HTML results page of a study")
     p.add_argument("file", metavar="RESULT.nc")

@@ -19,9 +19,11 @@ from pound_mc.analysis.inelastic_chart import inelastic_chart, yielding_sides
 from pound_mc.analysis.plot import CONTACT_DIM, GAP_DIM, distribution_chart, spectrum_panels
 from pound_mc.analysis.profiles import contacts_chart
 from pound_mc.analysis.risk_chart import fragility_panels, required_gap_chart
+from pound_mc.analysis.sensitivity_chart import sensitivity_chart
 from pound_mc.errors import InputError
 from pound_mc.integrators import METHODS
 from pound_mc.integrators.accuracy import STATUS_INACCURATE
+from pound_mc.integrators.outputs import STATUS_OK
 from pound_mc.physics.contact import CONTACT_MODELS
 from pound_mc.study.dataset import STATUS_FLAGS
 from pound_mc.study.definition import load_study
@@ -35,10 +37,11 @@ from pound_mc.study.runner import (
     plan_text,
     run_study,
 )
+from pound_mc.study.schema import STUDY
 from pound_mc.study.warmup import cache_directory, compile_kernels, warm_up
 
 #: Fixed cost per chunk of a local run (writing its file, Python around the batch call) [s],
-#: measured on a 2-core machine (README, "Throughput and scaling"); added to the estimate.
+#: measured on a 2-core machine (docs/performance.md); added to the estimate.
 CHUNK_OVERHEAD_S = 0.003
 #: ``check`` warns when one simulation takes longer than this [s]: such a study is
 #: effectively endless (a step far too short, a record far too long).
@@ -111,10 +114,26 @@ def run_command(args) -> int:
     print(f"wrote {report.path}")
     for line in status_warnings(report.path):
         print(line, file=sys.stderr)
+    if all_failed(report.path):  # nothing to chart: every run unstable or not converged
+        print(f"pound-mc run: error: {study.path}: every simulation failed (unstable or not "
+              "converged): no result to analyse; refine integrator.dt_s (substeps with "
+              "adaptive) or check the scene", file=sys.stderr)  # fmt: skip
+        return ALL_FAILED_STATUS
     if not args.no_plot:
         for png in _charts(study, report.path, Path(args.out)):
             print(f"wrote {png}")
     return 0
+
+
+#: Exit status of a run in which every simulation failed (DESIGN.md section 10).
+ALL_FAILED_STATUS = 3
+
+
+def all_failed(path: Path) -> bool:
+    """Whether every simulation of the dataset at ``path`` is unstable or not converged."""
+    with xr.open_dataset(path) as ds:
+        status = ds["status"].values
+    return bool(status.size) and not np.isin(status, (STATUS_OK, STATUS_INACCURATE)).any()
 
 
 def status_warnings(path: Path) -> list[str]:
@@ -164,11 +183,16 @@ def _charts(study, path: Path, out: Path) -> list[Path]:
     separation rules and the required gap (``_required_gap.png``); with an intensity axis the
     fragility curves; with more than one contact (shear buildings) the peak force per contact
     (``_contacts.png``).  A study without ``[grid]`` has no axis to draw a spectrum against: its
-    chart is the distribution of the peak force over the samples.
+    chart is the distribution of the peak force over the samples.  A study sampled with
+    Saltelli's design also gets the Sobol' indices of its peak force (``_sensitivity.png``,
+    :func:`~pound_mc.analysis.sensitivity_chart.sensitivity_chart`).
     """
     written = []
     with xr.open_dataset(path) as ds:
         ds.load()
+        if study.method == "saltelli":
+            written.append(out / f"{study.name}_sensitivity.png")
+            sensitivity_chart(ds, written[-1])
         if not study.grid:
             written.append(out / f"{study.name}_distribution.png")
             distribution_chart(ds, written[-1])
@@ -279,8 +303,43 @@ def shipped_studies() -> dict[str, Path]:
     return {p.stem: p for p in sorted(folder.glob("*.toml"))}
 
 
+def study_template(name: str) -> str:
+    """The text of a new study ``name``: the commented template of the package data.
+
+    Raises
+    ------
+    InputError
+        ``name`` is not a study name (letters, digits, ``-`` and ``_``).
+    """
+    if problem := STUDY["name"].problem(name):
+        raise InputError(problem, key="--new")
+    template = resources.files("pound_mc") / "templates" / "study.toml"
+    return template.read_text(encoding="utf-8").replace("{name}", name)
+
+
+def _init_new(args) -> int:
+    """``pound-mc init --new NAME``: write the commented template as ``NAME.toml``."""
+    if args.name:
+        raise InputError(f"give a shipped study ({args.name}) or --new NAME, not both")
+    name = args.new.removesuffix(".toml")
+    text = study_template(name)
+    path = Path(args.dir) / f"{name}.toml"
+    if path.exists() and not args.force:
+        raise InputError("exists; pass --force to overwrite it", file=str(path))
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(text, encoding="utf-8")
+    print(f"wrote {path}")
+    print(f"next: edit it, then pound-mc check {path} && pound-mc run {path}")
+    return 0
+
+
 def init_command(args) -> int:
-    """``pound-mc init [NAME]``: write a shipped study (and the scenes it reads) into a folder."""
+    """``pound-mc init [NAME]``: write a shipped study (and the scenes it reads) into a folder.
+
+    ``--new NAME`` writes a new study from the commented template instead.
+    """
+    if args.new is not None:
+        return _init_new(args)
     studies = shipped_studies()
     if not args.name:
         print("shipped studies (pound-mc init NAME writes NAME.toml here):")

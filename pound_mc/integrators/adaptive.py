@@ -359,6 +359,36 @@ def _locate_switch(q, v, q1, v1, a0, a1, psi, psi_t, clo, chi, gap, phase, hs, p
 
 
 @jit(inline=True)
+def _cut_substep(
+    q, v, s, hs, ag0, slope, omega, zeta, gamma, psi, psi_t, clo, chi, gap, beta, cd, zhd, phase,
+    model, q1, v1, a0, a1, wk, fc, fc0, cimp, rate, pw0, pw1,
+):  # fmt: skip
+    """The RK4 sub-step of ``hs`` [s] from local time ``s``, cut at the first switch inside it.
+
+    The sub-step (:func:`rk4`, its end state into ``q1, v1``, the accelerations at its ends
+    into ``a0, a1``), and again to the first switch of a force law inside it
+    (:func:`_locate_switch`) from the same start.  Returns the sub-step taken, the increments
+    of input energy, damping energy and contact work, and the switch ``(time, contact, kind)``.
+    """
+    de_in, de_d, dw_c = rk4(q, v, s, hs, ag0, slope, omega, zeta, gamma, psi, gap, beta, cd, zhd,
+                            phase, model, q1, v1, wk, fc, cimp, fc0, rate)  # fmt: skip
+    for j in range(q.size):
+        a0[j] = wk[4, j]
+    contact_forces(q1, v1, psi, gap, beta, cd, zhd, phase, model, fc, rate)
+    accel(q1, v1, ag0 + slope * (s + hs), omega, zeta, gamma, psi, fc, a1)
+    t_ev, c_ev, kind = _locate_switch(q, v, q1, v1, a0, a1, psi, psi_t, clo, chi, gap,
+                                      phase, hs, pw0, pw1)  # fmt: skip
+    if c_ev >= 0 and t_ev < hs:
+        hs = t_ev
+        de_in, de_d, dw_c = rk4(q, v, s, hs, ag0, slope, omega, zeta, gamma, psi,
+                                gap, beta, cd, zhd, phase, model, q1, v1, wk, fc,
+                                cimp, fc0, rate)  # fmt: skip
+        contact_forces(q1, v1, psi, gap, beta, cd, zhd, phase, model, fc, rate)
+        accel(q1, v1, ag0 + slope * (s + hs), omega, zeta, gamma, psi, fc, a1)
+    return hs, de_in, de_d, dw_c, t_ev, c_ev, kind
+
+
+@jit(inline=True)
 def _contact_peaks(q, v, q1, v1, a0, a1, psi, gap, beta, cd, zhd, phase, model, fc0, fc, cimp,
                    cout, pending, hs, t, peak_f, peak_t, ep, logs, nlog, peak_e):  # fmt: skip
     """Peak force per contact (Hermite on F with its rate), penetration and impulse.
@@ -424,6 +454,33 @@ def _open_contact(c, v, psi, xi, beta, meff, zhd, phase, pending, model, relatio
 
 
 @jit(inline=True)
+def _switch(kind, c, v, psi, xi, beta, meff, zhd, phase, pending, model, relation, substeps, hc,
+            h_rk, settings, cd, ep):  # fmt: skip
+    """Contact ``c``'s phase after a switch of ``kind`` at the end of a sub-step.
+
+    An onset starts an episode (:func:`_open_contact`); after a separation that leaves every
+    contact open, exact steps go on from there to the next grid point.  ``hc``: the contact
+    sub-step [s], ``h_rk`` its value once every contact is open.  Returns the sub-step and
+    whether the run is still in its contact phase.
+    """
+    in_contact = True
+    if kind == _ONSET:
+        hc = _open_contact(c, v, psi, xi, beta, meff, zhd, phase, pending, model, relation,
+                           substeps, hc, settings, cd, ep)  # fmt: skip
+    elif kind == _TO_RESTITUTION:
+        phase[c] = 2
+    elif kind == _SEPARATION:
+        phase[c] = 0
+        if _all_open(phase):
+            # continue with exact steps from here to the next grid point
+            in_contact = False
+            hc = h_rk
+    else:
+        phase[c] = 1
+    return hc, in_contact
+
+
+@jit(inline=True)
 def _grid_index(s, h, m_sub):
     """Index of the next grid point of the record interval after local time ``s``."""
     k_grid = int(math.floor(s / h + 1e-9))
@@ -474,6 +531,33 @@ def _hermite_tolerance(omega, h):
     return 4.0 * (wmax * h) ** 4 / 384.0
 
 
+@jit(inline=True)
+def _resume(pre, q, v, peaks):
+    """The start of a run from the shared response ``pre`` (:func:`outputs.snapshot`).
+
+    Writes the state into ``q, v`` and the floor peaks into ``peaks``; returns the record
+    interval, the input and damping energies, the steps so far and the initial energy.
+    """
+    n = q.size
+    for j in range(n):
+        q[j] = pre[outputs.PRE_STATE + j]
+        v[j] = pre[outputs.PRE_STATE + n + j]
+    for f in range(peaks.size):
+        peaks[f] = pre[outputs.PRE_STATE + 2 * n + f]
+    return (int(pre[outputs.PRE_INTERVAL]), pre[outputs.PRE_E_IN], pre[outputs.PRE_E_D],
+            int(pre[outputs.PRE_STEPS]), pre[outputs.PRE_E0])  # fmt: skip
+
+
+@jit(inline=True)
+def _stored_energy(q, psi, gap, beta, phase, model):
+    """Energy [J] stored in the closed contacts at the state ``q``."""
+    stored_energy = 0.0
+    for c in range(gap.size):
+        if phase[c] != 0:
+            stored_energy += stored(model, rowdot(psi, c, q) - gap[c], beta[c])
+    return stored_energy
+
+
 # --------------------------------------------------------------------------- the kernel
 
 
@@ -486,9 +570,9 @@ def adaptive(
 
     ``xi`` holds the damping ratio per contact (the restitution ``e`` for Hertz-damp laws).
     ``pre``: shared linear response before the first contact (layout in
-    :mod:`pound_mc.integrators.outputs`); empty for a plain run.  Longer than 150 lines because
-    the loop keeps its scalar state (energies, clocks, phase flags) in locals across the two
-    kinds of step; each step's work is in the helpers above.
+    :mod:`pound_mc.integrators.outputs`); empty for a plain run.  The loop keeps its scalar
+    state (energies, clocks, phase flags) in locals across the two kinds of step; each step's
+    work is in the helpers above.
     """
     ag, omega, zeta, gamma = borrow(ag), borrow(omega), borrow(zeta), borrow(gamma)
     phi, side = borrow(phi), borrow(side)
@@ -576,16 +660,7 @@ def adaptive(
     lean = mode == outputs.PRE_RESUME_PEAK
     i_first = 0
     if mode == outputs.PRE_RESUME or lean:
-        i_first = int(pre[outputs.PRE_INTERVAL])
-        e_in = pre[outputs.PRE_E_IN]
-        e_d = pre[outputs.PRE_E_D]
-        steps = int(pre[outputs.PRE_STEPS])
-        e0 = pre[outputs.PRE_E0]
-        for j in range(n):
-            q[j] = pre[outputs.PRE_STATE + j]
-            v[j] = pre[outputs.PRE_STATE + n + j]
-        for f in range(nf):
-            peaks[f] = pre[outputs.PRE_STATE + 2 * n + f]
+        i_first, e_in, e_d, steps, e0 = _resume(pre, q, v, peaks)
     for i in range(i_first, npts - 1):
         if mode == outputs.PRE_RUN_TO_CONTACT:
             outputs.snapshot(pre, i, e_in, e_d, steps, e0, q, v, peaks)
@@ -643,22 +718,10 @@ def adaptive(
                 hs = _substep_length(q, v, psi, gap, phase, hc, i * dt_rec + s, t_onset,
                                      dt_rec - s, model, beta, cd, zhd, loc_k,
                                      loc_c)  # fmt: skip
-                de_in, de_d, dw_c = rk4(q, v, s, hs, ag0, slope, omega, zeta, gamma, psi, gap,
-                                        beta, cd, zhd, phase, model, q1, v1, wk, fc, cimp,
-                                        fc0, rate)  # fmt: skip
-                for j in range(n):
-                    a0[j] = wk[4, j]
-                contact_forces(q1, v1, psi, gap, beta, cd, zhd, phase, model, fc, rate)
-                accel(q1, v1, ag0 + slope * (s + hs), omega, zeta, gamma, psi, fc, a1)
-                t_ev, c_ev, kind = _locate_switch(q, v, q1, v1, a0, a1, psi, psi_t, clo, chi, gap,
-                                                  phase, hs, pw0, pw1)  # fmt: skip
-                if c_ev >= 0 and t_ev < hs:
-                    hs = t_ev
-                    de_in, de_d, dw_c = rk4(q, v, s, hs, ag0, slope, omega, zeta, gamma, psi,
-                                            gap, beta, cd, zhd, phase, model, q1, v1, wk, fc,
-                                            cimp, fc0, rate)  # fmt: skip
-                    contact_forces(q1, v1, psi, gap, beta, cd, zhd, phase, model, fc, rate)
-                    accel(q1, v1, ag0 + slope * (s + hs), omega, zeta, gamma, psi, fc, a1)
+                hs, de_in, de_d, dw_c, t_ev, c_ev, kind = _cut_substep(
+                    q, v, s, hs, ag0, slope, omega, zeta, gamma, psi, psi_t, clo, chi, gap, beta,
+                    cd, zhd, phase, model, q1, v1, a0, a1, wk, fc, fc0, cimp, rate, pw0, pw1,
+                )  # fmt: skip
                 e_in += de_in
                 e_d += de_d
                 w_c += dw_c
@@ -674,21 +737,11 @@ def adaptive(
                     v[j] = v1[j]
                 s += hs
                 if c_ev >= 0 and hs == t_ev:
+                    hc, in_contact = _switch(kind, c_ev, v, psi, xi, beta, meff, zhd, phase,
+                                             pending, model, relation, substeps, hc, h_rk,
+                                             settings, cd, ep)  # fmt: skip
                     if kind == _ONSET:
-                        hc = _open_contact(c_ev, v, psi, xi, beta, meff, zhd, phase, pending,
-                                           model, relation, substeps, hc, settings, cd,
-                                           ep)  # fmt: skip
                         t_onset = i * dt_rec + s
-                    elif kind == _TO_RESTITUTION:
-                        phase[c_ev] = 2
-                    elif kind == _SEPARATION:
-                        phase[c_ev] = 0
-                        if _all_open(phase):
-                            # continue with exact steps from here to the next grid point
-                            in_contact = False
-                            hc = h_rk
-                    else:
-                        phase[c_ev] = 1
                 k_grid = _grid_index(s, h, m_sub)
             # divergence / non-finite guard
             if not _finite(q, v):
@@ -699,21 +752,15 @@ def adaptive(
     if mode == outputs.PRE_RUN_TO_CONTACT:
         # no contact in the whole record: the end state is shared
         outputs.snapshot(pre, npts - 1, e_in, e_d, steps, e0, q, v, peaks)
-        _alive(owned)
-        return
-    if lean:
+    elif lean:
         outputs.peak_only(out, cout, peak_f, status)
-        _alive(owned)
-        return
-    if store and status == outputs.STATUS_OK:
-        _store_history(npts - 1, q, v, phi, psi, gap, beta, cd, zhd, phase, model, hx, hd, hf)
-    stored_energy = 0.0
-    for c in range(nc):
-        if phase[c] != 0:
-            stored_energy += stored(model, rowdot(psi, c, q) - gap[c], beta[c])
-    outputs.finish(out, cout, peaks, side, phase, q, v, omega, e0, e_in, e_d, w_c, stored_energy,
-                   peak_f, peak_t, steps, status)  # fmt: skip
-    outputs.finish_impacts(out, cout, logs[0], nlog, peak_e[0])
+    else:
+        if store and status == outputs.STATUS_OK:
+            _store_history(npts - 1, q, v, phi, psi, gap, beta, cd, zhd, phase, model, hx, hd, hf)
+        stored_energy = _stored_energy(q, psi, gap, beta, phase, model)
+        outputs.finish(out, cout, peaks, side, phase, q, v, omega, e0, e_in, e_d, w_c,
+                       stored_energy, peak_f, peak_t, steps, status)  # fmt: skip
+        outputs.finish_impacts(out, cout, logs[0], nlog, peak_e[0])
     _alive(owned)
 
 

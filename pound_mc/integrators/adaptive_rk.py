@@ -13,15 +13,22 @@ by the yielding storeys' plastic drifts,
 with ``u = D q`` the storey drifts and ``z`` the hysteretic drift of each yielding storey,
 carried as a state variable (``z' = g(z, u') u'``, :mod:`~pound_mc.integrators.storey_laws`).
 
-Steps (Dormand & Prince 1980, the 5(4) pair with its first-same-as-last stage, as SciPy's
-``RK45``) are chosen by the embedded error estimate: the error of every floor's displacement
+While every contact is open and every yielding storey is bilinear and elastic, the equations
+are those of the initial elastic modes under a constant plastic load: such a spell is stepped
+exactly (:mod:`~pound_mc.integrators.elastic_spells`; no truncation error, a sixth of a
+Runge-Kutta step's cost), in equal steps of a share of the shortest period, up to a step that
+may hold a contact onset or a yield, from which the Runge-Kutta steps take over and locate it.
+Everywhere else, steps (Dormand & Prince 1980, the 5(4) pair with its first-same-as-last
+stage, as SciPy's ``RK45``: :mod:`~pound_mc.integrators.dormand_prince`) are chosen by the
+embedded error estimate: the error of every floor's displacement
 and velocity is held under :func:`tolerance` of the response's scale (the largest floor
 displacement so far, or the static displacement of the record's peak in the most flexible
 mode), every yielding storey's ``z`` under it times its yield drift, and every closed contact's
 penetration under it times the episode's deepest penetration, so that short contacts and
-near-yield storeys take the steps they need and quiet spells long ones.  Every step ends on
-the record's samples (the ground acceleration has kinks there); ``dt_s`` is only the first
-step's length, since the error estimate bounds every step.  Every switch is located inside
+near-yield storeys take the steps they need and quiet stretches long ones.  Every step ends on
+the record's samples (the ground acceleration has kinks there), and on the spells' grid
+while the equations are linear; ``dt_s`` is only the first step's length, since the error
+estimate bounds every step.  Every switch is located inside
 the step that holds it, on the cubic Hermite
 interpolant of the quantity and its rate, and the step is taken again up to it: contact onset
 (grazing ones included), approach -> restitution, separation and restitution -> approach, and
@@ -30,10 +37,8 @@ each storey's branch (yield, unloading).  Inside every step the right-hand side 
 Peak force, penetration, floor displacements and storey drifts are continuous-time maxima
 (cubic Hermite on each step); floor accelerations are maxima over the steps' ends.  The
 energies (input, damping, contact work, the plastic load's work and the hysteretic
-dissipation) are integrated with the state, at its order.
-
-Longer than 600 lines because the step, its error norm, the event location and the outputs of
-every structure meet in one compiled loop, each in a helper of its own below.
+dissipation) are integrated with the state, at its order (in a spell, exactly).  The run's
+``steps`` count the exact steps and the accepted Runge-Kutta steps.
 """
 
 from __future__ import annotations
@@ -49,19 +54,26 @@ from pound_mc.integrators.adaptive import (
     _SEPARATION,
     _TO_RESTITUTION,
     _contact_peaks,
+    _hermite_tolerance,
     _locate_switch,
     _open_contact,
     _store_history,
 )
+from pound_mc.integrators.dormand_prince import N_RATES, dp_step, error_norm, rates
+from pound_mc.integrators.elastic_spells import (
+    SPELL_CHUNK,
+    exact_spell,
+    spell_ready,
+    spell_steps,
+)
 from pound_mc.integrators.hysteretic import S_ALPHA, S_BW, S_K, S_YIELD, storey_outputs
-from pound_mc.integrators.laws import force, stored
+from pound_mc.integrators.laws import stored
 from pound_mc.integrators.storey_laws import (
     LAW_BILINEAR,
     LAW_BOUC_WEN,
     settled_branch,
     storey_event,
     storey_switch,
-    z_rate,
 )
 from pound_mc.integrators.toolkit import (
     borrow,
@@ -76,23 +88,6 @@ from pound_mc.integrators.toolkit import (
 
 __all__ = ["adaptive_rk", "tolerance", "RTOL_DEFAULT"]
 
-# Dormand-Prince 5(4) tableau (Dormand & Prince 1980; Hairer, Norsett & Wanner, Table 5.2)
-_C = np.array([0.0, 1.0 / 5.0, 3.0 / 10.0, 4.0 / 5.0, 8.0 / 9.0, 1.0, 1.0])
-_A = np.array([
-    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-    [1.0 / 5.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-    [3.0 / 40.0, 9.0 / 40.0, 0.0, 0.0, 0.0, 0.0],
-    [44.0 / 45.0, -56.0 / 15.0, 32.0 / 9.0, 0.0, 0.0, 0.0],
-    [19372.0 / 6561.0, -25360.0 / 2187.0, 64448.0 / 6561.0, -212.0 / 729.0, 0.0, 0.0],
-    [9017.0 / 3168.0, -355.0 / 33.0, 46732.0 / 5247.0, 49.0 / 176.0, -5103.0 / 18656.0, 0.0],
-    [35.0 / 384.0, 0.0, 500.0 / 1113.0, 125.0 / 192.0, -2187.0 / 6784.0, 11.0 / 84.0],
-])  # fmt: skip
-#: Fifth-order weights (the last row of ``_A``: first same as last).
-_B = np.array([35.0 / 384.0, 0.0, 500.0 / 1113.0, 125.0 / 192.0, -2187.0 / 6784.0,
-               11.0 / 84.0, 0.0])  # fmt: skip
-#: Fifth- less fourth-order weights: the embedded error estimate.
-_E = np.array([71.0 / 57600.0, 0.0, -71.0 / 16695.0, 71.0 / 1920.0, -17253.0 / 339200.0,
-               22.0 / 525.0, -1.0 / 40.0])  # fmt: skip
 #: Relative tolerance of the embedded error at the default 16 ``substeps``; it scales as
 #: ``(16 / substeps)^2``, so that the accuracy check's run (twice the sub-steps) is held to a
 #: quarter of it.
@@ -101,8 +96,6 @@ _SUBSTEPS_DEFAULT = 16.0
 #: Step growth after an accepted step is at most this factor, and a rejected step shrinks by
 #: at least ``_SHRINK_MIN``; safety factor of the step-size rule ``h (1 / err)^(1/5)``.
 _GROW_MAX, _SHRINK_MIN, _SAFETY = 5.0, 0.2, 0.9
-#: Energy rates integrated with the state: input, damping, contact, plastic load, hysteretic.
-_N_RATES = 5
 #: A drift rate below this share of ``u_y omega_max`` (a penetration rate below it of the
 #: response's velocity scale) is a located turn's round-off: the branch (the phase) there
 #: follows the rate's rate (:func:`~pound_mc.integrators.storey_laws.settled_branch`,
@@ -119,128 +112,6 @@ def tolerance(substeps):
     return RTOL_DEFAULT * r * r
 
 
-@jit
-def _deriv(y, ag, n, omega, zeta, gamma, psi, gap, beta, cd, zhd, phase, model, hd_, hlo, hhi,
-           hk, hal, huy, hbw, hlaw, branch, rate, kk, ek, fk, st):  # fmt: skip
-    """Right-hand side at state ``y = (q, v, z)`` and ground acceleration ``ag``: row ``st``.
-
-    Writes the rates into ``kk[st]``, the energy rates (input, damping, contact, plastic load,
-    hysteretic) into ``ek[st]`` and the contact forces into ``fk[st]``; indices, not views,
-    so that no array is reference-counted per call.  ``hlo, hhi``: the modes each yielding
-    storey's drift row spans (its building's).
-    """
-    pin = 0.0
-    pd = 0.0
-    for j in range(n):
-        vj = y[n + j]
-        kk[st, j] = vj
-        zw = 2.0 * zeta[j] * omega[j]
-        kk[st, n + j] = -zw * vj - omega[j] * omega[j] * y[j] - gamma[j] * ag
-        pin -= ag * gamma[j] * vj
-        pd += zw * vj * vj
-    pc = 0.0
-    for c in range(gap.size):
-        if phase[c] == 0:
-            fk[st, c] = 0.0
-            continue
-        d = -gap[c]
-        dd = 0.0
-        for j in range(n):
-            d += psi[c, j] * y[j]
-            dd += psi[c, j] * y[n + j]
-        rate[c] = dd
-        f = force(model, d, dd, beta[c], cd[c], zhd[c], phase[c])
-        fk[st, c] = f
-        if f != 0.0:
-            pc += f * dd
-            for j in range(n):
-                kk[st, n + j] -= f * psi[c, j]
-    pp = 0.0
-    peh = 0.0
-    for s in range(hk.size):
-        u = 0.0
-        du = 0.0
-        for j in range(hlo[s], hhi[s]):
-            u += hd_[s, j] * y[j]
-            du += hd_[s, j] * y[n + j]
-        z = y[2 * n + s]
-        kp = (1.0 - hal[s]) * hk[s]
-        fs = kp * (u - z)
-        if fs != 0.0:
-            for j in range(hlo[s], hhi[s]):
-                kk[st, n + j] += hd_[s, j] * fs
-        zd = z_rate(hlaw[s], branch[s], z, du, huy[s], hbw[s])
-        kk[st, 2 * n + s] = zd
-        pp += fs * du  # the plastic load's power sum_j P_j v_j, storey by storey
-        peh += kp * z * (du - zd)
-    ek[st, 0] = pin
-    ek[st, 1] = pd
-    ek[st, 2] = pc
-    ek[st, 3] = pp
-    ek[st, 4] = peh
-
-
-@jit
-def _dp_step(y, kk, ek, fk, hs, ag0, slope, s, n, omega, zeta, gamma, psi, gap, beta, cd, zhd,
-             phase, model, hd_, hlo, hhi, hk, hal, huy, hbw, hlaw, branch, rate, ys, y1, de,
-             cimp):  # fmt: skip
-    """One Dormand-Prince step of ``hs`` from ``y`` (``kk[0]``, ``ek[0]``, ``fk[0]``: its rates).
-
-    Fills the stages ``kk[1:]`` (``kk[6]`` the rates at the end), the new state ``y1``, the
-    energy increments ``de`` and the contact impulses ``cimp``.
-    """
-    m = y.size
-    for st in range(1, 7):
-        for i in range(m):
-            acc = 0.0
-            for r in range(st):
-                acc += _A[st, r] * kk[r, i]
-            ys[i] = y[i] + hs * acc
-        _deriv(ys, ag0 + slope * (s + _C[st] * hs), n, omega, zeta, gamma, psi, gap, beta, cd,
-               zhd, phase, model, hd_, hlo, hhi, hk, hal, huy, hbw, hlaw, branch, rate, kk, ek,
-               fk, st)  # fmt: skip
-    for i in range(m):
-        y1[i] = ys[i]  # stage 7 is evaluated at the fifth-order solution (first same as last)
-    for r in range(_N_RATES):
-        acc = 0.0
-        for st in range(6):
-            acc += _B[st] * ek[st, r]
-        de[r] = hs * acc
-    for c in range(cimp.size):
-        acc = 0.0
-        for st in range(6):
-            acc += _B[st] * fk[st, c]
-        cimp[c] = hs * acc
-
-
-@jit
-def _error(kk, hs, n, phi_t, flo, fhi, psi, phase, hn, xscale, vscale, huy, dscale, rtol, err_q,
-           err_v, xb, xdb):  # fmt: skip
-    """Embedded error of a step relative to the tolerance (<= 1: accepted)."""
-    for j in range(n):
-        eq = 0.0
-        ev = 0.0
-        for st in range(7):
-            eq += _E[st] * kk[st, j]
-            ev += _E[st] * kk[st, n + j]
-        err_q[j] = hs * eq
-        err_v[j] = hs * ev
-    matvec_spans(phi_t, err_q, xb, flo, fhi)
-    matvec_spans(phi_t, err_v, xdb, flo, fhi)
-    worst = 0.0
-    for f in range(xb.size):
-        worst = max(worst, abs(xb[f]) / (rtol * xscale), abs(xdb[f]) / (rtol * vscale))
-    for s in range(hn):
-        ez = 0.0
-        for st in range(7):
-            ez += _E[st] * kk[st, 2 * n + s]
-        worst = max(worst, abs(hs * ez) / (rtol * huy[s]))
-    for c in range(phase.size):
-        if phase[c] != 0:
-            worst = max(worst, abs(rowdot(psi, c, err_q)) / (rtol * dscale[c]))
-    return worst
-
-
 @jit(inline=True)
 def _storey_rates(y, kk, row, n, hd_, hlo, hhi, s):
     """Drift rate and its rate of yielding storey ``s`` at a state and its rates ``kk[row]``."""
@@ -252,7 +123,7 @@ def _storey_rates(y, kk, row, n, hd_, hlo, hhi, s):
     return du, dda
 
 
-@jit
+@jit(llvm_inline=True)
 def _first_event(y, y1, q, v, q1, v1, a0, a1, kk, hs, n, psi, psi_t, clo, chi, gap, phase, hd_,
                  hlo, hhi, huy, hlaw, branch, pw0, pw1):  # fmt: skip
     """Earliest switch in a step: ``(time, contact, storey, kind)``; ``(inf, -1, -1, 0)``: none.
@@ -292,7 +163,7 @@ def _first_event(y, y1, q, v, q1, v1, a0, a1, kk, hs, n, psi, psi_t, clo, chi, g
     return t_ev, c_ev, s_ev, kind
 
 
-@jit
+@jit(llvm_inline=True)
 def _settle(y, ag, n, omega, zeta, gamma, psi, gap, beta, cd, zhd, phase, model, hd_, hlo, hhi,
             hk, hal, huy, hbw, hlaw, branch, rate, kk, ek, fk, wmax, vscale, fresh):  # fmt: skip
     """Settle every contact phase and storey branch at a step's end; the rates in row 0.
@@ -309,8 +180,8 @@ def _settle(y, ag, n, omega, zeta, gamma, psi, gap, beta, cd, zhd, phase, model,
     """
     changed = fresh
     if fresh:
-        _deriv(y, ag, n, omega, zeta, gamma, psi, gap, beta, cd, zhd, phase, model, hd_, hlo, hhi,
-               hk, hal, huy, hbw, hlaw, branch, rate, kk, ek, fk, 0)  # fmt: skip
+        rates(y, ag, n, omega, zeta, gamma, psi, gap, beta, cd, zhd, phase, model, hd_, hlo, hhi,
+              hk, hal, huy, hbw, hlaw, branch, rate, kk, ek, fk, 0)  # fmt: skip
     for _ in range(3):
         moved = False
         tol = DU_TOL * vscale
@@ -347,8 +218,8 @@ def _settle(y, ag, n, omega, zeta, gamma, psi, gap, beta, cd, zhd, phase, model,
         if not moved:
             return changed
         changed = True
-        _deriv(y, ag, n, omega, zeta, gamma, psi, gap, beta, cd, zhd, phase, model, hd_, hlo, hhi,
-               hk, hal, huy, hbw, hlaw, branch, rate, kk, ek, fk, 0)  # fmt: skip
+        rates(y, ag, n, omega, zeta, gamma, psi, gap, beta, cd, zhd, phase, model, hd_, hlo, hhi,
+              hk, hal, huy, hbw, hlaw, branch, rate, kk, ek, fk, 0)  # fmt: skip
     return changed
 
 
@@ -390,7 +261,7 @@ def _floor_accels(phi_t, flo, fhi, a1, ag1, peak_acc, xb):
 
 @jit(inline=True)
 def _yielding(store, dmat, n):
-    """The yielding storeys' drift rows and constants, and their laws (``storey_laws``)."""
+    """The yielding storeys' drift rows and constants, their laws (``storey_laws``) and rows."""
     ns = store.shape[0]
     hn = 0
     for s in range(ns):
@@ -402,6 +273,7 @@ def _yielding(store, dmat, n):
     huy = np.empty(hn)
     hbw = np.empty(hn)
     hlaw = np.empty(hn, dtype=np.int64)
+    hrow = np.empty(hn, dtype=np.int64)
     r = 0
     for s in range(ns):
         if math.isfinite(store[s, S_YIELD]) and math.isfinite(store[s, S_K]):
@@ -412,8 +284,139 @@ def _yielding(store, dmat, n):
             huy[r] = store[s, S_YIELD]
             hbw[r] = store[s, S_BW]
             hlaw[r] = LAW_BOUC_WEN if store[s, S_BW] > 0.0 else LAW_BILINEAR
+            hrow[r] = s
             r += 1
-    return hd_, hk, hal, huy, hbw, hlaw
+    return hd_, hk, hal, huy, hbw, hlaw, hrow
+
+
+@jit(inline=True)
+def _scales(ag, omega, xf0, xfd0):
+    """Scales of the error norm at the start, and the largest ``omega``.
+
+    The static displacement and velocity of the record's peak in the most flexible mode, or
+    the initial state's floor displacements and velocities where larger (a still ground);
+    raised to the response's own peaks as they come.
+    """
+    agmax = 0.0
+    for i in range(ag.size):
+        agmax = max(agmax, abs(ag[i]))
+    wmin = np.inf
+    wmax = 0.0
+    for j in range(omega.size):
+        wmin = min(wmin, omega[j])
+        wmax = max(wmax, omega[j])
+    xscale = max(agmax / (wmin * wmin), 1e-12)
+    vscale = max(agmax / wmin, 1e-12)
+    for f in range(xf0.size):
+        xscale = max(xscale, abs(xf0[f]))
+        vscale = max(vscale, abs(xfd0[f]))
+    return xscale, vscale, wmax
+
+
+@jit(llvm_inline=True)
+def _accept(y, y1, kk, ek, fk, de, en, yq, yv, y1q, y1v, a0v, a1v, fk0, fk6, cimp, psi, gap,
+            beta, cd, zhd, phase, model, cout, pending, hs, t, ag1, peak_f, peak_t, ep, logs,
+            nlog, peak_e, phi_t, flo, fhi, xf0, xfd0, peaks, xb, xdb, dmat, dlo, dhi, u0, du0,
+            peak_u, peak_acc, dscale, xscale, vscale):  # fmt: skip
+    """An accepted step's outputs and scales; the step's end becomes the next one's start.
+
+    Adds the energy increments ``de`` into ``en`` (input, damping, contact, plastic load,
+    hysteretic); returns the peak force, its time, the impact log's count and the error
+    norm's scales.
+    """
+    for r in range(N_RATES):
+        en[r] += de[r]
+    peak_f, peak_t, nlog = _contact_peaks(
+        yq, yv, y1q, y1v, a0v, a1v, psi, gap, beta, cd, zhd, phase, model, fk0, fk6, cimp,
+        cout, pending, hs, t, peak_f, peak_t, ep, logs, nlog, peak_e,
+    )  # fmt: skip
+    track_floors(phi_t, flo, fhi, xf0, xfd0, y1q, y1v, hs, peaks, xb, xdb)
+    _storey_peaks(dmat, dlo, dhi, y1q, y1v, hs, u0, du0, peak_u)
+    _floor_accels(phi_t, flo, fhi, a1v, ag1, peak_acc, xb)
+    for f in range(peaks.size):
+        xscale = max(xscale, peaks[f])
+        vscale = max(vscale, abs(xfd0[f]))
+    for c in range(gap.size):
+        if phase[c] != 0:
+            dscale[c] = max(dscale[c], rowdot(psi, c, y1q) - gap[c])
+    for j in range(y.size):
+        y[j] = y1[j]
+        kk[0, j] = kk[6, j]
+    for r in range(N_RATES):
+        ek[0, r] = ek[6, r]
+    for c in range(gap.size):
+        fk[0, c] = fk[6, c]
+    return peak_f, peak_t, nlog, xscale, vscale
+
+
+@jit(inline=True)
+def _switch(c_ev, s_ev, kind, y, n, yv, psi, xi, beta, meff, zhd, phase, pending, model,
+            relation, substeps, dt_rec, settings, cd, ep, dscale, hlaw, branch, huy,
+            h_next):  # fmt: skip
+    """Apply a located switch at the step's end (a contact's phase, a storey's branch).
+
+    Returns the next step's length, bounded at an onset by the contact's duration.
+    """
+    if c_ev >= 0:
+        if kind == _ONSET:
+            hc = _open_contact(c_ev, yv, psi, xi, beta, meff, zhd, phase, pending, model,
+                               relation, substeps, dt_rec, settings, cd, ep)  # fmt: skip
+            dscale[c_ev] = max(1e-15, abs(ep[c_ev, outputs.EP_V0]) * hc)
+            h_next = min(h_next, hc)
+        elif kind == _TO_RESTITUTION:
+            phase[c_ev] = 2
+        elif kind == _SEPARATION:
+            phase[c_ev] = 0
+        else:
+            phase[c_ev] = 1
+    else:
+        branch[s_ev], y[2 * n + s_ev] = storey_switch(
+            hlaw[s_ev], branch[s_ev], y[2 * n + s_ev], 0.0, huy[s_ev]
+        )
+    return h_next
+
+
+@jit(inline=True)
+def _start(q, v, n, hd_, huy, phi, dmat, y, xf0, xfd0, u0, du0, dscale):
+    """The initial state ``y`` and the floors', storeys' and contacts' values at the start."""
+    for j in range(n):
+        y[j] = q[j]
+        y[n + j] = v[j]
+    for s in range(huy.size):
+        # no plastic drift at the start (z = u, within the yield drift)
+        y[2 * n + s] = min(max(rowdot(hd_, s, q), -huy[s]), huy[s])
+    for f in range(xf0.size):
+        xf0[f] = rowdot(phi, f, q)
+        xfd0[f] = rowdot(phi, f, v)
+    for s in range(u0.size):
+        u0[s] = rowdot(dmat, s, q)
+        du0[s] = rowdot(dmat, s, v)
+    for c in range(dscale.size):
+        dscale[c] = 1e-12
+
+
+@jit
+def _finish(q, v, y, n, store_h, npts, phi, psi, gap, beta, cd, zhd, phase, model, hx, hd, hf,
+            dmat, out, cout, peaks, side, omega, e0, en, peak_f, peak_t, steps, status, logs,
+            nlog, peak_e, store, peak_u, peak_acc, sout):  # fmt: skip
+    """The end state into ``q, v``, the last history sample and every output of the run."""
+    for j in range(n):
+        q[j] = y[j]
+        v[j] = y[n + j]
+    if store_h and status == outputs.STATUS_OK:
+        _store_history(npts - 1, q, v, phi, psi, gap, beta, cd, zhd, phase, model, hx, hd, hf)
+    stored_energy = 0.0
+    for c in range(gap.size):
+        if phase[c] != 0:
+            stored_energy += stored(model, rowdot(psi, c, q) - gap[c], beta[c])
+    drift = np.empty(dmat.shape[0])
+    for s in range(drift.size):
+        drift[s] = rowdot(dmat, s, q)
+    # the plastic load's work enters the balance as a negative damping work
+    outputs.finish(out, cout, peaks, side, phase, q, v, omega, e0, en[0], en[1] - en[3], en[2],
+                   stored_energy, peak_f, peak_t, steps, status)  # fmt: skip
+    outputs.finish_impacts(out, cout, logs[0], nlog, peak_e[0])
+    storey_outputs(out, store, peak_u, drift, peak_acc, side, en[4], sout)
 
 
 @jit(entry=True)
@@ -440,99 +443,63 @@ def adaptive_rk(
     ns = store.shape[0]
     cd = 2.0 * xi * np.sqrt(beta * meff)
     rtol = tolerance(substeps)
-    hd_, hk, hal, huy, hbw, hlaw = _yielding(store, dmat, n)
+    hd_, hk, hal, huy, hbw, hlaw, hrow = _yielding(store, dmat, n)
+    hn = hk.size
+    m = 2 * n + hn
+    m_lin, h_lin, coef = spell_steps(omega, zeta, dt_rec, substeps)
+    phi_t = np.ascontiguousarray(phi.T)
+    psi_t = np.ascontiguousarray(psi.T)
     hlo, hhi = row_spans(hd_)
     dlo, dhi = row_spans(dmat)
-    hn = hk.size
+    flo, fhi = row_spans(phi_t)
+    clo, chi = row_spans(psi_t)
     branch = np.zeros(hn, dtype=np.int64)
-    m = 2 * n + hn
-    y = np.empty(m)
-    for j in range(n):
-        y[j] = q[j]
-        y[n + j] = v[j]
-    for s in range(hn):
-        # no plastic drift at the start (z = u, within the yield drift)
-        y[2 * n + s] = min(max(rowdot(hd_, s, q), -huy[s]), huy[s])
-    kk = np.zeros((7, m))
-    ek = np.zeros((7, _N_RATES))
-    fk = np.zeros((7, nc))
-    ys = np.empty(m)
-    y1 = np.empty(m)
-    de = np.empty(_N_RATES)
-    cimp = np.zeros(nc)
     phase = np.zeros(nc, dtype=np.int64)
     pending = np.zeros(nc, dtype=np.bool_)
-    zhd = np.zeros(nc)
     ep, vlog, peak_e = outputs.impact_log(nc)
     logs = [vlog]  # never reassigned in the loop (outputs.log_impact_in)
     nlog = 0
-    peaks = np.zeros(nf)
-    phi_t = np.ascontiguousarray(phi.T)
-    psi_t = np.ascontiguousarray(psi.T)
-    flo, fhi = row_spans(phi_t)
-    clo, chi = row_spans(psi_t)
-    xf0 = np.empty(nf)
-    xfd0 = np.empty(nf)
-    for f in range(nf):
-        xf0[f] = rowdot(phi, f, q)
-        xfd0[f] = rowdot(phi, f, v)
-    xb = np.empty(nf)
-    xdb = np.empty(nf)
-    pw0 = np.empty(nc)
-    pw1 = np.empty(nc)
-    rate = np.zeros(nc)
-    err_q = np.empty(n)
-    err_v = np.empty(n)
-    u0 = np.empty(ns)
-    du0 = np.empty(ns)
-    for s in range(ns):
-        u0[s] = rowdot(dmat, s, q)
-        du0[s] = rowdot(dmat, s, v)
-    peak_u = np.zeros(ns)
-    peak_acc = np.zeros(nf)
-    dscale = np.full(nc, 1e-12)
-    # views of the state and of the rates at a step's two ends
-    yq, yv, y1q, y1v = y[:n], y[n : 2 * n], y1[:n], y1[n : 2 * n]
-    a0v, a1v = kk[0, n : 2 * n], kk[6, n : 2 * n]
-    owned = (hd_, hk, hal, huy, hbw, hlaw, hlo, hhi, dlo, dhi, branch, y, kk, ek, fk, ys, y1, de,
-             cimp, phase, pending, zhd, ep, peak_e, peaks, phi_t, psi_t, flo, fhi, clo, chi, xf0,
-             xfd0, xb, xdb, pw0, pw1, rate, err_q, err_v, u0, du0, peak_u, peak_acc, dscale,
-             cd)  # fmt: skip
+    # scratch, a row each: the state, its stage and end; the energies and their increments;
+    # per contact, per floor, per storey and per mode
+    sm = np.zeros((3, m))
+    kk = np.zeros((7, m))
+    ek = np.zeros((7, N_RATES))
+    fk = np.zeros((7, nc))
+    se = np.zeros((2, N_RATES))
+    sc = np.zeros((8, nc))
+    sf = np.zeros((6, nf))
+    ss = np.zeros((5, ns))
+    sn = np.zeros((3, n))
+    ybuf = np.empty((SPELL_CHUNK, 2 * n))
+    cand = np.empty((2 * SPELL_CHUNK * (nf + ns), 3), dtype=np.int64)
+    ctg = np.empty(2 * SPELL_CHUNK * (nf + ns))
+    owned = (hd_, hk, hal, huy, hbw, hlaw, hrow, coef, phi_t, psi_t, hlo, hhi, dlo, dhi, flo, fhi,
+             clo, chi, branch, phase, pending, ep, peak_e, sm, kk, ek, fk, se, sc, sf, ss, sn, ybuf,
+             cand, ctg, cd)  # fmt: skip
     hd_, hk, hal, huy, hbw = borrow(hd_), borrow(hk), borrow(hal), borrow(huy), borrow(hbw)
-    hlaw, hlo, hhi, dlo, dhi = borrow(hlaw), borrow(hlo), borrow(hhi), borrow(dlo), borrow(dhi)
-    branch, y, kk, ek, fk = borrow(branch), borrow(y), borrow(kk), borrow(ek), borrow(fk)
-    ys, y1, de, cimp, phase = borrow(ys), borrow(y1), borrow(de), borrow(cimp), borrow(phase)
-    pending, zhd, ep, peak_e = borrow(pending), borrow(zhd), borrow(ep), borrow(peak_e)
-    peaks, phi_t, psi_t, flo = borrow(peaks), borrow(phi_t), borrow(psi_t), borrow(flo)
-    fhi, clo, chi, xf0, xfd0 = borrow(fhi), borrow(clo), borrow(chi), borrow(xf0), borrow(xfd0)
-    xb, xdb, pw0, pw1, rate = borrow(xb), borrow(xdb), borrow(pw0), borrow(pw1), borrow(rate)
-    err_q, err_v, u0, du0 = borrow(err_q), borrow(err_v), borrow(u0), borrow(du0)
-    peak_u, peak_acc, dscale, cd = borrow(peak_u), borrow(peak_acc), borrow(dscale), borrow(cd)
-    yq, yv, y1q, y1v = borrow(yq), borrow(yv), borrow(y1q), borrow(y1v)
-    a0v, a1v = borrow(a0v), borrow(a1v)
-    fk0, fk6 = borrow(fk[0]), borrow(fk[6])
+    hlaw, hrow, coef, phi_t = borrow(hlaw), borrow(hrow), borrow(coef), borrow(phi_t)
+    psi_t, hlo, hhi, dlo, dhi = borrow(psi_t), borrow(hlo), borrow(hhi), borrow(dlo), borrow(dhi)
+    flo, fhi, clo, chi = borrow(flo), borrow(fhi), borrow(clo), borrow(chi)
+    branch, phase, pending, ep = borrow(branch), borrow(phase), borrow(pending), borrow(ep)
+    peak_e, sm, kk, ek, fk = borrow(peak_e), borrow(sm), borrow(kk), borrow(ek), borrow(fk)
+    se, sc, sf, ss, sn = borrow(se), borrow(sc), borrow(sf), borrow(ss), borrow(sn)
+    ybuf, cand, ctg, cd = borrow(ybuf), borrow(cand), borrow(ctg), borrow(cd)
     ag, omega, zeta, gamma = borrow(ag), borrow(omega), borrow(zeta), borrow(gamma)
     phi, psi, gap, dmat = borrow(phi), borrow(psi), borrow(gap), borrow(dmat)
-    # scales of the error norm: the static displacement and velocity of the record's peak in
-    # the most flexible mode, raised to the response's own peaks as they come
-    agmax = 0.0
-    for i in range(npts):
-        agmax = max(agmax, abs(ag[i]))
-    wmin = np.inf
-    wmax = 0.0
-    for j in range(n):
-        wmin = min(wmin, omega[j])
-        wmax = max(wmax, omega[j])
-    xscale = max(agmax / (wmin * wmin), 1e-12)
-    vscale = max(agmax / wmin, 1e-12)
-    for f in range(nf):  # an initial state sets the scale where the ground is still
-        xscale = max(xscale, abs(xf0[f]))
-        vscale = max(vscale, abs(xfd0[f]))
-    e_in = 0.0
-    e_d = 0.0
-    w_c = 0.0
-    w_p = 0.0
-    e_h = 0.0
+    # views of the scratch (without an owner, as the arrays they view)
+    y, ys, y1 = sm[0], sm[1], sm[2]
+    de, en = se[0], se[1]  # en: input, damping, contact, plastic load, hysteretic [J/kg]
+    cimp, zhd, pw0, pw1 = sc[0], sc[1], sc[2], sc[3]
+    pv0, pv1, rate, dscale = sc[4], sc[5], sc[6], sc[7]
+    peaks, xf0, xfd0, xb, xdb, peak_acc = sf[0], sf[1], sf[2], sf[3], sf[4], sf[5]
+    u0, du0, ub, dub, peak_u = ss[0], ss[1], ss[2], ss[3], ss[4]
+    err_q, err_v, pl = sn[0], sn[1], sn[2]
+    # and of the state and of the rates at a step's two ends
+    yq, yv, y1q, y1v = y[:n], y[n : 2 * n], y1[:n], y1[n : 2 * n]
+    a0v, a1v, fk0, fk6 = kk[0, n : 2 * n], kk[6, n : 2 * n], fk[0], fk[6]
+    _start(q, v, n, hd_, huy, phi, dmat, y, xf0, xfd0, u0, du0, dscale)
+    herm_tol = _hermite_tolerance(omega, h_lin)
+    xscale, vscale, wmax = _scales(ag, omega, xf0, xfd0)
     e0 = mechanical_energy(q, v, omega)
     _settle(y, ag[0], n, omega, zeta, gamma, psi, gap, beta, cd, zhd, phase, model, hd_, hlo, hhi,
             hk, hal, huy, hbw, hlaw, branch, rate, kk, ek, fk, wmax, vscale, True)  # fmt: skip
@@ -554,20 +521,50 @@ def adaptive_rk(
         slope = (ag[i + 1] - ag[i]) / dt_rec
         s = 0.0
         rejects = 0
+        k_grid = 0  # s is the spells' grid point k_grid (-1: off the grid)
+        s_block = -1.0  # a spell that stopped here: the Runge-Kutta steps go on from here
         while s < dt_rec * (1.0 - 1e-12):
+            linear = spell_ready(phase, branch, hlaw)
+            if linear and k_grid >= 0 and s > s_block:
+                k0 = k_grid
+                s, k_grid, blocked, xmax, vmax = exact_spell(
+                    y, y1, yq, yv, y1q, y1v, err_q, n, coef, k_grid, m_lin, h_lin, dt_rec, ag0,
+                    slope, pl, omega, zeta, gamma, phi, phi_t, flo, fhi, psi_t, clo, chi, gap,
+                    pw0, pw1, pv0, pv1, hd_, hlo, hhi, hk, hal, huy, hrow, dmat, dlo, dhi, xf0,
+                    xfd0, u0, du0, ub, dub, peaks, peak_u, peak_acc, xb, xdb, herm_tol, ybuf, cand,
+                    ctg, en,
+                )  # fmt: skip
+                steps += k_grid - k0
+                xscale = max(xscale, xmax)
+                vscale = max(vscale, vmax)
+                if not _finite(y):
+                    status = outputs.STATUS_UNSTABLE
+                    break
+                if blocked:  # the Runge-Kutta steps take over: the rates at the state
+                    rates(y, ag0 + slope * s, n, omega, zeta, gamma, psi, gap, beta, cd, zhd,
+                          phase, model, hd_, hlo, hhi, hk, hal, huy, hbw, hlaw, branch, rate,
+                          kk, ek, fk, 0)  # fmt: skip
+                    h_try = min(h_try, h_lin)
+                    s_block = s
+                continue
             tries += 1
             if tries > budget:
                 status = outputs.STATUS_NOT_CONVERGED
                 break
-            room = dt_rec - s
+            # while the equations are linear, the step ends on the spells' next grid point
+            g = m_lin
+            if linear:
+                g = min(int(math.floor(s / h_lin + 1e-9)) + 1, m_lin)
+            s_end = dt_rec if g == m_lin else g * h_lin
+            room = s_end - s
             hs = h_try
             if hs >= room or room - hs < 1e-3 * hs:
                 hs = room
-            _dp_step(y, kk, ek, fk, hs, ag0, slope, s, n, omega, zeta, gamma, psi, gap, beta, cd,
-                     zhd, phase, model, hd_, hlo, hhi, hk, hal, huy, hbw, hlaw, branch, rate, ys,
-                     y1, de, cimp)  # fmt: skip
-            err = _error(kk, hs, n, phi_t, flo, fhi, psi, phase, hn, xscale, vscale, huy, dscale,
-                         rtol, err_q, err_v, xb, xdb)  # fmt: skip
+            dp_step(y, kk, ek, fk, hs, ag0, slope, s, n, omega, zeta, gamma, psi, gap, beta, cd,
+                    zhd, phase, model, hd_, hlo, hhi, hk, hal, huy, hbw, hlaw, branch, rate, ys,
+                    y1, de, cimp)  # fmt: skip
+            err = error_norm(kk, hs, n, phi_t, flo, fhi, psi, phase, hn, xscale, vscale, huy,
+                             dscale, rtol, err_q, err_v, xb, xdb)  # fmt: skip
             if not (err <= 1.0):
                 rejects += 1
                 if rejects > _MAX_REJECTS or not (hs > 1e-300):
@@ -583,57 +580,27 @@ def adaptive_rk(
             switch = c_ev >= 0 or s_ev >= 0
             if switch and t_ev < hs:
                 hs = t_ev
-                _dp_step(y, kk, ek, fk, hs, ag0, slope, s, n, omega, zeta, gamma, psi, gap, beta,
-                         cd, zhd, phase, model, hd_, hlo, hhi, hk, hal, huy, hbw, hlaw, branch,
-                         rate, ys, y1, de, cimp)  # fmt: skip
+                dp_step(y, kk, ek, fk, hs, ag0, slope, s, n, omega, zeta, gamma, psi, gap, beta,
+                        cd, zhd, phase, model, hd_, hlo, hhi, hk, hal, huy, hbw, hlaw, branch,
+                        rate, ys, y1, de, cimp)  # fmt: skip
             steps += 1
-            e_in += de[0]
-            e_d += de[1]
-            w_c += de[2]
-            w_p += de[3]
-            e_h += de[4]
-            t = i * dt_rec + s
-            peak_f, peak_t, nlog = _contact_peaks(
-                yq, yv, y1q, y1v, a0v, a1v, psi, gap, beta, cd, zhd, phase, model, fk0, fk6, cimp,
-                cout, pending, hs, t, peak_f, peak_t, ep, logs, nlog, peak_e,
+            peak_f, peak_t, nlog, xscale, vscale = _accept(
+                y, y1, kk, ek, fk, de, en, yq, yv, y1q, y1v, a0v, a1v, fk0, fk6, cimp, psi, gap,
+                beta, cd, zhd, phase, model, cout, pending, hs, i * dt_rec + s,
+                ag0 + slope * (s + hs), peak_f, peak_t, ep, logs, nlog, peak_e, phi_t, flo, fhi,
+                xf0, xfd0, peaks, xb, xdb, dmat, dlo, dhi, u0, du0, peak_u, peak_acc, dscale,
+                xscale, vscale,
             )  # fmt: skip
-            track_floors(phi_t, flo, fhi, xf0, xfd0, y1q, y1v, hs, peaks, xb, xdb)
-            _storey_peaks(dmat, dlo, dhi, y1q, y1v, hs, u0, du0, peak_u)
-            _floor_accels(phi_t, flo, fhi, a1v, ag0 + slope * (s + hs), peak_acc, xb)
-            for f in range(nf):
-                xscale = max(xscale, peaks[f])
-                vscale = max(vscale, abs(xfd0[f]))
-            for c in range(nc):
-                if phase[c] != 0:
-                    dscale[c] = max(dscale[c], rowdot(psi, c, y1q) - gap[c])
-            for j in range(m):
-                y[j] = y1[j]
-                kk[0, j] = kk[6, j]
-            for r in range(_N_RATES):
-                ek[0, r] = ek[6, r]
-            for c in range(nc):
-                fk[0, c] = fk[6, c]
             s += hs
-            fresh = False
-            if switch and t_ev <= hs:
-                fresh = True
-                if c_ev >= 0:
-                    if kind == _ONSET:
-                        hc = _open_contact(c_ev, yv, psi, xi, beta, meff, zhd, phase, pending,
-                                           model, relation, substeps, dt_rec, settings, cd,
-                                           ep)  # fmt: skip
-                        dscale[c_ev] = max(1e-15, abs(ep[c_ev, outputs.EP_V0]) * hc)
-                        h_next = min(h_next, hc)
-                    elif kind == _TO_RESTITUTION:
-                        phase[c_ev] = 2
-                    elif kind == _SEPARATION:
-                        phase[c_ev] = 0
-                    else:
-                        phase[c_ev] = 1
-                else:
-                    branch[s_ev], y[2 * n + s_ev] = storey_switch(
-                        hlaw[s_ev], branch[s_ev], y[2 * n + s_ev], 0.0, huy[s_ev]
-                    )
+            k_grid = -1
+            if hs == room:  # not cut by a switch: on the grid point (or the interval's end)
+                s = s_end
+                k_grid = g
+            fresh = switch and t_ev <= hs
+            if fresh:
+                h_next = _switch(c_ev, s_ev, kind, y, n, yv, psi, xi, beta, meff, zhd, phase,
+                                 pending, model, relation, substeps, dt_rec, settings, cd, ep,
+                                 dscale, hlaw, branch, huy, h_next)  # fmt: skip
             # every step's end: a switch, or a turn the end values hid, settled (no Zeno)
             _settle(y, ag0 + slope * s, n, omega, zeta, gamma, psi, gap, beta, cd, zhd, phase,
                     model, hd_, hlo, hhi, hk, hal, huy, hbw, hlaw, branch, rate, kk, ek, fk, wmax,
@@ -644,22 +611,9 @@ def adaptive_rk(
                 break
         if status != outputs.STATUS_OK:
             break
-    for j in range(n):
-        q[j] = y[j]
-        v[j] = y[n + j]
-    if store_h and status == outputs.STATUS_OK:
-        _store_history(npts - 1, q, v, phi, psi, gap, beta, cd, zhd, phase, model, hx, hd, hf)
-    stored_energy = 0.0
-    for c in range(nc):
-        if phase[c] != 0:
-            stored_energy += stored(model, rowdot(psi, c, q) - gap[c], beta[c])
-    drift = np.empty(ns)
-    for s in range(ns):
-        drift[s] = rowdot(dmat, s, q)
-    outputs.finish(out, cout, peaks, side, phase, q, v, omega, e0, e_in, e_d - w_p, w_c,
-                   stored_energy, peak_f, peak_t, steps, status)  # fmt: skip
-    outputs.finish_impacts(out, cout, logs[0], nlog, peak_e[0])
-    storey_outputs(out, store, peak_u, drift, peak_acc, side, e_h, sout)
+    _finish(q, v, y, n, store_h, npts, phi, psi, gap, beta, cd, zhd, phase, model, hx, hd, hf,
+            dmat, out, cout, peaks, side, omega, e0, en, peak_f, peak_t, steps, status, logs,
+            nlog, peak_e, store, peak_u, peak_acc, sout)  # fmt: skip
     _alive(owned)
 
 

@@ -6,8 +6,9 @@ by the contact's own time scale at the penetration it is at (its local period an
 time, :func:`contact_bound`).  The SDOF pair (:mod:`~pound_mc.integrators.adaptive_pair`),
 the bilinear pair (:mod:`~pound_mc.integrators.adaptive_bilinear`) and the general modal
 kernel (:mod:`~pound_mc.integrators.adaptive`) take them from here; the error-controlled
-kernel (:mod:`~pound_mc.integrators.adaptive_rk`) needs none (its error estimate bounds
-every step).
+kernel (:mod:`~pound_mc.integrators.adaptive_rk`) needs none for its Runge-Kutta steps (its
+error estimate bounds every one), and bounds its exact steps of the linear spells by
+:data:`LINEAR_STEPS_PER_PERIOD` (:mod:`~pound_mc.integrators.elastic_spells`).
 """
 
 from __future__ import annotations

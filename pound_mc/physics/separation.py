@@ -59,6 +59,8 @@ __all__ = [
     "SeparationGaps",
     "peak_displacements",
     "required_gaps",
+    "gap_asce7",
+    "gap_ec8",
 ]
 
 
@@ -85,6 +87,56 @@ def gap_srss(u1, u2):
     :func:`gap_abs` does.
     """
     return np.hypot(u1, u2)
+
+
+def gap_asce7(u1, u2, *, r: float, cd: float, ie: float = 1.0):
+    """Separation of ASCE/SEI 7-22 section 12.12.2 from two buildings' elastic displacements.
+
+    Each building's maximum inelastic response displacement is ``delta_M = Cd delta_max / Ie``
+    (section 12.12.2, the displacement of eq. 12.8-16 at the critical location), where
+    ``delta_max``, the displacement of the elastic analysis under the design forces (reduced
+    by the response modification coefficient ``R``), is here the building's elastic
+    displacement ``u`` under the record over ``R``; adjacent structures on the same property
+    are separated by at least ``delta_MT = sqrt(delta_M1^2 + delta_M2^2)`` (section
+    12.12.2).
+
+    Parameters
+    ----------
+    u1, u2 : array_like
+        Peak elastic (linear, unreduced) displacements of the two buildings [m].
+    r, cd, ie : float
+        Response modification coefficient ``R``, deflection amplification factor ``Cd`` and
+        importance factor ``Ie`` (ASCE 7-22 tables 12.2-1 and 1.5-2).
+    """
+    m1 = cd * np.asarray(u1, float) / (r * ie)
+    m2 = cd * np.asarray(u2, float) / (r * ie)
+    return np.hypot(m1, m2)
+
+
+def gap_ec8(u1, u2, *, q: float, qd: float | None = None, same_levels: bool = False):
+    """Separation of EN 1998-1:2004 section 4.4.2.7 from two buildings' elastic displacements.
+
+    Each building's displacement is ``d_s = q_d d_e`` (expression 4.23), ``d_e`` that of the
+    linear analysis under the design spectrum (reduced by the behaviour factor ``q``): here
+    the elastic displacement ``u`` under the record over ``q``.  Buildings of the same
+    property are separated by at least the SRSS of the two ``d_s`` (4.4.2.7(3)), reduced by
+    the factor 0.7 where their floor elevations are the same (4.4.2.7(4)).
+
+    Parameters
+    ----------
+    u1, u2 : array_like
+        Peak elastic (linear, unreduced) displacements of the two buildings [m].
+    q : float
+        Behaviour factor of the design (EN 1998-1 sections 5 to 9).
+    qd : float, optional
+        Displacement behaviour factor (default ``q``, as 4.3.4(1) assumes).
+    same_levels : bool
+        Whether the two buildings' floors are at the same elevations (the 0.7 of 4.4.2.7(4)).
+    """
+    qd = q if qd is None else qd
+    d1 = qd * np.asarray(u1, float) / q
+    d2 = qd * np.asarray(u2, float) / q
+    return (0.7 if same_levels else 1.0) * np.hypot(d1, d2)
 
 
 def cqc_correlation(period1_s, period2_s, damping1=0.05, damping2=0.05):

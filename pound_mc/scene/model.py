@@ -9,14 +9,13 @@ from __future__ import annotations
 
 import copy
 import math
-import tomllib
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from pound_mc.errors import InputError
+from pound_mc.errors import InputError, parse_toml, read_text_file
 from pound_mc.motions import load_record, record_arrays
 from pound_mc.physics.contact import CONTACT_MODELS, kernel_damping, reported_xi
 from pound_mc.physics.structures import (
@@ -549,17 +548,7 @@ def scene_from_dict(data: dict, *, file: str | Path | None = None) -> Scene:
 def load_scene(path: str | Path) -> Scene:
     """Read and validate a scene file (TOML)."""
     path = Path(path)
-    if path.is_symlink() and not path.exists():
-        raise InputError("symbolic link that leads nowhere (a loop, or its target is missing)",
-                         file=str(path))  # fmt: skip
-    if not path.is_file():
-        raise InputError("no such scene file", file=str(path))
-    try:
-        data = tomllib.loads(path.read_text(encoding="utf-8-sig"))  # a leading BOM dropped
-    except tomllib.TOMLDecodeError as exc:
-        raise InputError(f"not valid TOML: {exc}", file=str(path)) from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"cannot read the scene file: {exc}", file=str(path)) from None
+    data = parse_toml(read_text_file(path, "scene file"), str(path))
     return scene_from_dict(data, file=path)
 
 

@@ -369,7 +369,7 @@ RECORD = Table(
               "study grid axis `record.sa_g`; no longer than the record.", unit="s",
               minimum=0.0, exclusive_minimum=True),
         Field("seed", "integer", "Realisation of a synthetic motion (required for "
-              "`synthetic:`).", minimum=0),
+              "`synthetic:`).", minimum=0, maximum=2**64 - 1),
         Field("params", "table", "Parameters of a synthetic motion "
               "(`pound_mc.motions.synthetic`)."),
         Field("resample_hz", "number", "New sampling rate (Fourier resampling, no taper), "
@@ -530,7 +530,7 @@ CONTACT = Table(
 
 INTEGRATOR = Table(
     "integrator",
-    "The time integration (README, \"Integrators\").",
+    "The time integration (docs/integrators.md).",
     (
         Field("method", "string", "Integration method.", default="adaptive",
               choices=tuple(METHODS)),

@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from pound_mc.errors import OutputError
+from pound_mc.errors import InputError, OutputError
 from pound_mc.integrators.accuracy import STATUS_INACCURATE
 from pound_mc.integrators.outputs import STATUS_OK
 from pound_mc.study.definition import grid_dim_name
@@ -48,6 +48,7 @@ __all__ = [
     "STATUS_FLAGS",
     "QUANTILES",
     "build_dataset",
+    "open_dataset",
     "write_netcdf",
     "pounding_counted",
     "study_file",
@@ -257,11 +258,12 @@ def build_dataset(
         Extra global attributes.
     """
     dims = ("record", *(grid_dim_name(k) for k in study.grid), "sample")
+    sample_attrs, saltelli = _saltelli_attrs(study)
     coords = {
         "record": ("record", np.asarray(study.record_names, dtype=object), {
             "long_name": "ground-motion record", "cf_role": "timeseries_id"}),
         "sample": ("sample", np.arange(study.n, dtype=np.int32), {
-            "long_name": "Monte Carlo sample index", "units": "1"}),
+            "long_name": "Monte Carlo sample index", "units": "1", **sample_attrs}),
     }  # fmt: skip
     for key, values in study.grid.items():
         coords[grid_dim_name(key)] = (grid_dim_name(key), values, _param_attrs(key))
@@ -364,9 +366,33 @@ def build_dataset(
         "sampling_method": study.method,
         "sampling_seed": study.sampling_seed,
         "sampled_variables": "; ".join(f"{v.key}: {v.source}" for v in study.variables),
+        **saltelli,
         **(provenance or {}),
     }
     return ds
+
+
+def _saltelli_attrs(study) -> tuple[dict, dict]:
+    """Saltelli's design as the sensitivity analysis reads it back (``method = "saltelli"``).
+
+    The ``sample`` coordinate's ``comment`` (how its N (D + 2) samples are laid out) and the
+    global attributes ``saltelli_base_n`` (N), ``saltelli_n_variables`` (D) and
+    ``saltelli_variables`` (the sampled study keys in the design's column order, ``"; "``
+    between them); empty for the other designs.
+    """
+    if study.base_n is None:
+        return {}, {}
+    d = len(study.variables)
+    comment = (
+        f"Saltelli's design (SALib, first and total order): sample = {d + 2} b + r for base "
+        f"point b (0..{study.base_n - 1}); r = 0 is matrix A's row, r = j (1..{d}) A's row with "
+        f"column j from B, r = {d + 1} B's row"
+    )
+    return {"comment": comment}, {
+        "saltelli_base_n": int(study.base_n),
+        "saltelli_n_variables": d,
+        "saltelli_variables": "; ".join(v.key for v in study.variables),
+    }
 
 
 def study_folder(ds: xr.Dataset, fallback: str | Path | None = None) -> Path | None:
@@ -424,3 +450,35 @@ def write_netcdf(ds: xr.Dataset, path: str | Path) -> Path:
         reason = getattr(exc, "strerror", None) or str(exc)
         raise OutputError(f"cannot write the dataset: {reason}", file=str(path)) from None
     return path
+
+
+def open_dataset(path: str | Path) -> xr.Dataset:
+    """Open the study dataset ``pound-mc run`` wrote at ``path`` (``OUT/NAME.nc``).
+
+    The file is opened lazily, as :func:`xarray.open_dataset` does; the ``ds.pound`` accessor
+    is registered by ``import pound_mc``.
+
+    Raises
+    ------
+    pound_mc.errors.InputError
+        ``path`` is no file, not a netCDF dataset, or not a pound-mc study dataset (no
+        ``peak_force``, ``impacts`` or ``status``); the message names the file.
+    """
+    path = Path(path)
+    if not path.is_file():
+        what = "is a folder" if path.is_dir() else "no such file"
+        raise InputError(f"{what}; give a study dataset (pound-mc run writes OUT/NAME.nc)",
+                         file=str(path))  # fmt: skip
+    try:
+        ds = xr.open_dataset(path)
+    except (OSError, ValueError, TypeError):
+        raise InputError(
+            "is not a netCDF dataset (pound-mc run writes one as OUT/NAME.nc)", file=str(path)
+        ) from None
+    missing = [v for v in ("peak_force", "impacts", "status") if v not in ds]
+    if missing:
+        ds.close()
+        raise InputError(
+            f"is not a pound-mc study dataset: no variable {missing[0]!r}", file=str(path)
+        )
+    return ds

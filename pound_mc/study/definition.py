@@ -27,9 +27,12 @@ A study is a scene (``[record]`` or ``[[records]]``, ``[left]`` and ``[right]`` 
     (:func:`pound_mc.study.records.expand_records`).
     Validation counts a suite's components from its metadata and a glob's files.
 ``[sampling]``
-    ``n`` samples per grid point and record, ``method`` (``random`` | ``lhs`` | ``sobol``,
-    default ``sobol``), optional ``seed`` (default: the study's), and ``[sampling.vary]``
-    (:mod:`pound_mc.study.sampling`).
+    ``n`` samples per grid point and record, ``method`` (``random`` | ``lhs`` | ``sobol`` |
+    ``saltelli``, default ``sobol``), optional ``seed`` (default: the study's), and
+    ``[sampling.vary]`` (:mod:`pound_mc.study.sampling`).  With ``saltelli`` ``n`` is the
+    base N of Saltelli's design, a power of two >= 2, and the study runs N (D + 2) samples at
+    every grid point (D sampled keys, at least one): :attr:`Study.n` is that number,
+    :attr:`Study.base_n` is N.
 
 A building's keys may be varied as its model allows (``left.period_s`` of an SDOF building,
 ``left.storey_stiffness_N_per_m`` of a shear building: a number stands for every storey; yield
@@ -51,13 +54,13 @@ from __future__ import annotations
 import copy
 import dataclasses
 import hashlib
-import tomllib
+import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from pound_mc.errors import InputError, InputErrors
+from pound_mc.errors import InputError, InputErrors, parse_toml, read_text_file
 from pound_mc.physics import materials
 from pound_mc.scene.schema import BUILDINGS, check_table
 from pound_mc.study import records as records_mod
@@ -69,6 +72,7 @@ from pound_mc.study.schema import (
     INTENSITY_KEYS,
     MATERIAL_KEY,
     MAX_SAMPLES,
+    MIN_BYTES_PER_SIMULATION,
     NUMERIC_SCENE_KEYS,
     ROW_KEY,
     ROW_TABLE,
@@ -134,6 +138,8 @@ class Study:
     #: Per record, what a suite tells of it (``event``, ``station``, ...; empty dicts for other
     #: records); non-empty only when a table was expanded (a suite or a glob).
     record_meta: list[dict] = field(default_factory=list)
+    #: Base N of Saltelli's design (``method = "saltelli"``; ``n`` is then N (D + 2)), else None.
+    base_n: int | None = None
 
     @property
     def intensity_key(self) -> str | None:
@@ -583,6 +589,42 @@ def _record_names(records: list[dict]) -> list[str]:
     return names
 
 
+def _samples(spec: dict, variables: list, file, errors: list) -> tuple[int, int | None]:
+    """Samples per grid point, and Saltelli's base N (None for the other designs).
+
+    ``saltelli`` takes ``n`` as the base N: a power of two >= 2 (SALib's design and the
+    balance of its Sobol' points ask for it), at least one sampled key, and N (D + 2) samples
+    within :data:`~pound_mc.study.schema.MAX_SAMPLES`.  Where it is refused, the samples of the
+    smallest design stand in, so the probe still checks the sampled keys' values and every
+    problem is reported at once.
+    """
+    n = spec.get("n", 1)
+    d = len(variables)
+    if spec.get("method") != "saltelli":
+        return n, None
+    problem = None
+    if not variables:
+        problem = ('method = "saltelli" needs at least one sampled key in [sampling.vary]',
+                   "sampling.vary")  # fmt: skip
+    elif any(e.key == "sampling.n" for e in errors):  # n itself refused already
+        pass
+    elif not sampling.is_saltelli_base(n):
+        problem = (
+            f'must be a power of two >= 2 with method = "saltelli" (the base N of Saltelli\'s '
+            f"design, which runs N (D + 2) = N x {d + 2} samples), got {n}; e.g. "
+            f"{max(2, 1 << n.bit_length() - 1)} or {max(4, 1 << n.bit_length())}",
+            "sampling.n",
+        )
+    elif sampling.saltelli_samples(n, d) > MAX_SAMPLES:
+        problem = (f"N (D + 2) = {n} x {d + 2} = {sampling.saltelli_samples(n, d):,} samples, "
+                   f"more than {MAX_SAMPLES:,}", "sampling.n")  # fmt: skip
+    else:
+        return sampling.saltelli_samples(n, d), n
+    if problem is not None:
+        errors.append(InputError(problem[0], file=file, key=problem[1]))
+    return sampling.saltelli_samples(2, d), None
+
+
 def study_from_text(text: str, *, file: str | Path | None = None) -> Study:
     """Parse and validate a study from TOML text.
 
@@ -599,10 +641,7 @@ def study_from_text(text: str, *, file: str | Path | None = None) -> Study:
         Listing every problem found, each with the file and key.
     """
     fname = None if file is None else str(file)
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise InputError(f"not valid TOML: {exc}", file=fname) from None
+    data = parse_toml(text, fname)
     errors: list[InputError] = []
     _top_level(data, fname, errors)
     if errors:  # the tables themselves are malformed: checking their keys would only add noise
@@ -617,6 +656,7 @@ def study_from_text(text: str, *, file: str | Path | None = None) -> Study:
     variables, material_variables = _vary(vary, grid, labels, fname, errors)
     variables = _structure_keys(scene, grid, variables, fname, errors)
     fixed_partner(scene, grid, variables, fname, errors)
+    n, base_n = _samples(spec, variables, fname, errors)
     study = Study(
         path=None if file is None else Path(file),
         name=head["name"],
@@ -626,7 +666,7 @@ def study_from_text(text: str, *, file: str | Path | None = None) -> Study:
         scene=scene,
         records=records,
         grid=grid,
-        n=spec.get("n", 1),
+        n=n,
         method=spec.get("method", "sobol"),
         sampling_seed=spec.get("seed", head["seed"]),
         variables=variables,
@@ -637,24 +677,47 @@ def study_from_text(text: str, *, file: str | Path | None = None) -> Study:
         grid_labels=labels,
         material_variables=material_variables,
         record_meta=meta if any(meta) else [],
+        base_n=base_n,
     )
     records_mod.check_intensity(study, prefixes, fname, errors)
+    if not errors:  # before anything the size allocates (the probe draws the samples)
+        check_size(study)
     probe(study, prefixes, fname, errors)
     if errors:
         raise InputErrors(errors)
     return study
 
 
+def check_size(study: Study) -> None:
+    """Refuse a study whose results could not fit in this machine's memory, before anything.
+
+    The least a simulation holds (:data:`~pound_mc.study.schema.MIN_BYTES_PER_SIMULATION`)
+    times the simulations, against the physical memory; the run checks its full layout again
+    (:func:`~pound_mc.study.runner.run_study`).  Names the grid axis or ``sampling.n`` that
+    makes the study largest.
+    """
+    need = study.n_simulations * MIN_BYTES_PER_SIMULATION
+    have = physical_memory()
+    if have is None or need <= have:
+        return
+    sizes = {f"grid.{k}": v.size for k, v in study.grid.items()} | {"sampling.n": study.n}
+    largest = max(sizes, key=sizes.get)
+    raise InputError(
+        f"{study.n_simulations:,} simulations need at least {need / 2**30:,.1f} GiB of memory "
+        f"for their results, more than this machine's {have / 2**30:,.1f} GiB; make the grid "
+        "or the number of samples smaller", file=None if study.path is None else str(study.path),
+        key=largest)  # fmt: skip
+
+
+def physical_memory() -> int | None:
+    """Bytes of physical memory of this machine, if the system says."""
+    try:
+        return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    except (AttributeError, ValueError, OSError):
+        return None
+
+
 def load_study(path: str | Path) -> Study:
     """Read and validate a study file (see the module docstring for the schema)."""
     path = Path(path)
-    if path.is_symlink() and not path.exists():
-        raise InputError("symbolic link that leads nowhere (a loop, or its target is missing)",
-                         file=str(path))  # fmt: skip
-    try:
-        text = path.read_text(encoding="utf-8-sig")  # a leading BOM dropped: TOML has none
-    except FileNotFoundError:
-        raise InputError("study file not found", file=str(path)) from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"cannot read study file: {exc}", file=str(path)) from None
-    return study_from_text(text, file=path)
+    return study_from_text(read_text_file(path, "study file"), file=path)

@@ -45,7 +45,7 @@ import logging
 import time
 import uuid
 from collections.abc import Iterable
-from contextlib import ExitStack
+from contextlib import ExitStack, contextmanager
 from pathlib import Path
 
 import numba
@@ -116,11 +116,23 @@ def warm_up_worker(engine, index: int) -> float:
     return refused if isinstance(refused, InputError) else time.perf_counter() - t0
 
 
+#: Longest part of a cluster's own message a fault quotes (the rest is its task keys).
+_FAULT_TEXT = 120
+#: Exceptions of ``distributed`` that say the futures were cancelled: one future's, and the
+#: many futures' one (whose message lists every key).
+_CANCELLED = ("FutureCancelledError", "FuturesCancelledError", "CancelledError")
+
+
 def _fault(exc: BaseException) -> str:
-    """What a cluster failure means, in words."""
+    """What a cluster failure means, in words: one line, without the cluster's task keys."""
     name = type(exc).__name__
-    text = str(exc)
-    if "lost" in text.lower() and "scatter" in text.lower() or name == "FutureCancelledError":
+    full = str(exc)
+    text = full.strip().splitlines()[0] if full.strip() else ""
+    if len(text) > _FAULT_TEXT:
+        text = text[: _FAULT_TEXT - 3] + "..."
+    if name in _CANCELLED:
+        return "all workers were lost (and the study sent to them): the chunks were cancelled"
+    if "lost" in full.lower() and "scatter" in full.lower():
         return f"all workers were lost (and the study sent to them): {name}: {text}"
     if name in ("CommClosedError", "StreamClosedError"):
         return f"the connection to the scheduler was lost: {name}: {text}"
@@ -129,7 +141,8 @@ def _fault(exc: BaseException) -> str:
     return f"{name}: {text}"
 
 
-def dask_executor(client, *, retries: int = 3, timeout_s: float = TIMEOUT_S):
+def dask_executor(client, *, retries: int = 3, timeout_s: float = TIMEOUT_S,
+                  key: str = "--scheduler"):  # fmt: skip
     """Executor (see :func:`pound_mc.study.runner.run_study`) that runs chunks on a Dask cluster.
 
     Parameters
@@ -141,6 +154,9 @@ def dask_executor(client, *, retries: int = 3, timeout_s: float = TIMEOUT_S):
         rescheduled by the scheduler regardless).
     timeout_s : float
         Seconds without a finished chunk after which the cluster is given up [s].
+    key : str
+        The option that asked for the cluster (``--scheduler`` or ``--workers``), which its
+        errors name.
 
     Raises
     ------
@@ -188,7 +204,7 @@ def dask_executor(client, *, retries: int = 3, timeout_s: float = TIMEOUT_S):
         except Exception as exc:  # every failure of the cluster, whatever its class
             raise ClusterError(
                 f"the Dask cluster failed while its workers loaded the kernels: {_fault(exc)}",
-                key="--scheduler",
+                key=key,
             ) from None
         for result in results:
             if isinstance(result, InputError):
@@ -226,7 +242,7 @@ def dask_executor(client, *, retries: int = 3, timeout_s: float = TIMEOUT_S):
                         f"no chunk finished in {timeout_s:g} s (a scheduler that does not "
                         "answer, or no workers left); finished chunks are kept: run again to "
                         "resume",
-                        key="--scheduler",
+                        key=key,
                     ) from None
                 for future in done:
                     chunk = futures.pop(future)
@@ -244,7 +260,7 @@ def dask_executor(client, *, retries: int = 3, timeout_s: float = TIMEOUT_S):
             raise ClusterError(
                 f"the Dask cluster failed: {_fault(exc)}; finished chunks are kept: run again "
                 "to resume",
-                key="--scheduler",
+                key=key,
             ) from None
         finally:
             if not failed:
@@ -296,7 +312,7 @@ def _connect(distributed, stack: ExitStack, scheduler: str | None, workers: int 
             threads_per_worker=1,
             host="127.0.0.1",
             dashboard_address=":0",  # the scheduler's HTTP server on a free port
-            silence_logs=logging.ERROR,
+            silence_logs=logging.CRITICAL,  # a worker's heartbeat tracebacks are not ours
             env={"NUMBA_NUM_THREADS": "1"},
         )
     )
@@ -354,9 +370,27 @@ def run_study_distributed(
             "give either --scheduler ADDRESS or --workers N" + (f", not {given}" if given else ""),
             key="--scheduler",
         )
-    distributed = _import_distributed()
+    distributed = _import_distributed(given[0] if given[0] != "client" else "--scheduler")
+    key = "--workers" if workers is not None else "--scheduler"
     with ExitStack() as stack:
+        stack.enter_context(_quiet_cluster_logs())
         if client is None:
             client = _connect(distributed, stack, scheduler, workers, timeout_s)
-        executor = dask_executor(client, retries=retries, timeout_s=timeout_s)
+        executor = dask_executor(client, retries=retries, timeout_s=timeout_s, key=key)
         return run_study(study, out_dir, executor=executor, **kwargs)
+
+
+@contextmanager
+def _quiet_cluster_logs():
+    """Keep ``distributed``'s own log records (tracebacks of a lost scheduler) off the screen.
+
+    The run says what failed in one line (:class:`~pound_mc.errors.ClusterError`); the
+    client's loggers would print the same failure again as tracebacks.
+    """
+    logger = logging.getLogger("distributed")
+    level = logger.level
+    logger.setLevel(logging.CRITICAL + 1)
+    try:
+        yield
+    finally:
+        logger.setLevel(level)

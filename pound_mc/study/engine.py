@@ -515,9 +515,25 @@ class StudyEngine:
         out["run_substeps"] = base_sub * factor
         return out
 
-    def _run_level(self, indices: np.ndarray, level: int) -> dict[str, np.ndarray]:
-        """Run ``indices`` at refinement ``level`` (``dt_s / 2^level``, ``substeps 2^level``)."""
+    def run_at_gaps(self, indices: np.ndarray, gaps: np.ndarray) -> dict[str, np.ndarray]:
+        """Run the simulations ``indices`` again, each with its own gap ``gaps`` [m].
+
+        The per-simulation outputs of :data:`~pound_mc.study.dataset.RESULT_VARIABLES`
+        (no refinement); SDOF-pair studies only (a separation rule's gap is one number).
+        """
+        if self.mdof or self.per_scene:
+            raise InputError("runs at a gap of their own are for studies of two SDOF "
+                             "buildings", file=self.study.path, key="contact.gap_m")  # fmt: skip
+        return self._run_level(np.asarray(indices, np.int64), 0, gaps=np.asarray(gaps, float))
+
+    def _run_level(self, indices: np.ndarray, level: int, gaps=None) -> dict[str, np.ndarray]:
+        """Run ``indices`` at refinement ``level`` (``dt_s / 2^level``, ``substeps 2^level``).
+
+        ``gaps``: each simulation's gap in place of the study's (:meth:`run_at_gaps`).
+        """
         p = self.parameters(indices)
+        if gaps is not None:
+            p["contact.gap_m"] = gaps
         n = p["record"].size
         out = {
             name: np.empty((n, *tail), dtype=dtype)

@@ -34,7 +34,6 @@ from __future__ import annotations
 
 import io
 import itertools
-import os
 import signal
 import sys
 import threading
@@ -52,6 +51,7 @@ from tqdm.auto import tqdm
 from pound_mc.errors import InputError
 from pound_mc.integrators.threads import numba_threads
 from pound_mc.study.dataset import build_dataset, write_netcdf
+from pound_mc.study.definition import physical_memory
 from pound_mc.study.engine import StudyEngine
 from pound_mc.study.files import output_lock, pause_at, remove_parts, write_bytes_atomically
 from pound_mc.study.resume import (
@@ -171,7 +171,10 @@ def plan_text(study, chunk_size: int | None = None, seconds_per_simulation: floa
         names = study.grid_labels.get(key)
         span = ", ".join(names) if names else f"{values.min():g} .. {values.max():g}"
         lines.append(f"  grid      : {key} = {count_text(values.size, 'value')} {span}")
-    lines.append(f"  sampling  : n = {study.n}, method {study.method}, seed {study.sampling_seed}")
+    n = f"n = {study.n}"
+    if study.base_n is not None:  # Saltelli's design: N (D + 2) samples
+        n = f"n = {study.n} (base N = {study.base_n} x {len(study.variables) + 2})"
+    lines.append(f"  sampling  : {n}, method {study.method}, seed {study.sampling_seed}")
     for v in study.variables:
         lines.append(f"    {v.key}: {v.source}")
     n = study.n_simulations
@@ -205,17 +208,9 @@ def memory_estimate(study, layout: dict) -> int:
     return 2 * study.n_simulations * per_sim
 
 
-def _physical_memory() -> int | None:
-    """Bytes of physical memory of this machine, if the system says."""
-    try:
-        return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
-    except (AttributeError, ValueError, OSError):
-        return None
-
-
 def _check_memory(study, layout: dict) -> None:
     """Refuse a study whose results do not fit in memory before anything is written."""
-    need, have = memory_estimate(study, layout), _physical_memory()
+    need, have = memory_estimate(study, layout), physical_memory()
     if have is not None and need > have:
         raise InputError(
             f"{study.n_simulations:,} simulations need about {need / 2**30:,.1f} GiB of memory "

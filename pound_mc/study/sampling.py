@@ -15,6 +15,14 @@ Designs (``method``):
 ``sobol``
     Owen-scrambled Sobol' points (:class:`scipy.stats.qmc.Sobol`), the first ``n`` points of a
     ``2^m`` sequence, seeded by ``seed``.
+``saltelli``
+    Saltelli's design for first- and total-order Sobol' indices, made by SALib
+    (:func:`SALib.sample.sobol.sample`, ``calc_second_order=False``, scrambled, seeded by
+    ``seed``): base ``N`` (a power of two) points of a ``2d``-dimensional scrambled Sobol'
+    sequence, split into matrices A and B, give ``N`` blocks of ``d + 2`` rows each: A's row,
+    A's row with column j taken from B's (j = 1..d), B's row.  The study's ``n`` is ``N``; it
+    runs ``N (d + 2)`` samples at every grid point (:func:`saltelli_samples`), in this order,
+    which :mod:`pound_mc.analysis.sensitivity` reads back.
 
 Distributions (``[sampling.vary]`` values):
 
@@ -32,6 +40,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from SALib.sample import sobol as salib_sobol
 from scipy import stats
 from scipy.stats import qmc
 
@@ -45,6 +54,8 @@ __all__ = [
     "VARY_TABLES",
     "RandomVariable",
     "design",
+    "saltelli_samples",
+    "is_saltelli_base",
     "parse_variable",
     "draw",
     "per_impact",
@@ -70,8 +81,37 @@ def _sobol_design(n: int, d: int, seed: int) -> np.ndarray:
     return qmc.Sobol(d=d, scramble=True, rng=rng).random_base2(m)[:n]
 
 
+def saltelli_samples(base_n: int, d: int) -> int:
+    """Samples of Saltelli's design (first and total order) of base ``base_n`` and ``d`` keys."""
+    return base_n * (d + 2)
+
+
+def is_saltelli_base(n: int) -> bool:
+    """Whether ``n`` may be Saltelli's base N: a power of two >= 2 (SALib warns for others)."""
+    return n >= 2 and not n & (n - 1)
+
+
+def _saltelli_design(n: int, d: int, seed: int) -> np.ndarray:
+    """Saltelli's design of ``n = N (d + 2)`` rows (SALib), in the unit cube."""
+    base_n, rest = divmod(n, d + 2)
+    if rest or not is_saltelli_base(base_n):  # a study refuses it first, naming sampling.n
+        raise InputError(
+            f"Saltelli's design needs N (d + 2) samples with N a power of two >= 2 (d = {d}), "
+            f"got {n}",
+            key="n",
+        )
+    problem = {"num_vars": d, "names": [f"x{j}" for j in range(d)], "bounds": [[0.0, 1.0]] * d}
+    rng = np.random.default_rng(np.random.SeedSequence(seed))
+    return salib_sobol.sample(problem, base_n, calc_second_order=False, scramble=True, seed=rng)
+
+
 #: Sampling designs by name.
-DESIGNS = {"random": _random_design, "lhs": _lhs_design, "sobol": _sobol_design}
+DESIGNS = {
+    "random": _random_design,
+    "lhs": _lhs_design,
+    "sobol": _sobol_design,
+    "saltelli": _saltelli_design,
+}
 
 
 def design(n: int, d: int, seed: int, method: str = "sobol") -> np.ndarray:
@@ -85,8 +125,9 @@ def design(n: int, d: int, seed: int, method: str = "sobol") -> np.ndarray:
         Number of random variables.
     seed : int
         Root seed (>= 0).
-    method : {"random", "lhs", "sobol"}
-        Design (see the module docstring).
+    method : {"random", "lhs", "sobol", "saltelli"}
+        Design (see the module docstring); ``saltelli`` takes ``n`` = N (d + 2)
+        (:func:`saltelli_samples`) with N a power of two.
     """
     if method not in DESIGNS:
         raise InputError(

@@ -31,6 +31,8 @@ __all__ = [
     "SAMPLING",
     "TOP_LEVEL",
     "MAX_SAMPLES",
+    "MAX_AXIS_VALUES",
+    "MIN_BYTES_PER_SIMULATION",
     "MATERIAL_KEY",
     "NUMERIC_SCENE_KEYS",
     "ROW_TABLE",
@@ -45,6 +47,12 @@ __all__ = [
     "MAX_SEED",
 ]
 
+#: The least memory one simulation's results hold [bytes]: the per-simulation outputs and run
+#: settings of :mod:`pound_mc.study.dataset` (98 bytes), twice (the arrays and the dataset);
+#: the tests hold it to them.
+MIN_BYTES_PER_SIMULATION = 196
+#: Most values of one grid axis: a spectrum of a million points is a typing error.
+MAX_AXIS_VALUES = 10**6
 #: Largest number of samples per grid point (2^24: Sobol designs and memory stay sane).
 MAX_SAMPLES = 2**24
 #: Largest seed: the dataset keeps ``seed`` and ``sampling_seed`` as netCDF attributes, whose
@@ -97,7 +105,7 @@ STUDY = Table(
               maximum=MAX_SEED),
         Field("description", "string", "Free text, kept in the dataset.", default=""),
         Field("chunk_size", "integer", "Simulations per chunk file (default about 1/50 of the "
-              "study, between 256 and 8192).", minimum=1),
+              "study, between 256 and 8192).", minimum=1, maximum=MAX_SAMPLES),
     ),
 )  # fmt: skip
 
@@ -116,7 +124,8 @@ GRID_AXIS = Table(
         Field("start", "number", "First value.", unit="as the key", required=True),
         Field("stop", "number", "Last value (differs from start when num > 1).",
               unit="as the key", required=True),
-        Field("num", "integer", "Number of values.", required=True, minimum=1),
+        Field("num", "integer", "Number of values.", required=True, minimum=1,
+              maximum=MAX_AXIS_VALUES),
     ),
 )  # fmt: skip
 
@@ -125,9 +134,11 @@ SAMPLING = Table(
     "Random variables: `n` samples at every grid point and record, the same design points "
     "everywhere (common random numbers).",
     (
-        Field("n", "integer", "Samples per grid point and record.", default=1, minimum=1,
-              maximum=MAX_SAMPLES),
-        Field("method", "string", "Design of the samples.", default="sobol",
+        Field("n", "integer", "Samples per grid point and record; with `method = "
+              "\"saltelli\"` the base N, a power of two >= 2: N (D + 2) samples for D sampled "
+              "keys.", default=1, minimum=1, maximum=MAX_SAMPLES),
+        Field("method", "string", "Design of the samples; `saltelli`: Saltelli's design "
+              "(SALib) for Sobol' sensitivity indices (`pound-mc sensitivity`).", default="sobol",
               choices=tuple(sorted(sampling.DESIGNS))),
         Field("seed", "integer", "Seed of the design (default: the study's seed).", minimum=0,
               maximum=MAX_SEED),
