@@ -70,6 +70,7 @@ from pound_mc.integrators.outputs import (
     ONSET_PEAK,
     ONSET_S,
     ONSET_ZHD,
+    PEAK_DISP_LEFT,
     PRE_E0,
     PRE_E_D,
     PRE_E_IN,
@@ -130,12 +131,12 @@ def adaptive_pair(
     e0 = 0.5 * (v0 * v0 + w0 * w0 * q0 * q0)
     e0 += 0.5 * (v1 * v1 + w1 * w1 * q1 * q1)
     mode = int(pre[PRE_MODE]) if pre.size > 0 else 0
-    # the peak force alone: no energies and no floor peaks (neither moves the state)
+    # the check's run: no energies; the floors' peaks from a contact onset (PRE_RESUME_ONSET)
     lean = mode == PRE_RESUME_PEAK or mode == PRE_RESUME_ONSET
+    floors = not lean or mode == PRE_RESUME_ONSET
     # where the run starts: k_grid is the index of the next grid point within the interval
-    i, s, k_grid, steps, e_in, e_d, e0, q0, q1, v0, v1, pk0, pk1, peak_f, cd, zhd = _resumed(
-        pre, mode, lean, q0, q1, v0, v1, e0, cd
-    )
+    (i, s, k_grid, steps, e_in, e_d, e0, q0, q1, v0, v1, pk0, pk1, peak_f, cd,
+     zhd) = _resumed(pre, mode, lean, q0, q1, v0, v1, e0, cd)  # fmt: skip
     phase = 0
     w_c = peak_t = impacts = impulse = 0.0
     pending = False  # an episode not yet counted as an impact
@@ -194,7 +195,8 @@ def adaptive_pair(
                     slope = (ag[i + 1] - ag[i]) * inv_dt
                 (quiet, hh, q0, q1, v0, v1, dc0, ddc0, xf0, xfd0, xf1, xfd1, pk0, pk1,
                  run) = _quiet_step(k_grid, s, ag0, slope, q0, q1, v0, v1, dc0, ddc0, xf0, xfd0,
-                                    xf1, xfd1, pk0, pk1, en0, run, lean, lin, md, geo,
+                                    xf1, xfd1, pk0, pk1, en0, run, lean, floors, lin, md,
+                                    geo,
                                     km)  # fmt: skip
                 if not quiet:
                     break  # the general step below takes this grid step
@@ -231,13 +233,13 @@ def adaptive_pair(
                 (opened, hh, nq0, nq1, nv0, nv1, dc0, ddc0, xf0, xfd0, xf1, xfd1, en0, e_in, e_d,
                  pk0, pk1) = _linear_step(k_grid, s, ag0, slope, q0, q1, v0, v1, fresh, dc0, ddc0,
                                           xf0, xfd0, xf1, xfd1, en0, e_in, e_d, pk0, pk1, lean,
-                                          lin, md, geo, km)  # fmt: skip
+                                          floors, lin, md, geo, km)  # fmt: skip
                 fresh = True
                 if opened and mode == PRE_RUN_TO_CONTACT:
                     return
                 if opened and onsets and same_fine:  # the check's run is this one up to here
                     _snapshot_onset(out[N_OUT + 1 :], i, s, k_grid, steps - 1, q0, q1, v0, v1,
-                                    peak_f, cd, zhd)  # fmt: skip
+                                    peak_f, cd, zhd, pk0, pk1)  # fmt: skip
                 q0, q1, v0, v1 = nq0, nq1, nv0, nv1
                 s += hh
                 if opened:
@@ -263,7 +265,7 @@ def adaptive_pair(
                     i * dt_rec + s, dt_rec - s, s, ag0, slope, q0, q1, v0, v1, phase, hc, h_rk,
                     t_onset, zhd, cd, kpot, kc4, same_fine, fsal, fc_end, ae0, ae1, roots, rooted,
                     e_in, e_d, w_c, impulse, peak_f, peak_t, peak_e, e_ep, maxpen, impacts,
-                    pending, pk0, pk1, lean, pot, model, b, km, geo, ramp, bounds, h, m_sub,
+                    pending, pk0, pk1, floors, pot, model, b, km, geo, ramp, bounds, h, m_sub,
                 )  # fmt: skip
                 if counted:  # the episode is an impact
                     nlog = log_impact_in(logs, nlog, v_ep)
@@ -290,7 +292,7 @@ def adaptive_pair(
         _snapshot_pair(pre, npts - 1, e_in, e_d, steps, e0, q0, q1, v0, v1, pk0, pk1)
         return
     if lean:
-        peak_only(out, cout, peak_f, status)
+        _finish_lean(out, cout, peak_f, status, floors, side, pk0, pk1)
         return
     if store and status == STATUS_OK:
         _store_pair(npts - 1, q0, q1, v0, v1, f0, f1, ps0, ps1, gp, b, cd, zhd, phase,
@@ -408,9 +410,18 @@ def _snapshot_pair(pre, i, e_in, e_d, steps, e0, q0, q1, v0, v1, pk0, pk1):
 
 
 @jit(inline=True)
-def _snapshot_onset(pre, i, s, k_grid, steps, q0, q1, v0, v1, peak_f, cd, zhd):
-    """A ``PRE_RESUME_ONSET`` start: the state at a linear step's start (peak force alone)."""
-    _snapshot_pair(pre, i, 0.0, 0.0, steps, 0.0, q0, q1, v0, v1, 0.0, 0.0)
+def _finish_lean(out, cout, peak_f, status, floors, side, pk0, pk1):
+    """The outputs of the accuracy check's run: the peak force and, from an onset, the floors'."""
+    peak_only(out, cout, peak_f, status)
+    if floors and status == STATUS_OK:
+        out[PEAK_DISP_LEFT + side[0]] = pk0
+        out[PEAK_DISP_LEFT + side[1]] = pk1
+
+
+@jit(inline=True)
+def _snapshot_onset(pre, i, s, k_grid, steps, q0, q1, v0, v1, peak_f, cd, zhd, pk0, pk1):
+    """A ``PRE_RESUME_ONSET`` start: a linear step's start (state, peak force, floors' peaks)."""
+    _snapshot_pair(pre, i, 0.0, 0.0, steps, 0.0, q0, q1, v0, v1, pk0, pk1)
     pre[ONSET_S] = s
     pre[ONSET_GRID] = k_grid
     pre[ONSET_PEAK] = peak_f

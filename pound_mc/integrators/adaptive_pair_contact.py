@@ -327,7 +327,7 @@ def _substep_length(since, room, q0, q1, v0, v1, phase, hc, model, b, cd, zhd, k
 def _contact_substep(
     t, room, s, ag0, slope, q0, q1, v0, v1, phase, hc, h_rk, t_onset, zhd, cd, kpot, kc4,
     same_fine, fsal, fc_end, ae0, ae1, roots, rooted, e_in, e_d, w_c, impulse, peak_f, peak_t,
-    peak_e, e_ep, maxpen, impacts, pending, pk0, pk1, lean, pot, model, b, km, geo, ramp,
+    peak_e, e_ep, maxpen, impacts, pending, pk0, pk1, floors, pot, model, b, km, geo, ramp,
     bounds, h, m_sub,
 ):  # fmt: skip
     """One contact sub-step (RK4) from local time ``s`` [s], cut at the first switch in it.
@@ -435,7 +435,7 @@ def _contact_substep(
             impacts += 1.0  # the episode is an impact
             pending = False
             counted = True
-    if not lean:
+    if floors:
         # peak floor displacements over the sub-step (Hermite)
         pk0 = _track_floor(f0 * q0, f0 * v0, f0 * nq0, f0 * nv0, hs, pk0)
         pk1 = _track_floor(f1 * q1, f1 * v1, f1 * nq1, f1 * nv1, hs, pk1)

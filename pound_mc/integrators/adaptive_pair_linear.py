@@ -295,7 +295,7 @@ def _quiet_floor_peak(
 @jit(llvm_inline=True)
 def _quiet_step(
     k_grid, s, ag0, slope, q0, q1, v0, v1, dc0, ddc0, xf0, xfd0, xf1, xfd1, pk0, pk1, en0, run,
-    lean, lin, md, geo, km,
+    lean, floors, lin, md, geo, km,
 ):  # fmt: skip
     """One step of a quiet run: a whole grid step where nothing happens inside it.
 
@@ -305,7 +305,7 @@ def _quiet_step(
     (ground acceleration ``ag0 + slope t``); the state, the penetration ``dc0`` and its rate
     ``ddc0``, the floors' displacements and velocities ``xf, xfd`` and their peaks ``pk`` at
     its start; ``en0``: the sums of :func:`_ends` at the run's start, ``run``: the run's sums
-    (:func:`_quiet_start`); ``lean``: no energies and no floor peaks.  Returns whether the
+    (:func:`_quiet_start`); ``lean``: no energies; ``floors``: the floor peaks.  Returns whether the
     step was quiet, its length [s] and all of these at its end; where it was not, the state as
     it was (the general step takes it).
     """
@@ -330,6 +330,8 @@ def _quiet_step(
     if not quiet:  # the general step takes this grid step
         return False, hh, q0, q1, v0, v1, dc0, ddc0, xf0, xfd0, xf1, xfd1, pk0, pk1, run
     if not lean:
+        run = _quiet_add(run, hh, slope, p0s, p1s, en0, nv0, nv1, km)
+    if floors:
         # a floor extremum that may be a new peak: found here as the general step
         # would (the state does not depend on it)
         pk0 = _quiet_floor_peak(f0, 0, xf0, xfd0, xb0, xdb0, pk0, q0, q1, v0, v1,
@@ -338,7 +340,6 @@ def _quiet_step(
         pk1 = _quiet_floor_peak(f1, 1, xf1, xfd1, xb1, xdb1, pk1, q0, q1, v0, v1,
                                 p0s, slope, hh, w0, z0, g0, w1, z1, g1,
                                 herm_tol)  # fmt: skip
-        run = _quiet_add(run, hh, slope, p0s, p1s, en0, nv0, nv1, km)
         pk0 = max(pk0, abs(xb0))
         pk1 = max(pk1, abs(xb1))
         xf0, xfd0, xf1, xfd1 = xb0, xdb0, xb1, xdb1
@@ -348,7 +349,7 @@ def _quiet_step(
 @jit(llvm_inline=True)
 def _linear_step(
     k_grid, s, ag0, slope, q0, q1, v0, v1, fresh, dc0, ddc0, xf0, xfd0, xf1, xfd1, en0, e_in,
-    e_d, pk0, pk1, lean, lin, md, geo, km,
+    e_d, pk0, pk1, lean, floors, lin, md, geo, km,
 ):  # fmt: skip
     """The exact linear step to the next grid point, or to a contact onset inside it.
 
@@ -359,8 +360,8 @@ def _linear_step(
     cubic Hermite bound, found on the exact solution), located by safeguarded Newton, or a
     penetration since a located separation that grows again.  Returns whether the step ends at
     an onset, its length [s], the state, the penetration and its rate at its end, and the
-    floors, the energy sums, the energies and the floor peaks there (the last three as they
-    were where ``lean``).
+    floors, the energy sums, the energies and the floor peaks there (the energy sums and the
+    energies as they were where ``lean``, the floors and their peaks where not ``floors``).
     """
     m_sub, h, dt_rec, cf0, cf1, herm_tol = lin
     w0, z0, g0, w1, z1, g1 = md
@@ -429,6 +430,7 @@ def _linear_step(
                                         km)  # fmt: skip
         e_in += de_in
         e_d += de_d
+    if floors:
         # peak floor displacements: where the cubic Hermite bound says an extremum
         # inside the step may be a new peak, find it on the exact solution
         pk0 = _floor_peak(f0, 0, xf0, xfd0, f0 * nq0, f0 * nv0, pk0, q0, q1, v0, v1,

@@ -34,10 +34,12 @@ import numpy as np
 from pound_mc._jit import jit
 from pound_mc.errors import InputError
 from pound_mc.integrators.accuracy import (
-    ADAPTIVE_SUBSTEPS_FACTOR,
+    COMPANION_DT_S,
+    COMPANION_SUBSTEPS,
+    check_substeps,
     flag_inaccurate,
+    output_change,
     shortest_contact_s,
-    substep_check_due,
 )
 from pound_mc.integrators.adaptive import adaptive
 from pound_mc.integrators.adaptive_bilinear import adaptive_bilinear, bilinear_pair_steps
@@ -56,14 +58,13 @@ from pound_mc.integrators.outputs import (
     OUTPUTS,
     PEAK_DISP_LEFT,
     PEAK_DISP_RIGHT,
-    PEAK_FORCE,
     PRE_MODE,
     PRE_RESUME,
     PRE_RESUME_ONSET,
-    PRE_RESUME_PEAK,
     PRE_RUN_TO_CONTACT,
     STATUS,
     STATUS_NOT_CONVERGED,
+    STATUS_OK,
     UNSTABLE_ENERGY_FRACTION,
     fail,
     pre_size,
@@ -79,6 +80,7 @@ from pound_mc.integrators.settings import (
 from pound_mc.integrators.toolkit import MAX_STEPS
 
 __all__ = [
+    "FINER_SIZE",
     "METHODS",
     "OUTPUTS",
     "CONTACT_OUTPUTS",
@@ -103,8 +105,7 @@ class KernelResult(NamedTuple):
     outputs: dict
     contacts: dict
     history: tuple | None
-    #: Peak displacement [m] of each building code (``side``: 0 the first, 1 the last,
-    #: 2... a row's others), NaN unless ok.
+    #: Peak displacement [m] of each building code (``side``: 0 the first, 1 the last, 2...)
     code_peaks: np.ndarray
 
 
@@ -291,6 +292,8 @@ def _named(out):
 
 #: The empty ``pre`` of a plain run (kernels never write an empty array).
 _NO_PRE = np.zeros(0)
+#: Length of :func:`run_kernel`'s ``finer_start``.
+FINER_SIZE = 1 + ONSET_SIZE
 
 
 @functools.lru_cache(maxsize=64)
@@ -324,6 +327,9 @@ def run_kernel(
     storeys=None,
     restitution: dict | None = None,
     storey_out=None,
+    contact_steps_flag: bool = True,
+    finer_start=None,
+    resume=None,
 ) -> KernelResult:
     """Run one simulation on prepared modal arrays.
 
@@ -351,6 +357,18 @@ def run_kernel(
     storey_out : numpy.ndarray, optional
         ``(n_storeys, 2)`` float array that receives each yielding run's storey peak
         ``|drift|`` and final drift [m] (rows as the storey table; NaN unless ok).
+    contact_steps_flag : bool
+        Flag a fixed-step run ``inaccurate`` where its shortest contact lasts fewer than
+        :data:`~pound_mc.integrators.accuracy.MIN_STEPS_PER_CONTACT` steps (the criterion of a
+        run without the accuracy check; :func:`pound_mc.scene.simulate` runs the check).
+    finer_start : numpy.ndarray, optional
+        :data:`FINER_SIZE` values that receive (``adaptive`` on an SDOF pair, else NaN) 1.0
+        where the accuracy check's finer run would be this run, bit for bit (no sub-step
+        shortened by a bound set by ``substeps``), else 0; then the state at the last contact
+        onset up to which it is this run.
+    resume : numpy.ndarray, optional
+        ``finer_start[1:]`` of a run of the same pair: run from there (``PRE_RESUME_ONSET``),
+        for the peak force and the floors' peaks alone (the accuracy check's finer run).
     """
     settings = kernel_settings(model, method, relation=relation, dt_s=dt_s, substeps=substeps,
                                restitution=restitution)  # fmt: skip
@@ -364,16 +382,22 @@ def run_kernel(
     v = np.zeros(n) if v0 is None else np.array(v0, dtype=float)
     # a row's buildings past the first and last: each code's peak past the outputs
     n_codes = int(np.max(side)) + 1 if np.size(side) else 0
-    out = np.empty(N_OUT + (n_codes if n_codes > 2 else 0))
+    run = _RUNS[settings.method]
+    if run is _run_adaptive and pair and storeys is None:
+        run = _run_adaptive_pair
+    # past the outputs: each code's peak (a row), or a pair's finer_start
+    onsets = ONSET_SIZE if finer_start is not None and resume is None else 0
+    out = np.empty(N_OUT + (n_codes if n_codes > 2 else (1 + onsets) * (run is _run_adaptive_pair)))
+    pre = _NO_PRE
+    if resume is not None and run is _run_adaptive_pair:
+        pre = np.array(resume, dtype=np.float64)
+        pre[PRE_MODE] = PRE_RESUME_ONSET
     cout = np.empty((nc, N_COUT))
     if history:  # NaN where a run that stopped (unstable, not converged) did not reach
         hx, hd, hf = (np.full((ag.size, k), np.nan) for k in (nf, nc, nc))
     else:
         hx, hd, hf = _no_histories(nf, nc)
     f8 = np.float64
-    run = _RUNS[settings.method]
-    if run is _run_adaptive and pair:
-        run = _run_adaptive_pair
     if storeys is not None:
         if storey_out is None:
             storey_out = np.empty((np.size(storeys[1]) // N_STOREY_COLUMNS, 2))
@@ -389,15 +413,19 @@ def run_kernel(
         np.ascontiguousarray(side, dtype=np.int64), np.ascontiguousarray(psi, dtype=f8),
         np.ascontiguousarray(gap, dtype=f8), np.ascontiguousarray(meff, dtype=f8),
         np.ascontiguousarray(beta, dtype=f8), np.ascontiguousarray(xi, dtype=f8),
-        settings, q, v, out, cout, hx, hd, hf, _NO_PRE,
+        settings, q, v, out, cout, hx, hd, hf, pre,
     )  # fmt: skip
     fixed_restitution(out, settings, xi[0] if np.size(xi) else 0.0)
-    if settings.method != ADAPTIVE:
+    if settings.method != ADAPTIVE and contact_steps_flag:
         t_c = shortest_contact_s(model, cout[:, C_MAX_PENETRATION], beta, meff).min()
         out[STATUS] = flag_inaccurate(out[STATUS], out[IMPACTS], t_c, dt_s)
     outputs = dict(zip(OUTPUTS, out[:N_OUT].tolist(), strict=True))
     contacts = dict(zip(CONTACT_OUTPUTS, cout.T.copy(), strict=True))
     code_peaks = out[N_OUT:].copy() if n_codes > 2 else out[[PEAK_DISP_LEFT, PEAK_DISP_RIGHT]]
+    if finer_start is not None:
+        finer_start[:] = np.nan
+        if run is _run_adaptive_pair:
+            finer_start[: out.size - N_OUT] = out[N_OUT:]
     return KernelResult(outputs, contacts, (hx, hd, hf) if history else None, code_peaks)
 
 
@@ -446,7 +474,8 @@ def _sdof_adaptive(ag, dt_rec, tl, zl, ml, tr, zr, mr, gap, beta, xi, dt_s, sett
     ``PRE_RUN_TO_CONTACT``, its linear response up to the first contact is run once, from
     member ``index[g]``, into ``shared[g]``; else every simulation ``k`` resumes from
     ``shared[group[k]]`` in that mode (``PRE_RESUME``, or ``PRE_RESUME_PEAK`` and
-    ``PRE_RESUME_ONSET`` for the peak force alone, :mod:`~pound_mc.integrators.outputs`).
+    ``PRE_RESUME_ONSET`` for the peak force (and the floors' peaks),
+    :mod:`~pound_mc.integrators.outputs`).
     One kernel for every pass: the SDOF-pair kernel is linked into one compiled caller, not
     several.
     """
@@ -547,70 +576,60 @@ def simulate_sdof_pairs(
         out = np.empty((nsim, N_OUT))
         _threaded(_sdof_fixed, nsim, acc, dt_rec, *arrays, settings, out)
         fixed_restitution(out, settings, arrays[8])
-        half = None
-        if accuracy_check:
-            half = np.empty_like(out)  # step doubling (pound_mc.integrators.accuracy)
-            _threaded(_sdof_fixed, nsim, acc, dt_rec, *arrays[:9], arrays[9] / 2, settings,
-                      half)  # fmt: skip
-        ml, mr, beta_k, dt_k = arrays[2], arrays[5], arrays[7], arrays[9]
-        t_c = shortest_contact_s(contact_model, out[:, MAX_PENETRATION], beta_k,
-                                 ml * mr / (ml + mr))  # fmt: skip
-        out[:, STATUS] = flag_inaccurate(out[:, STATUS], out[:, IMPACTS], t_c, dt_k,
-                                         *_peaks(out, half))  # fmt: skip
+        if accuracy_check:  # against adaptive at its defaults (pound_mc.integrators.accuracy)
+            hit = np.flatnonzero(out[:, STATUS] == STATUS_OK)
+            other = np.full((nsim, N_OUT), np.nan)
+            other[hit] = _sdof_adaptive_batch(
+                acc, dt_rec, [a[hit] for a in arrays[:9]], _companion(settings),
+                np.full(hit.size, COMPANION_DT_S),
+            )[:, :N_OUT]  # fmt: skip
+            out[:, STATUS] = flag_inaccurate(out[:, STATUS], None, np.inf, 0.0,
+                                             change=output_change(out, other))  # fmt: skip
+        else:
+            ml, mr, beta_k, dt_k = arrays[2], arrays[5], arrays[7], arrays[9]
+            t_c = shortest_contact_s(contact_model, out[:, MAX_PENETRATION], beta_k,
+                                     ml * mr / (ml + mr))  # fmt: skip
+            out[:, STATUS] = flag_inaccurate(out[:, STATUS], out[:, IMPACTS], t_c, dt_k)
         return _named(out)
-    # simulations that differ only in contact parameters share their linear response up to
-    # the first contact (periods, damping ratios, masses, gap and step define a group)
+    out = _sdof_adaptive_batch(acc, dt_rec, arrays[:9], settings, arrays[9])
+    fixed_restitution(out, settings, arrays[8])
+    if accuracy_check:
+        # the finer run gives its peak force and the floors' peaks (those of a full run,
+        # faster), from the last contact onset up to which it is the run; a run whose finer
+        # run would take its very sub-steps (the slot past the outputs) is not run again
+        check_substeps(out, settings, lambda hit, finer, fine: _threaded(
+            _sdof_adaptive, hit.size, acc, dt_rec, *[a[hit] for a in arrays], finer, fine,
+            np.arange(hit.size, dtype=np.int64), np.arange(hit.size, dtype=np.int64),
+            out[hit, N_OUT + 1 :], PRE_RESUME_ONSET,
+        ), same=out[:, N_OUT] == 1.0)  # fmt: skip
+    return _named(out[:, :N_OUT])
+
+
+def _sdof_adaptive_batch(acc, dt_rec, arrays, settings, dt_s) -> tuple:
+    """``adaptive`` on SDOF pairs (``arrays``: :func:`simulate_sdof_pairs`'s first nine).
+
+    Simulations that differ only in contact parameters share their linear response up to the
+    first contact (periods, damping ratios, masses, gap and step define a group): it is run
+    once per group into ``shared``, and every simulation resumes from its group's row.
+    Returns the outputs; past them a slot (1 where the accuracy check's finer run would be the
+    run) and the state from which that run may start (``PRE_RESUME_ONSET``).
+    """
+    arrays = [*arrays, np.array(dt_s, dtype=np.float64, order="C")]
+    nsim = arrays[0].size
     first, group = _linear_groups(np.stack([arrays[k] for k in (0, 1, 2, 3, 4, 5, 6, 9)], axis=1))
     shared = np.zeros((first.size, pre_size(2, 2)))
-    # a slot past the outputs: 1 where the accuracy check's run would take the run's very
-    # sub-steps (adaptive_pair), so that its peak force is known without running it; then the
-    # state from which the check's run may start (PRE_RESUME_ONSET: it is the run's up to there)
     out = np.zeros((nsim, N_OUT + 1 + ONSET_SIZE))
     _threaded(_sdof_adaptive, first.size, acc, dt_rec, *arrays, settings, out, first, group,
               shared, PRE_RUN_TO_CONTACT)  # fmt: skip
     everyone = np.arange(nsim, dtype=np.int64)
     _threaded(_sdof_adaptive, nsim, acc, dt_rec, *arrays, settings, out, everyone, group, shared,
               PRE_RESUME)  # fmt: skip
-    fixed_restitution(out, settings, arrays[8])
-    if not accuracy_check:
-        return _named(out)
-    # the finer run gives only its peak force (the same as a full run's, faster), from the
-    # last contact onset up to which it is the run
-    _check_substeps(out, settings, lambda hit, finer, fine: _threaded(
-        _sdof_adaptive, hit.size, acc, dt_rec, *[a[hit] for a in arrays], finer, fine,
-        np.arange(hit.size, dtype=np.int64), np.arange(hit.size, dtype=np.int64),
-        out[hit, N_OUT + 1 :], PRE_RESUME_ONSET,
-    ), same=out[:, N_OUT] == 1.0)  # fmt: skip
-    return _named(out)
+    return out
 
 
-def _peaks(out, half) -> tuple:
-    """Peak forces of the runs and of their step-doubling runs (none without the check)."""
-    return (None, None) if half is None else (out[:, PEAK_FORCE], half[:, PEAK_FORCE])
-
-
-def _check_substeps(out, settings, rerun, same=None) -> None:
-    """``adaptive``: flag the runs whose peak force changes with more contact sub-steps.
-
-    ``rerun(hit, finer, fine)`` runs simulations ``hit`` again with ``finer``, the run's
-    ``settings`` with :data:`~pound_mc.integrators.accuracy.ADAPTIVE_SUBSTEPS_FACTOR` times the
-    sub-steps, into ``fine``; every run with a contact (status ok) is checked
-    (:mod:`pound_mc.integrators.accuracy`), except those that ``same`` (a mask, optional) says
-    the finer run would take with the same sub-steps (every sub-step bound set by ``substeps``
-    slack even at the finer setting): its peak force would be theirs, bit for bit.
-    """
-    check = substep_check_due(out[:, PEAK_FORCE], out[:, STATUS])
-    if same is not None:
-        check &= ~same
-    hit = np.flatnonzero(check)
-    if hit.size == 0:
-        return
-    fine = np.empty((hit.size, N_OUT))
-    rerun(hit, settings._replace(substeps=settings.substeps * ADAPTIVE_SUBSTEPS_FACTOR), fine)
-    peak_fine = out[:, PEAK_FORCE].copy()
-    peak_fine[hit] = fine[:, PEAK_FORCE]
-    out[:, STATUS] = flag_inaccurate(out[:, STATUS], out[:, IMPACTS], np.inf, 0.0,
-                                     out[:, PEAK_FORCE], peak_fine)  # fmt: skip
+def _companion(settings):
+    """The settings of the ``adaptive`` run a fixed-step run is compared with (its defaults)."""
+    return settings._replace(method=ADAPTIVE, substeps=float(COMPANION_SUBSTEPS))
 
 
 @jit(inline=True)
@@ -729,33 +748,53 @@ def simulate_scene_batch(
     if settings.method != ADAPTIVE:
         _threaded(_scene_fixed, nsim, *pair, dt_s, settings, out, cout, _NO_PRE)
         fixed_restitution(out, settings, xi)  # before the flags: runs flagged keep their numbers
-        half = None
-        if accuracy_check:
-            half = np.empty_like(out)  # step doubling (pound_mc.integrators.accuracy)
-            _threaded(_scene_fixed, nsim, *pair, dt_s / 2, settings, half, np.empty_like(cout),
-                      _NO_PRE)  # fmt: skip
-        meff = np.asarray(arrays["meff"], dtype=f8)[None, :]
-        t_c = shortest_contact_s(contact_model, cout[:, :, C_MAX_PENETRATION], beta[:, None], meff)
-        t_c = t_c.min(axis=1)
-        out[:, STATUS] = flag_inaccurate(out[:, STATUS], out[:, IMPACTS], t_c, dt_s,
-                                         *_peaks(out, half))  # fmt: skip
+        if accuracy_check:  # against adaptive at its defaults (pound_mc.integrators.accuracy)
+            hit = np.flatnonzero(out[:, STATUS] == STATUS_OK)
+            other, other_cout = np.full_like(out, np.nan), np.full_like(cout, np.nan)
+            other[hit], other_cout[hit] = _scene_adaptive_batch(
+                pair[:-3], gap[hit], beta[hit], xi[hit], np.full(hit.size, COMPANION_DT_S),
+                _companion(settings),
+            )[:2]  # fmt: skip
+            change = output_change(out, other, cout, other_cout)
+            out[:, STATUS] = flag_inaccurate(out[:, STATUS], None, np.inf, 0.0, change=change)
+        else:
+            meff = np.asarray(arrays["meff"], dtype=f8)[None, :]
+            t_c = shortest_contact_s(contact_model, cout[:, :, C_MAX_PENETRATION],
+                                     beta[:, None], meff).min(axis=1)  # fmt: skip
+            out[:, STATUS] = flag_inaccurate(out[:, STATUS], out[:, IMPACTS], t_c, dt_s)
     else:
-        # simulations with the same gaps and step share their linear response up to the first
-        # contact (the buildings are the batch's)
-        first, group = _linear_groups(np.column_stack([gap, dt_s]))
-        shared = np.zeros((first.size, pre_size(arrays["omega"].size, arrays["phi"].shape[0])))
-        _threaded(_scene_adaptive, first.size, *pair, dt_s, settings, np.empty_like(out),
-                  np.empty_like(cout), first, group, shared, PRE_RUN_TO_CONTACT)  # fmt: skip
-        _threaded(_scene_adaptive, nsim, *pair, dt_s, settings, out, cout,
-                  np.arange(nsim, dtype=np.int64), group, shared, PRE_RESUME)  # fmt: skip
+        out, cout, group, shared = _scene_adaptive_batch(pair[:-3], gap, beta, xi, dt_s,
+                                                         settings)  # fmt: skip
         fixed_restitution(out, settings, xi)
-    if settings.method == ADAPTIVE and accuracy_check:
-        # the finer run gives only its peak force (the same as a full run's, faster)
-        _check_substeps(out, settings, lambda hit, finer, fine: _threaded(
-            _scene_adaptive, hit.size, *pair[:-3], gap[hit], beta[hit], xi[hit], dt_s[hit],
-            finer, fine, np.empty((hit.size, nc, N_COUT)), np.arange(hit.size, dtype=np.int64),
-            group[hit], shared, PRE_RESUME_PEAK,
-        ))  # fmt: skip
+        if accuracy_check:  # the finer run resumes from the shared linear response
+            check_substeps(out, settings, lambda hit, finer, fine, fine_cout: _threaded(
+                _scene_adaptive, hit.size, *pair[:-3], gap[hit], beta[hit], xi[hit], dt_s[hit],
+                finer, fine, fine_cout, np.arange(hit.size, dtype=np.int64), group[hit],
+                shared, PRE_RESUME,
+            ), cout=cout)  # fmt: skip
     contacts = {name: cout[:, :, k] for k, name in enumerate(CONTACT_OUTPUTS)}
     contacts["impacts"] = contacts["impacts"].astype(np.int32)
     return _named(out), contacts
+
+
+def _scene_adaptive_batch(buildings, gap, beta, xi, dt_s, settings) -> tuple:
+    """``adaptive`` on many simulations of one pair of buildings.
+
+    ``buildings``: the record and the modal arrays, in :func:`_scene_args`'s order up to
+    ``meff``.
+
+    Simulations with the same gaps and step share their linear response up to the first
+    contact: run once per group into ``shared``, every simulation resumes from its group's
+    row.  Returns the outputs, the per-contact outputs, each simulation's group and ``shared``.
+    """
+    nsim, nc = gap.shape
+    first, group = _linear_groups(np.column_stack([gap, dt_s]))
+    omega, phi = buildings[2], buildings[5]
+    shared = np.zeros((first.size, pre_size(omega.size, phi.shape[0])))
+    out, cout = np.empty((nsim, N_OUT)), np.empty((nsim, nc, N_COUT))
+    _threaded(_scene_adaptive, first.size, *buildings, gap, beta, xi, dt_s, settings,
+              np.empty_like(out), np.empty_like(cout), first, group, shared,
+              PRE_RUN_TO_CONTACT)  # fmt: skip
+    _threaded(_scene_adaptive, nsim, *buildings, gap, beta, xi, dt_s, settings, out, cout,
+              np.arange(nsim, dtype=np.int64), group, shared, PRE_RESUME)  # fmt: skip
+    return out, cout, group, shared

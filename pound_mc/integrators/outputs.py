@@ -97,7 +97,8 @@ def pre_size(n_modes: int, n_floors: int) -> int:
     return PRE_STATE + 2 * n_modes + n_floors
 
 
-# Mode 4 (SDOF-pair ``adaptive``): resume for the peak force alone, as mode 3, from the start of
+# Mode 4 (SDOF-pair ``adaptive``): resume for the peak force and the floors' peaks (no
+# energies; the peaks so far in the floors' slots of the state), from the start of
 # the linear step in which a contact began: the last onset before which the accuracy check's
 # finer run takes the run's very sub-steps, so that the two runs are bitwise the same up to
 # there.  The slots of a pair's ``pre`` are followed by the step's start within its interval,

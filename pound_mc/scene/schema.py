@@ -544,13 +544,15 @@ INTEGRATOR = Table(
         Field("tail_s", "number", "Free vibration after the record (zero ground acceleration) "
               "of runs with yielding buildings, for their residual drift.", unit="s",
               default=5.0, minimum=0.0, maximum=600.0),
-        Field("accuracy_check", "boolean", "Run every study simulation with a contact a second "
-              "time, finer (fixed-step methods at dt_s / 2, adaptive with twice the sub-steps), "
-              "and flag it inaccurate where the peak force changes by more than 0.5 %; a study "
-              "then runs each flagged simulation again with dt_s halved and substeps doubled, "
-              "up to 3 times (dataset: run_dt_s, run_substeps, refinements).  False saves that "
-              "second run (1.3-3 times the cost) and leaves sensitive runs unflagged.",
-              default=True),
+        Field("accuracy_check", "boolean", "Compare every run that ends ok with a second run "
+              "(fixed-step methods: adaptive at its defaults; adaptive with a contact: twice "
+              "the sub-steps) and flag it inaccurate where its peak force, a contact's peak "
+              "force, a building's peak displacement or ductility differs by more than 0.5 % "
+              "(of the peak force, the larger building's); pound-mc simulate and every study "
+              "run alike.  A study then runs each flagged simulation again with dt_s halved "
+              "and substeps doubled, up to 3 times (dataset: run_dt_s, run_substeps, "
+              "refinements).  False saves that second run (up to the cost of the run) and "
+              "leaves sensitive runs unflagged.", default=True),
     ),
 )  # fmt: skip
 

@@ -8,6 +8,7 @@ contacts', each building's (:func:`building_results`) and each yielding storey's
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field, replace
 from typing import Any
@@ -16,7 +17,16 @@ import numpy as np
 
 from pound_mc.errors import InputError
 from pound_mc.integrators import run_kernel
-from pound_mc.integrators.outputs import INELASTIC_OUTPUTS
+from pound_mc.integrators.accuracy import (
+    ADAPTIVE_SUBSTEPS_FACTOR,
+    COMPANION_DT_S,
+    COMPANION_SUBSTEPS,
+    flag_inaccurate,
+    judged_change,
+    substep_check_due,
+)
+from pound_mc.integrators.batch import FINER_SIZE
+from pound_mc.integrators.outputs import INELASTIC_OUTPUTS, STATUS_OK
 from pound_mc.scene import schema
 from pound_mc.scene.model import Scene
 
@@ -239,6 +249,46 @@ def building_results(scene: Scene, code_peaks, table=None, storey_out=None) -> l
     return out
 
 
+def _checked_status(res: SimulationResult, kernel, start, table) -> int:
+    """The status of an ``ok`` run after the accuracy check (:mod:`pound_mc.integrators.accuracy`).
+
+    ``kernel(**settings)``: :func:`~pound_mc.integrators.run_kernel` of the run's scene and
+    record; ``start``: the run's ``finer_start`` (``adaptive`` on an SDOF pair: whether its
+    finer run would be the run itself, and where that run may start, else NaN).
+    """
+    scene, o = res.scene, res.outputs
+    resume = None
+    if scene.method == "adaptive":
+        if start[0] == 1.0 or not substep_check_due(o["peak_force"], o["status"]):
+            return int(o["status"])
+        second = {"method": "adaptive", "dt_s": scene.dt_s,
+                  "substeps": scene.substeps * ADAPTIVE_SUBSTEPS_FACTOR}  # fmt: skip
+        if not np.isnan(start[0]):  # from the last onset up to which it is the run
+            resume = start[1:]
+    else:
+        second = {"method": "adaptive", "dt_s": COMPANION_DT_S, "substeps": COMPANION_SUBSTEPS}
+    storey_out = None if table is None else np.empty((table.shape[0], 2))
+    other = kernel(**second, storey_out=storey_out, resume=resume)
+    buildings = building_results(scene, other.code_peaks, table, storey_out)
+    contacts = resume is None  # a resumed run gives the peak force and the floors' peaks
+    change = judged_change(_judged(o, res.contacts, res.buildings, contacts),
+                           _judged(other.outputs, other.contacts, buildings, contacts))  # fmt: skip
+    return int(flag_inaccurate([o["status"]], None, np.inf, 0.0, change=change)[0])
+
+
+def _judged(outputs: dict, contacts: dict, buildings: list, per_contact: bool = True) -> dict:
+    """A run's judged quantities (:func:`~pound_mc.integrators.accuracy.judged_change`)."""
+    got = {
+        "peak_force": [outputs["peak_force"]],
+        "impacts": [outputs["impacts"]],
+        "peak_disp": [[b["peak_disp"] for b in buildings]],
+        "peak_ductility": [[b["peak_ductility"] for b in buildings]],
+    }
+    if per_contact:  # an SDOF pair's one contact is its peak force
+        got["contact_peak_force"] = [contacts["peak_force"]]
+    return got
+
+
 def simulate(
     scene: Scene,
     *,
@@ -247,8 +297,9 @@ def simulate(
     method: str | None = None,
     dt_s: float | None = None,
     substeps: int | None = None,
+    accuracy_check: bool | None = None,
 ) -> SimulationResult:
-    """Run one simulation of ``scene``.
+    """Run one simulation of ``scene``, with the accuracy check of a study's runs.
 
     Parameters
     ----------
@@ -262,6 +313,13 @@ def simulate(
     method, dt_s, substeps : optional
         Override the scene's integrator settings, within the bounds of the scene file's
         ``[integrator]`` keys.
+    accuracy_check : bool, optional
+        Override ``integrator.accuracy_check``: an ``ok`` run is compared with a second run
+        (:mod:`pound_mc.integrators.accuracy`: ``adaptive`` at its defaults for a fixed-step
+        run, twice the contact sub-steps for an ``adaptive`` run with a contact, unless that
+        run would be this one) and its status becomes ``inaccurate`` where a judged quantity
+        differs by more than 0.5 %; its numbers are kept.  False: only a fixed-step run's
+        steps-per-contact criterion.
 
     Raises
     ------
@@ -272,7 +330,7 @@ def simulate(
     -----
     The first call on a scene reads its record (tens of milliseconds through obspy); later
     calls on the same scene reuse it and the modal arrays, and cost the kernel plus a few
-    microseconds of Python.
+    microseconds of Python, and the check's second run where it is due.
     """
     for key, value in (("method", method), ("dt_s", dt_s), ("substeps", substeps)):
         if value is not None and (problem := schema.INTEGRATOR[key].problem(value)):
@@ -289,25 +347,22 @@ def simulate(
     if storeys is not None:
         acc = with_tail(acc, dt_rec, scene.tail_s)
         storey_out = np.empty((storeys[1].shape[0], 2))
-    outputs, contacts, hist, code_peaks = run_kernel(
-        acc,
-        dt_rec,
-        **arrays,
-        model=scene.contact_model,
-        method=m,
-        relation=scene.relation,
-        dt_s=dt_s,
-        substeps=substeps,
-        history=history,
-        storeys=storeys,
-        restitution=scene.restitution_rule(),
-        storey_out=storey_out,
-    )
+    check = scene.accuracy_check if accuracy_check is None else bool(accuracy_check)
+    kernel = functools.partial(run_kernel, acc, dt_rec, **arrays, model=scene.contact_model,
+                               relation=scene.relation, storeys=storeys,
+                               restitution=scene.restitution_rule())  # fmt: skip
+    start = np.empty(FINER_SIZE)  # where adaptive's finer run may start (SDOF pairs)
+    outputs, contacts, hist, code_peaks = kernel(
+        method=m, dt_s=dt_s, substeps=substeps, history=history, storey_out=storey_out,
+        contact_steps_flag=not check, finer_start=start,
+    )  # fmt: skip
     if (m, dt_s, substeps) != (scene.method, scene.dt_s, scene.substeps):
         scene = replace(scene, method=m, dt_s=dt_s, substeps=substeps)
     res = SimulationResult(outputs, contacts, scene)
     table = None if storeys is None else np.asarray(storeys[1], dtype=float)
     res.buildings = building_results(scene, code_peaks, table, storey_out)
+    if check and outputs["status"] == STATUS_OK:
+        outputs["status"] = _checked_status(res, kernel, start, table)
     if storey_out is not None:
         owner = None
         if scene.row is not None:  # a row's buildings by their place in it

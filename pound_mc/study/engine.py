@@ -31,12 +31,7 @@ import xarray as xr
 import pound_mc.integrators as integrators
 from pound_mc._version import __version__
 from pound_mc.errors import InputError, InputErrors, named_by
-from pound_mc.integrators.accuracy import (
-    ADAPTIVE_SUBSTEPS_FACTOR,
-    STATUS_INACCURATE,
-    flag_inaccurate,
-    substep_check_due,
-)
+from pound_mc.integrators.accuracy import ADAPTIVE_SUBSTEPS_FACTOR, STATUS_INACCURATE
 from pound_mc.integrators.batch import check_inelastic_method
 from pound_mc.integrators.outputs import STATUS_OK
 from pound_mc.integrators.threads import numba_threads
@@ -93,29 +88,6 @@ _STOREY_KEYS = {
 }
 # Keys the batch of a pair with a shear building takes per simulation (its modes are fixed).
 _SCENE_KERNEL_KEYS = ("contact.gap_m", "contact.beta", "integrator.dt_s")
-
-
-def _checked_status(scene, record, outputs: dict) -> int:
-    """The status of a run of its own scene, after the accuracy check a batch run gets.
-
-    As :func:`~pound_mc.integrators.simulate_sdof_pairs`: a fixed-step run is run again at
-    ``dt_s / 2``, an ``adaptive`` run that had a contact with
-    :data:`~pound_mc.integrators.accuracy.ADAPTIVE_SUBSTEPS_FACTOR` times the sub-steps; an
-    ``ok`` run whose peak force changes by more than
-    :data:`~pound_mc.integrators.accuracy.PEAK_FORCE_TOLERANCE` is ``inaccurate``.
-    """
-    status = int(outputs["status"])
-    if not scene.accuracy_check or status != STATUS_OK:
-        return status
-    if scene.method == "adaptive":
-        if not substep_check_due(outputs["peak_force"], status):  # no contact, no sub-steps
-            return status
-        finer = {"substeps": scene.substeps * ADAPTIVE_SUBSTEPS_FACTOR}
-    else:
-        finer = {"dt_s": scene.dt_s / 2}
-    fine = simulate(scene, record=record, **finer).outputs
-    return int(flag_inaccurate([status], [outputs["impacts"]], np.inf, 0.0,
-                               [outputs["peak_force"]], [fine["peak_force"]])[0])  # fmt: skip
 
 
 def _dims_of(study, key: str) -> tuple[str, ...]:
@@ -489,10 +461,9 @@ class StudyEngine:
                     finer = 2**level if scene.method == "adaptive" else 1
                     scene = replace(scene, dt_s=scene.dt_s * 0.5**level,
                                     substeps=scene.substeps * finer)  # fmt: skip
-                res = simulate(scene, record=record)
+                res = simulate(scene, record=record)  # with the accuracy check, if on
                 for name in names:
                     out[name][k] = res.outputs[name]
-                out["status"][k] = _checked_status(scene, record, res.outputs)
                 if self.mdof:
                     for name in CONTACT_VARIABLES:
                         out[name][k] = res.contacts[name.removeprefix("contact_")]
