@@ -419,18 +419,24 @@ def test_adaptive_very_stiff_building_is_not_unstable(period_s):
 # ------------------------------------------- class 7: every error names the study or scene file
 
 
-def test_method_refusal_names_the_study_file(make_study, tmp_path):
-    """Class 7: a law a method cannot step was refused without the study file's name (now
-    ``central-difference`` with yielding storeys: ``adaptive`` runs every building)."""
-    study = _tiny(make_study, left={"hysteresis": "bouc-wen", "yield_disp_m": 0.02},
-                  integrator={"method": "central-difference", "dt_s": 1e-3})  # fmt: skip
+#: A contact the kernels' settings refuse: restitution set per impact on a law without damping
+_UNDAMPED_PER_IMPACT = dict(
+    contact={"e": None, "model": "hertz", "restitution": "velocity", "material": "concrete",
+             "e_quantile": 0.5},
+    sampling={"n": 2, "vary": None},
+)  # fmt: skip
+
+
+def test_kernel_settings_refusal_names_the_study_file(make_study, tmp_path):
+    """Class 7: what the kernels' settings refuse (a law a method could not step, once) was
+    refused without the study file's name."""
+    study = _tiny(make_study, **_UNDAMPED_PER_IMPACT)
     for command in ("check", "run"):
         rc, _, err = _run(command, study, *(["--out", tmp_path / "o"] if command == "run" else []))
         _assert_clean_error(rc, err)
         assert err == (
-            f"pound-mc {command}: error: {study}: integrator.method: buildings with hysteresis "
-            "other than 'elastic' run with method = 'adaptive' (the default), 'newmark' or "
-            "'newmark-explicit'\n"
+            f"pound-mc {command}: error: {study}: contact.restitution: the 'hertz' law has no "
+            "damping to set per impact\n"
         )
     # refused at its first simulation, after the manifest: the run left it behind
     assert not (tmp_path / "o" / study.stem).exists()
@@ -444,13 +450,12 @@ def test_refused_run_keeps_earlier_results(make_study, tmp_path):
     work = tmp_path / "o" / study.stem
     before = sorted(p.name for p in work.iterdir())
     assert "manifest.json" in before and any(p.startswith("chunk_") for p in before)
-    _tiny(make_study, left={"hysteresis": "bouc-wen", "yield_disp_m": 0.02},
-          integrator={"method": "central-difference", "dt_s": 1e-3})  # fmt: skip
-    # refused as it loads (Bouc-Wen with central-difference), before the earlier results are
-    # looked at: with --fresh too, nothing is discarded for a run that cannot start
+    _tiny(make_study, **_UNDAMPED_PER_IMPACT)
+    # refused as it loads (per-impact restitution on an undamped law), before the earlier
+    # results are looked at: with --fresh too, nothing is discarded for a run that cannot start
     for fresh in ([], ["--fresh"]):
         rc, _, err = _run("run", study, "--out", tmp_path / "o", *fresh)
-        _assert_clean_error(rc, err, "hysteresis", "integrator.method")
+        _assert_clean_error(rc, err, "damping", "contact.restitution")
         assert sorted(p.name for p in work.iterdir()) == before
 
 

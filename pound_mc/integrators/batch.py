@@ -32,7 +32,6 @@ import numba
 import numpy as np
 
 from pound_mc._jit import jit
-from pound_mc.errors import InputError
 from pound_mc.integrators.accuracy import (
     COMPANION_DT_S,
     COMPANION_SUBSTEPS,
@@ -45,6 +44,7 @@ from pound_mc.integrators.adaptive import adaptive
 from pound_mc.integrators.adaptive_bilinear import adaptive_bilinear, bilinear_pair_steps
 from pound_mc.integrators.adaptive_pair import adaptive_pair
 from pound_mc.integrators.adaptive_rk import adaptive_rk
+from pound_mc.integrators.central_hysteretic import central_hysteretic
 from pound_mc.integrators.fixed import CENTRAL_DIFFERENCE, NEWMARK, NEWMARK_EXPLICIT, fixed
 from pound_mc.integrators.hysteretic import N_STOREY_COLUMNS, newmark_hysteretic
 from pound_mc.integrators.outputs import (
@@ -179,28 +179,14 @@ def _run_fixed(
               q, v, out, cout, hx, hd, hf)  # fmt: skip
 
 
-#: Methods that run yielding buildings (``central-difference`` has no inelastic kernel).
-INELASTIC_METHODS = ("adaptive", "newmark", "newmark-explicit")
-
-
-def check_inelastic_method(method: str, file=None) -> None:
-    """Refuse a method that does not run yielding buildings, naming the key (and ``file``)."""
-    if method not in INELASTIC_METHODS:
-        raise InputError(
-            "buildings with hysteresis other than 'elastic' run with method = 'adaptive' (the "
-            "default), 'newmark' or 'newmark-explicit'",
-            file=file,
-            key="integrator.method",
-        )
-
-
 def _inelastic_run(storeys, sout, kernel):
     """A run of an inelastic kernel with the storeys bound (the signature of ``_RUNS``).
 
     ``sout`` (storeys x 2) receives each storey's peak and final drift [m].  ``kernel``:
     ``"pair"`` (``adaptive`` on a bilinear SDOF pair, exact steps per branch), ``"rk"``
     (``adaptive`` on any other yielding scene, :mod:`~pound_mc.integrators.adaptive_rk`) or
-    ``"newmark"`` (the inelastic fixed-step kernel).
+    ``"newmark"`` (the inelastic ``newmark`` kernel, both variants) or ``"central"`` (the
+    inelastic ``central-difference`` kernel).
     """
     dmat = np.ascontiguousarray(storeys[0], dtype=np.float64)
     store = np.ascontiguousarray(storeys[1], dtype=np.float64).reshape(-1, N_STOREY_COLUMNS)
@@ -215,8 +201,9 @@ def _inelastic_run(storeys, sout, kernel):
             adaptive_rk(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi,
                         settings, q, v, out, cout, hx, hd, hf, dmat, store, sout)  # fmt: skip
         else:
-            _run_inelastic(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi,
-                           settings, q, v, out, cout, hx, hd, hf, dmat, store, sout)  # fmt: skip
+            fixed_run = _run_central if kernel == "central" else _run_inelastic
+            fixed_run(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi,
+                      settings, q, v, out, cout, hx, hd, hf, dmat, store, sout)  # fmt: skip
 
     return run
 
@@ -246,6 +233,20 @@ def _run_inelastic(
         sout[:] = np.nan
         return
     newmark_hysteretic(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi,
+                       settings, q, v, out, cout, hx, hd, hf, dmat, store, sout)  # fmt: skip
+
+
+@jit
+def _run_central(
+    ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi, settings,
+    q, v, out, cout, hx, hd, hf, dmat, store, sout,
+):  # fmt: skip
+    """One run of the inelastic ``central-difference`` kernel, as :func:`_run_inelastic`."""
+    if _endless(ag, dt_rec, settings):
+        fail(out, cout, STATUS_NOT_CONVERGED)
+        sout[:] = np.nan
+        return
+    central_hysteretic(ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi,
                        settings, q, v, out, cout, hx, hd, hf, dmat, store, sout)  # fmt: skip
 
 
@@ -373,8 +374,6 @@ def run_kernel(
     settings = kernel_settings(model, method, relation=relation, dt_s=dt_s, substeps=substeps,
                                restitution=restitution)  # fmt: skip
     pair = _is_sdof_pair(omega, gap, phi)
-    if storeys is not None:
-        check_inelastic_method(method)
     n = omega.size
     nc = gap.size
     nf = phi.shape[0]
@@ -401,7 +400,7 @@ def run_kernel(
     if storeys is not None:
         if storey_out is None:
             storey_out = np.empty((np.size(storeys[1]) // N_STOREY_COLUMNS, 2))
-        kernel = "newmark"
+        kernel = "central" if settings.method == CENTRAL_DIFFERENCE else "newmark"
         if settings.method == ADAPTIVE:
             steps = pair and settings.rest_v.size == 0
             kernel = "pair" if steps and bilinear_pair_steps(storeys[1], zeta) else "rk"

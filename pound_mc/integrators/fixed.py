@@ -364,6 +364,67 @@ def keep_sample(i, phi, q, dpen, fc, hx, hd, hf):
         hf[i, c] = fc[c]
 
 
+@jit(llvm_inline=True)
+def central_step(
+    model, psi, gap, beta, cd, zhd, dpen, fc, fprev, q, qprev, qn, v, gamma, zeta, omega, ag_n,
+    pl, h, t1, step, cout, ep, peak_e, e_in, e_d, w_c, pin_prev, pd_prev, pc_prev, peak_f, peak_t,
+):  # fmt: skip
+    """One central-difference step: ``qn`` (q at n+1) from ``q`` (n) and ``qprev`` (n-1).
+
+    The contact forces at n from the backward-difference velocity, the modal load ``pl`` at n
+    (the inelastic kernel's plastic load; none where empty); ``v`` takes the central velocity
+    at n, with which the energies are summed (trapezoidal between n-1 and n) and the contacts'
+    impulses, peaks and the peak force (at ``t1 - h``) kept.  Returns the energies, the powers
+    at n and the peak force and its time.
+    """
+    nc = gap.size
+    for c in range(nc):
+        dprev = rowdot(psi, c, qprev) - gap[c]
+        vb = (dpen[c] - dprev) / h
+        fc[c] = force(model, dpen[c], vb, beta[c], cd[c], zhd[c], phase_of(dpen[c], vb))
+    for j in range(q.size):
+        p = -gamma[j] * ag_n
+        for c in range(nc):
+            p -= fc[c] * psi[c, j]
+        if pl.size > 0:
+            p += pl[j]
+        zw = zeta[j] * omega[j] * h
+        qn[j] = (h * h * p + (2.0 - omega[j] * omega[j] * h * h) * q[j]
+                 - (1.0 - zw) * qprev[j]) / (1.0 + zw)  # fmt: skip
+    for j in range(q.size):
+        v[j] = (qn[j] - qprev[j]) / (2.0 * h)
+    pin1, pd1 = powers(v, ag_n, omega, zeta, gamma)
+    pc1 = 0.0
+    for c in range(nc):
+        pc1 += fc[c] * rowdot(psi, c, v)
+    if step > 0:
+        e_in, e_d, w_c = trapezoid(h, e_in, e_d, w_c, pin_prev, pd_prev, pc_prev,
+                                   pin1, pd1, pc1)  # fmt: skip
+        for c in range(nc):
+            cout[c, outputs.C_IMPULSE] += 0.5 * h * (fprev[c] + fc[c])
+    for c in range(nc):
+        fprev[c] = fc[c]
+        if fc[c] > cout[c, outputs.C_PEAK_FORCE]:
+            cout[c, outputs.C_PEAK_FORCE] = fc[c]
+        if fc[c] > peak_f:
+            peak_f = fc[c]
+            peak_t = t1 - h
+            peak_e[0] = ep[c, outputs.EP_E]
+    return e_in, e_d, w_c, pin1, pd1, pc1, peak_f, peak_t
+
+
+@jit(inline=True)
+def central_shift(q, qprev, qn, vn, fn, fc, h):
+    """Shift a central-difference step: n becomes n-1, n+1 becomes n (``vn``: backward)."""
+    for j in range(q.size):
+        qprev[j] = q[j]
+        q[j] = qn[j]
+    for j in range(q.size):
+        vn[j] = (q[j] - qprev[j]) / h
+    for c in range(fc.size):
+        fn[c] = fc[c]
+
+
 @jit
 def fixed(
     ag, dt_rec, omega, zeta, gamma, phi, side, psi, gap, meff, beta, xi, settings,
@@ -372,8 +433,6 @@ def fixed(
     """Run one simulation with a fixed-step method (module docstring).
 
     ``xi`` holds the damping ratio per contact (the restitution ``e`` for Hertz-damp laws).
-    Longer than 150 lines because the three schemes share the per-step bookkeeping (contacts,
-    energies, maxima, divergence) in one loop whose scalar state stays in locals.
     """
     model = settings.model
     relation = settings.relation
@@ -412,49 +471,13 @@ def fixed(
         ag1 = ag[i] + (ag[i + 1] - ag[i]) * ((k + 1) * inv_m)
         steps += 1
         if method == CENTRAL_DIFFERENCE:
-            # central difference: q_{n+1} from q_n, q_{n-1}; force at n from backward velocity
             ag_n = ag[i] + (ag[i + 1] - ag[i]) * (k * inv_m)
-            for c in range(nc):
-                dprev = rowdot(psi, c, qprev) - gap[c]
-                vb = (dpen[c] - dprev) / h
-                fc[c] = force(model, dpen[c], vb, beta[c], cd[c], zhd[c], phase_of(dpen[c], vb))
-            for j in range(n):
-                p = -gamma[j] * ag_n
-                for c in range(nc):
-                    p -= fc[c] * psi[c, j]
-                zw = zeta[j] * omega[j] * h
-                qn[j] = (h * h * p + (2.0 - omega[j] * omega[j] * h * h) * q[j]
-                         - (1.0 - zw) * qprev[j]) / (1.0 + zw)  # fmt: skip
-            # velocity at n (central), then shift; the state reported is at n+1 with a
-            # backward-difference velocity consistent with the scheme
-            for j in range(n):
-                v[j] = (qn[j] - qprev[j]) / (2.0 * h)
-            # energies at step n with the central velocity, trapezoidal between n-1 and n
-            pin1, pd1 = powers(v, ag_n, omega, zeta, gamma)
-            pc1 = 0.0
-            for c in range(nc):
-                pc1 += fc[c] * rowdot(psi, c, v)
-            if step > 0:
-                e_in, e_d, w_c = trapezoid(h, e_in, e_d, w_c, pin_prev, pd_prev, pc_prev,
-                                           pin1, pd1, pc1)  # fmt: skip
-                for c in range(nc):
-                    cout[c, outputs.C_IMPULSE] += 0.5 * h * (fprev[c] + fc[c])
-            for c in range(nc):
-                fprev[c] = fc[c]
-                if fc[c] > cout[c, outputs.C_PEAK_FORCE]:
-                    cout[c, outputs.C_PEAK_FORCE] = fc[c]
-                if fc[c] > peak_f:
-                    peak_f = fc[c]
-                    peak_t = t1 - h
-                    peak_e[0] = ep[c, outputs.EP_E]
-            pin_prev, pd_prev, pc_prev = pin1, pd1, pc1
-            for j in range(n):
-                qprev[j] = q[j]
-                q[j] = qn[j]
-            for j in range(n):
-                vn[j] = (q[j] - qprev[j]) / h
-            for c in range(nc):
-                fn[c] = fc[c]
+            (e_in, e_d, w_c, pin_prev, pd_prev, pc_prev, peak_f,
+             peak_t) = central_step(model, psi, gap, beta, cd, zhd, dpen, fc, fprev, q, qprev, qn,
+                                    v, gamma, zeta, omega, ag_n, no_load, h, t1, step, cout, ep,
+                                    peak_e, e_in, e_d, w_c, pin_prev, pd_prev, pc_prev, peak_f,
+                                    peak_t)  # fmt: skip
+            central_shift(q, qprev, qn, vn, fn, fc, h)
         else:
             # Newmark average acceleration, modal predictor without contact at n+1
             if not newmark_solve(settings, q, v, a, ag1, gamma, zw2, ikhat, h, no_load, psi,

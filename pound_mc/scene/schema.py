@@ -388,9 +388,9 @@ _HYSTERESIS = Field(
     "hysteresis", "string", "Storey law: `elastic`, `bilinear` (kinematic hardening: storey "
     "force alpha k u + (1 - alpha) k z, z elastic-perfectly-plastic with |z| <= yield drift) "
     "or `bouc-wen` (same force, z smooth: z' = u' (1 - |z/u_y|^n (0.5 sign(u' z) + 0.5)), no "
-    "degradation or pinching); damping from the initial elastic modes.  Every method but "
-    "`central-difference` runs yielding buildings; `adaptive` with error-controlled steps and "
-    "located yield and unload events.",
+    "degradation or pinching); damping from the initial elastic modes.  Every method runs "
+    "yielding buildings; `adaptive` with error-controlled steps and located yield and unload "
+    "events.",
     default="elastic", choices=HYSTERESIS,
 )  # fmt: skip
 _POST_YIELD = Field(

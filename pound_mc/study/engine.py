@@ -32,7 +32,6 @@ import pound_mc.integrators as integrators
 from pound_mc._version import __version__
 from pound_mc.errors import InputError, InputErrors, named_by
 from pound_mc.integrators.accuracy import ADAPTIVE_SUBSTEPS_FACTOR, STATUS_INACCURATE
-from pound_mc.integrators.batch import check_inelastic_method
 from pound_mc.integrators.outputs import STATUS_OK
 from pound_mc.integrators.threads import numba_threads
 from pound_mc.motions import G, record_arrays
@@ -152,8 +151,6 @@ class StudyEngine:
         #: Whether a building can yield: each simulation then runs its own scene (the inelastic
         #: kernels), and the dataset holds the storeys' outputs.
         self.inelastic = self.scene.inelastic
-        if self.inelastic:  # refused before any simulation, not at the first one
-            check_inelastic_method(self._base["integrator.method"], self.study.path)
         #: Whether each simulation runs its own scene (:meth:`scene_of`, its modes computed
         #: for it): with yielding buildings, and with a shear building whose keys vary.
         self.per_scene = (

@@ -26,7 +26,6 @@ from numba.core import event as numba_event
 # the kernel cache (see pound_mc._jit.source_key), and every edit here would recompile
 import pound_mc._jit as jit_cache
 from pound_mc.integrators import METHODS
-from pound_mc.integrators.batch import INELASTIC_METHODS
 from pound_mc.physics.contact import CONTACT_MODELS
 from pound_mc.study.definition import study_from_text
 from pound_mc.study.engine import StudyEngine
@@ -259,8 +258,6 @@ def compile_kernels(
     rows = []
     for structure in structures:
         for method in METHODS if methods is None else methods:
-            if structure == "yielding" and method not in INELASTIC_METHODS:
-                continue
             for law in CONTACT_MODELS if laws is None else laws:
                 engine = StudyEngine(tiny_study(method, law, structure))
                 t0 = time.perf_counter()
