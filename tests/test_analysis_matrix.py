@@ -29,7 +29,7 @@ from pound_mc.analysis.style import axis_label
 from pound_mc.cli import main
 from pound_mc.cli.analysis import draw
 from pound_mc.cli.commands import KINDS
-from studies import dump_toml
+from studies import dump_toml, pounding_counted
 
 ROOT = Path(__file__).resolve().parent.parent
 STUDIES = sorted((ROOT / "studies").glob("*.toml"))
@@ -97,8 +97,11 @@ def _grid(ds):
 
 
 def _probability(ds, x):
-    """Pounding probability over records and samples: the chart's line data, (x, rest...)."""
-    pounded = (ds["impacts"] > 0).where(ds["status"] == 0).mean(("record", "sample"))
+    """Pounding probability over records and samples: the chart's line data, (x, rest...).
+
+    Over the runs a pounding count takes: status ok or flagged inaccurate.
+    """
+    pounded = (ds["impacts"] > 0).where(pounding_counted(ds)).mean(("record", "sample"))
     return pounded.transpose(x, ...)
 
 
@@ -154,8 +157,9 @@ def _check_restitution(ds, fig):
 
 def _check_fragility(ds, fig):
     dim = next(d for d in risk.INTENSITY_DIMS if d in ds.dims)
-    pounded = ((ds["impacts"] > 0) & (ds["status"] == 0)).sum(("record", "sample"))
-    total = (ds["status"] == 0).sum(("record", "sample"))
+    counted = pounding_counted(ds)  # status ok or flagged inaccurate
+    pounded = ((ds["impacts"] > 0) & counted).sum(("record", "sample"))
+    total = counted.sum(("record", "sample"))
     rest = [d for d in pounded.dims if d != dim]
     first = {d: 0 for d in rest}
     expect = (pounded.isel(first) / total.isel(first)).transpose(dim).values

@@ -280,18 +280,41 @@ def test_more_than_half_without_a_fit_gives_no_interval():
     assert not fragility_chart(fit).collections  # no band
 
 
-def test_intervals_without_discarded_resamples_are_unchanged():
-    # theta_ci, beta_ci and band of this fit as the bootstrap gave them before resamples without
-    # a fit were discarded (commit 16aaaec, which kept them at their limits; this fit has none)
+def _percentile(values, q):
+    """The inverted-CDF percentile: the smallest value whose share at or below it is >= q.
+
+    The k-th smallest of n for the smallest k >= q n (here q n is 2.5 or 97.5: no tie of
+    definitions at an integer).
+    """
+    ordered = np.sort(np.asarray(values))
+    return ordered[int(np.ceil(q * ordered.size)) - 1]
+
+
+def test_intervals_without_discarded_resamples_are_the_percentile_bootstrap():
+    # the plain percentile bootstrap (Efron & Tibshirani 1993, ch. 13) recomputed here: the
+    # fit's own resamples drawn again from its generator (z*_j ~ Binomial(n_j, z_j / n_j)),
+    # each refitted by the independent Nelder-Mead fit of Baker's eq. 12 above, and the 2.5
+    # and 97.5 % points of the replicates and of the curves they give (Baker 2015 eq. 1);
+    # the fits agree to their tolerances (1e-6), so do the intervals
     n_event, n_total = _draw(0.4, 0.5, 40, 3)
     assert n_event.tolist() == [0, 2, 14, 21, 35, 37, 39]
-    fit = fit_fragility(STRIPES, n_event, n_total, n_boot=300, seed=11)
+    fit = fit_fragility(STRIPES, n_event, n_total, n_boot=100, seed=11)
     assert fit.n_boot_discarded == 0 and fit.discarded == {} and fit.bootstrap_note == ""
-    assert fit.theta_ci == (0.35191872692498855, 0.420293440341506)
-    assert fit.beta_ci == (0.35947060191546815, 0.5394157339325832)
-    lower, upper = fit.band([0.2, 0.4, 0.8])
-    assert lower.tolist() == [0.029461718149874114, 0.4539537880520916, 0.9058796821539399]
-    assert upper.tolist() == [0.1301267210115875, 0.6134600750611734, 0.9804727358478391]
+    draws = _resamples(n_event, n_total, 100, 11)[:100]  # no discard: the first batch alone
+    replicates = np.array([_independent_fit(STRIPES, z, n_total)[:2] for z in draws])
+    theta_b, beta_b = replicates.T
+    for interval, values in ((fit.theta_ci, theta_b), (fit.beta_ci, beta_b)):
+        expected = (_percentile(values, 0.025), _percentile(values, 0.975))
+        assert interval == pytest.approx(expected, rel=1e-5)
+    x = np.array([0.2, 0.4, 0.8])
+    curves = stats.norm.cdf(np.log(x[None, :] / theta_b[:, None]) / beta_b[:, None])
+    lower, upper = fit.band(x)
+    for k in range(x.size):
+        assert lower[k] == pytest.approx(_percentile(curves[:, k], 0.025), rel=1e-5)
+        assert upper[k] == pytest.approx(_percentile(curves[:, k], 0.975), rel=1e-5)
+    # the intervals hold the point fit, and are not degenerate
+    assert fit.theta_ci[0] < fit.theta < fit.theta_ci[1]
+    assert fit.beta_ci[0] < fit.beta < fit.beta_ci[1]
 
 
 def _stripe_dataset(*columns, pga=QS_PGA):

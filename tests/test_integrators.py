@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from scipy.linalg import expm
+from scipy.linalg import expm, sqrtm
 
 from pound_mc.integrators import batch, kernel_settings, run_kernel
 from pound_mc.integrators.outputs import (
@@ -122,22 +122,40 @@ def run_linear(scene, ag, dt, *, method="adaptive", dt_s, x0=None, v0=None):
     return out, hist[0]
 
 
+def shear_matrices(building):
+    """Mass, stiffness and damping matrices of a shear building from its data alone.
+
+    Not the building's own matrices nor its modes (what the kernels run on): K assembled here
+    from the storey stiffnesses (storey i joins floor i - 1, or the ground, to floor i), and
+    classical damping with one ratio zeta in every mode in closed form,
+    C = 2 zeta M^1/2 (M^-1/2 K M^-1/2)^1/2 M^1/2 (its modes are those of K and M, each damped
+    2 zeta omega_i: Chopra, Dynamics of Structures, ch. 11), through a matrix square root
+    (scipy.linalg.sqrtm), not an eigendecomposition.
+    """
+    mass = np.asarray(building.storey_mass_kg, dtype=float)
+    ks = np.asarray(building.storey_stiffness_N_per_m, dtype=float)
+    k = np.diag(ks + np.r_[ks[1:], 0.0]) - np.diag(ks[1:], 1) - np.diag(ks[1:], -1)
+    root = np.sqrt(mass)
+    sq = np.real(sqrtm(k / np.outer(root, root)))
+    c = 2.0 * building.damping_ratio * sq * np.outer(root, root)
+    return np.diag(mass), k, c
+
+
 def exact_linear_history(scene, ag, dt, x0=None, v0=None):
     """Floor displacements at the samples: matrix exponential of the augmented system.
 
     State z = [x, v, a_g, a_g'] with M x'' + C x' + K x = -M 1 a_g, a_g'' = 0 inside a sample
     interval: exact for the linearly interpolated record.
     """
-    blocks = [(scene.left, 0), (scene.right, scene.left.n_floors)]
+    nl = scene.left.storey_mass_kg.size
+    blocks = [(scene.left, 0), (scene.right, nl)]
     n = masses(scene).size
     m = np.zeros((n, n))
     k = np.zeros((n, n))
     c = np.zeros((n, n))
     for b, o in blocks:
-        s = slice(o, o + b.n_floors)
-        m[s, s] = b.mass_matrix()
-        k[s, s] = b.stiffness_matrix()
-        c[s, s] = b.damping_matrix()
+        s = slice(o, o + b.storey_mass_kg.size)
+        m[s, s], k[s, s], c[s, s] = shear_matrices(b)
     minv = np.linalg.inv(m)
     a = np.zeros((2 * n + 2, 2 * n + 2))
     a[:n, n : 2 * n] = np.eye(n)
@@ -197,7 +215,9 @@ FREE_V0 = np.array([0.2, -0.1])
 def free_closed_form(scene, t):
     xs, peaks = [], []
     for b, j in ((scene.left, 0), (scene.right, 1)):
-        w, z = float(b.omega[0]), b.damping_ratio
+        # an SDOF: omega = sqrt(k / m) from its data (k = m (2 pi / T)^2), not its modes
+        w = math.sqrt(b.storey_stiffness_N_per_m[0] / b.storey_mass_kg[0])
+        z = b.damping_ratio
         xs.append(free_vibration(FREE_X0[j], FREE_V0[j], w, z, t))
         peaks.append(free_vibration_peak(FREE_X0[j], FREE_V0[j], w, z, t[-1]))
     return np.array(xs).T, peaks

@@ -17,6 +17,7 @@ import xarray as xr
 
 from pound_mc.cli import main
 from pound_mc.errors import InputError, InputErrors
+from pound_mc.integrators.reference import reference_solution
 from pound_mc.study.dataset import RESULT_VARIABLES
 from pound_mc.study.definition import load_study, study_from_text
 from pound_mc.study.engine import StudyEngine
@@ -355,10 +356,33 @@ def test_linear_law_study(tmp_path):
     )
     path = tmp_path / "kelvin.toml"
     path.write_text(text)
-    report = run_study(load_study(path), tmp_path / "k", progress=False)
+    study = load_study(path)
+    report = run_study(study, tmp_path / "k", progress=False)
     with xr.open_dataset(report.path) as ds:
-        assert float(ds["k_N_per_m"]) == 1.0e9
-        assert np.all(ds["status"].values == 0)
+        ds.load()
+    assert float(ds["k_N_per_m"]) == 1.0e9
+    assert np.all(ds["status"].values == 0)
+    # the Kelvin law's damping from each sampled e by Anagnostopoulos (1992),
+    # xi = -ln e / sqrt(pi^2 + ln^2 e), written out here
+    e = ds["e"].values
+    assert e.min() < e.max()  # sampled over concrete's Table 2 range
+    np.testing.assert_allclose(ds["xi"].values, -np.log(e) / np.sqrt(np.pi**2 + np.log(e) ** 2),
+                               rtol=1e-12)  # fmt: skip
+    # the runs against the independent SciPy reference (the Kelvin law written out there):
+    # the strongest pounding run and one at the other gap, impacts and peak force as in
+    # test_laws_vs_reference (adaptive at its defaults: 1e-4)
+    engine = StudyEngine(study)
+    impacts = ds["impacts"].values.ravel()
+    force = ds["peak_force"].values.ravel()
+    assert (impacts > 0).sum() > 8  # the study pounds
+    gap_axis = ds["peak_force"].dims.index("contact_gap_m")
+    at_gap = np.unravel_index(np.arange(impacts.size), ds["peak_force"].shape)[gap_axis]
+    for gap in (0, 1):
+        mine = np.flatnonzero(at_gap == gap)
+        i = int(mine[np.argmax(force[mine])])
+        ref = reference_solution(engine.scene_of(i), engine.record_of(i))
+        assert impacts[i] == ref["impacts"] > 0
+        assert force[i] == pytest.approx(ref["peak_force"], rel=1e-4)
 
 
 def test_plan_names_the_materials_of_a_material_axis():

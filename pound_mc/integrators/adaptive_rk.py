@@ -428,7 +428,7 @@ def adaptive_rk(
 
     Arguments as :func:`~pound_mc.integrators.hysteretic.newmark_hysteretic`: ``dmat`` the
     storeys' drift rows in modal coordinates, ``store`` the storey table, ``sout`` the storeys'
-    peak and final drifts.  Longer than 150 lines because the loop keeps its scalar state
+    peak and final drifts.  One loop (within the 200-line limit) keeps its scalar state
     (energies, clocks, step size) in locals across accepted, rejected and cut steps.  The loop
     works on views without an owner (:func:`~pound_mc.integrators.toolkit.borrow`, kept alive
     by ``owned``), as :func:`~pound_mc.integrators.adaptive.adaptive` does.

@@ -433,6 +433,8 @@ def fixed(
     """Run one simulation with a fixed-step method (module docstring).
 
     ``xi`` holds the damping ratio per contact (the restitution ``e`` for Hertz-damp laws).
+    The three schemes share the per-step bookkeeping (contacts, energies, maxima, divergence)
+    in one loop whose scalar state stays in locals.
     """
     model = settings.model
     relation = settings.relation

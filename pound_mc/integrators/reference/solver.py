@@ -1,45 +1,8 @@
-"""Independent tight-tolerance reference solution of a scene (SciPy, pure Python).
+"""The reference solution itself: the scene's equations, its events and its maxima.
 
-Used to check the compiled kernels of :mod:`pound_mc.integrators`; it shares none of their
-code.  The buildings are integrated in *physical* floor coordinates (not modes),
-
-``M x'' + C x' + K x = -M 1 a_g(t) + f_c(x, x')``,
-
-with the mass, stiffness and (classical) damping matrices of
-:class:`pound_mc.physics.structures.Building`.
-At a contact between left floor ``i`` and right floor ``j`` the penetration is
-``delta = x_i - x_j - gap`` and the force ``F >= 0`` acts as ``-F`` on the left floor and ``+F`` on
-the right floor (``../shared/DESIGN.md`` section 2).  The force laws are written out here:
-
-``jankowski`` (seed eq. 1.1)
-    approach (``delta_dot > 0``): ``F = beta delta^1.5 + c delta_dot`` with
-    ``c = 2 xi sqrt(beta sqrt(delta) m_eff)``; restitution: ``F = beta delta^1.5``.
-``hertz``
-    ``F = beta delta^1.5``.
-``linear`` / ``kelvin``
-    ``F = k delta`` / ``F = k delta + 2 xi sqrt(k m_eff) delta_dot``.
-``hertzdamp``
-    ``F = max(0, beta delta^1.5 (1 + zeta delta_dot))`` with ``zeta`` from ``e`` and ``v0``,
-    the approach velocity of the episode, by the scene's relation (default Ye et al. 2009,
-    ``zeta = 8 (1 - e) / (5 e v0)``).
-
-The ground acceleration is the record's samples linearly interpolated, so the right-hand side
-has kinks at the samples: the solution is integrated sample interval by sample interval, each a
-smooth problem, with SciPy's ``DOP853`` at ``rtol = 1e-11``.  Every contact carries an explicit
-phase (open, approach, restitution); the switches are terminal events (open -> approach when
-``delta`` crosses 0 upwards, approach -> restitution when ``delta_dot`` crosses 0 downwards,
-restitution -> open when ``delta`` crosses 0 downwards, restitution -> approach when
-``delta_dot`` crosses 0 upwards) and the integration restarts after each with the new phases,
-so the right-hand side is smooth inside every segment.  Peak force and peak displacements are
-continuous-time maxima: the dense output of every segment is sampled finely and the best sample
-refined with :func:`scipy.optimize.minimize_scalar`.
-
-With ``restitution = "velocity"`` each impact's ``e`` is
-:func:`pound_mc.physics.materials.restitution_at` (the seed's Table 2) at the relative
-velocity at the onset event, and its damping (``xi`` by
-:func:`pound_mc.physics.relations.xi_from_e`, or ``zeta``) is fixed for that episode.
-
-This is slow (seconds for a 30 s SDOF-pair record) and meant for tests and checks only.
+See :mod:`pound_mc.integrators.reference` for what it solves and how; the contact physics comes
+from :mod:`~pound_mc.integrators.reference.impact`, the matrices from
+:mod:`~pound_mc.integrators.reference.frame`, both written for the reference.
 """
 
 from __future__ import annotations
@@ -51,43 +14,47 @@ import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.optimize import minimize_scalar
 
-from pound_mc.integrators.outputs import IMPACT_MIN_PENETRATION_M
-from pound_mc.motions import record_arrays
-from pound_mc.physics.contact import CONTACT_MODELS
-from pound_mc.physics.materials import restitution_at
-from pound_mc.physics.relations import (
-    HERTZDAMP_RELATIONS,
-    single_impact_restitution,
-    single_impact_restitution_hertzdamp,
-    xi_from_e,
+from pound_mc.integrators.reference.frame import building_matrices, column_mass, storey_heights
+from pound_mc.integrators.reference.impact import (
+    APPROACH,
+    IMPACT_MIN_PENETRATION_M,
+    OPEN,
+    RESTITUTION,
+    contact_force,
+    hertzdamp_rebound,
+    jankowski_rebound,
+    restitution_at_velocity,
+    stored,
+    xi_of_e,
+    zeta_of_e,
 )
 
 __all__ = ["reference_solution"]
 
-_OPEN, _APPROACH, _RESTITUTION = 0, 1, 2
 #: Dense-output samples per solver step when looking for maxima.
 _SAMPLES_PER_STEP = 8
 _MODELS = ("jankowski", "hertz", "linear", "kelvin", "hertzdamp")
+#: The relation a law runs with when the scene gives ``e`` and names none.
+_DEFAULT_RELATION = {"jankowski": "jankowski2008", "kelvin": "kelvin", "hertzdamp": "ye2009"}
 
 
-def _contact_force(model, d, dd, beta, xi, m_eff, zhd, phase):
-    """Contact force [N] in a phase (0 open, 1 approach, 2 restitution); arrays allowed."""
-    if phase == _OPEN:
-        return np.zeros_like(np.asarray(d, dtype=float))
-    d = np.maximum(d, 0.0)
-    if model == "jankowski":
-        f = beta * d**1.5
-        if phase == _APPROACH:
-            f = f + 2.0 * xi * np.sqrt(beta * np.sqrt(d) * m_eff) * dd
-        return f
-    if model == "hertz":
-        return beta * d**1.5
-    if model == "linear":
-        return beta * d
-    if model == "kelvin":
-        return beta * d + 2.0 * xi * np.sqrt(beta * m_eff) * dd
-    # hertzdamp
-    return np.maximum(beta * d**1.5 * (1.0 + zhd * dd), 0.0)
+def _yields(building) -> bool:
+    """Whether the building's storeys can yield (a hysteresis other than elastic)."""
+    return getattr(building, "hysteresis", "elastic") != "elastic"
+
+
+def _contact_point(at, floor, building):
+    """A contact's weights on ``building``'s floors and the mass [kg] that meets there.
+
+    ``at``: the ``(floor, weight)`` pairs of a column point (linear between the floors below
+    and above), empty for floor ``floor`` itself.
+    """
+    masses = np.asarray(building.storey_mass_kg, dtype=float)
+    w = np.zeros(masses.size)
+    for f, wf in at or ((floor, 1.0),):
+        if f >= 0:  # the ground (-1) does not move
+            w[f] += wf
+    return w, (column_mass(at, masses) if at else float(masses[floor]))
 
 
 def _refine_max(fun, t_lo, t_hi, f_guess):
@@ -173,8 +140,9 @@ def reference_solution(
     t_wall = time.perf_counter()
     if scene.contact_model not in _MODELS:
         raise ValueError(f"unsupported contact model {scene.contact_model!r}")
-    if record is None:
-        record = record_arrays(scene.load_record())
+    if record is None:  # the scene's record as read and preprocessed (an obspy Trace)
+        trace = scene.load_record()
+        record = (float(trace.stats.delta), np.asarray(trace.data, dtype=float))
     ref = _Reference(scene, record, atol_scale, x0, v0, contact_work)
     ref.run(rtol)
     return ref.results(t_wall)
@@ -208,16 +176,16 @@ class _Reference:
         scene = self.scene
         # a row of buildings (``scene.row``) or the two; the left one's floors first
         buildings = getattr(scene, "row", None) or [scene.left, scene.right]
-        starts = np.cumsum([0] + [b.n_floors for b in buildings])
+        starts = np.cumsum([0] + [np.asarray(b.storey_mass_kg).size for b in buildings])
         n = int(starts[-1])
         m = np.zeros((n, n))
         k = np.zeros((n, n))
         c = np.zeros((n, n))
+        omegas = []
         for j, b in enumerate(buildings):
             sl = slice(starts[j], starts[j + 1])
-            m[sl, sl] = b.mass_matrix()
-            k[sl, sl] = b.stiffness_matrix()
-            c[sl, sl] = b.damping_matrix()
+            m[sl, sl], k[sl, sl], c[sl, sl], omega = building_matrices(b)
+            omegas.append(omega)
         # a wall (infinite mass) stays with the ground: no acceleration of its own
         fixed = np.flatnonzero(~np.isfinite(np.diag(m)))
         minv = np.linalg.inv(m) if fixed.size == 0 else np.diag(1.0 / np.diag(m))
@@ -228,6 +196,7 @@ class _Reference:
         a_lin[n:, n:] = -minv @ c
         self.buildings, self.starts, self.n = buildings, starts, n
         self.fixed, self.a_lin, self.masses = fixed, a_lin, np.diag(m)
+        self.omega = np.concatenate(omegas)
 
     def _contacts(self):
         """The contacts' weights on the floors, their laws' constants and the episodes' damping."""
@@ -236,22 +205,29 @@ class _Reference:
         # penetration of contact j: w[j] @ x - gap (a floor, or a column interpolated between
         # floors, of each building); its force acts on the floors by the same weights
         w = np.zeros((nc, self.n))
+        self.meff = np.zeros(nc)
         for j, ct in enumerate(scene.contacts):
             p = getattr(ct, "pair", 0)
-            w[j, starts[p] : starts[p + 1]] = ct.weights("left", buildings[p].n_floors)
-            w[j, starts[p + 1] : starts[p + 2]] -= ct.weights("right", buildings[p + 1].n_floors)
+            w_l, m_l = _contact_point(ct.left_at, ct.left_floor, buildings[p])
+            w_r, m_r = _contact_point(ct.right_at, ct.right_floor, buildings[p + 1])
+            w[j, starts[p] : starts[p + 1]] = w_l
+            w[j, starts[p + 1] : starts[p + 2]] -= w_r
+            # the masses that meet, m1 m2 / (m1 + m2); against a wall's infinite mass, m1
+            self.meff[j] = m_l if math.isinf(m_r) else m_l * m_r / (m_l + m_r)
         self.nc, self.w = nc, w
-        self.meff = np.array([ct.m_eff for ct in scene.contacts], dtype=float)
         self.gap = np.broadcast_to(np.asarray(scene.gap_m, dtype=float), (nc,)).copy()
         self.beta = float(scene.stiffness)
         self.velocity = getattr(scene, "restitution", "fixed") == "velocity"
+        self.relation = getattr(scene, "relation", None) or _DEFAULT_RELATION.get(model)
+        e = getattr(scene, "e", None)
+        self.e_coef = 1.0
+        xi0 = 0.0
         if model == "hertzdamp":
-            self.e_coef = float(scene.e) if not self.velocity else 1.0
-            xi0 = 0.0
-            self.zeta_of = HERTZDAMP_RELATIONS[scene.relation or "ye2009"]
-        else:
-            self.e_coef = 1.0
-            xi0 = float(scene.xi) if scene.xi is not None else 0.0
+            self.e_coef = float(e) if not self.velocity else 1.0
+        elif e is not None and model in ("jankowski", "kelvin") and not self.velocity:
+            xi0 = xi_of_e(e, self.relation)  # the scene gives e: xi by its relation, here
+        elif scene.xi is not None:
+            xi0 = float(scene.xi)
         self.xi = np.full(nc, xi0)
         self.zhd = np.zeros(nc)
         self.e_episode = np.full(nc, np.nan)
@@ -268,15 +244,15 @@ class _Reference:
         scene, model = self.scene, self.model
         self.v_episode[j] = vimp
         if self.velocity:
-            self.e_episode[j] = restitution_at(
-                scene.material, max(vimp, 1e-12), scene.e_quantile, outside=scene.outside
+            self.e_episode[j] = restitution_at_velocity(
+                scene.material, max(vimp, 1e-12), scene.e_quantile, scene.outside
             )
             if model == "hertzdamp":
-                self.zhd[j] = self.zeta_of(self.e_episode[j], max(vimp, 1e-12))
+                self.zhd[j] = zeta_of_e(self.e_episode[j], max(vimp, 1e-12), self.relation)
             else:
-                self.xi[j] = xi_from_e(self.e_episode[j], scene.relation)
+                self.xi[j] = xi_of_e(self.e_episode[j], self.relation)
         elif model == "hertzdamp":
-            self.zhd[j] = self.zeta_of(self.e_coef, max(vimp, 1e-12))
+            self.zhd[j] = zeta_of_e(self.e_coef, max(vimp, 1e-12), self.relation)
 
     def _storeys(self):
         """Every storey's floors, stiffness, yield drift and law, and its branch at the start.
@@ -291,14 +267,15 @@ class _Reference:
         s_top, s_bot, s_k, s_uy, s_alpha, s_side, s_h, s_bw = [], [], [], [], [], [], [], []
         for b, bld in enumerate(self.buildings):
             off = int(self.starts[b])
-            for st in range(bld.n_floors):
+            heights = storey_heights(bld)
+            for st in range(int(self.starts[b + 1]) - off):
                 s_top.append(off + st)
                 s_bot.append(off + st - 1 if st > 0 else -1)
                 s_k.append(bld.storey_stiffness_N_per_m[st])
-                s_uy.append(bld.yield_disp_m[st] if bld.inelastic else np.inf)
+                s_uy.append(bld.yield_disp_m[st] if _yields(bld) else np.inf)
                 s_alpha.append(bld.post_yield_ratio)
                 s_side.append(b)  # the building's place from the left
-                s_h.append(bld.storey_height_m[st])
+                s_h.append(heights[st])
                 s_bw.append(bld.bw_exponent if bld.hysteresis == "bouc-wen" else 0.0)
         self.s_top, self.s_bot = np.array(s_top), np.array(s_bot)
         self.s_k, self.s_uy = np.array(s_k, float), np.array(s_uy, float)
@@ -338,7 +315,7 @@ class _Reference:
 
     def _start(self, x0, v0, atol_scale):
         """The initial state, the solver's absolute tolerances and the contacts' phases."""
-        n, nz, acc, buildings = self.n, self.nz, self.acc, self.buildings
+        n, nz, acc = self.n, self.nz, self.acc
         y = np.zeros(2 * n + (nz + 1 if nz else 0) + (1 if self.contact_work else 0))
         if x0 is not None:
             y[:n] = np.asarray(x0, dtype=float)
@@ -347,7 +324,7 @@ class _Reference:
             y[n : 2 * n] = np.asarray(v0, dtype=float)
 
         # tolerances
-        omega_all = np.concatenate([b.omega for b in buildings])
+        omega_all = self.omega
         pga = float(np.max(np.abs(acc))) if self.npts else 0.0
         x_scale = max(pga / omega_all.min() ** 2, np.max(np.abs(y[:n])), 1e-300)
         x_scale = max(x_scale, np.max(np.abs(y[n : 2 * n])) / omega_all.min())
@@ -371,7 +348,7 @@ class _Reference:
             d = w[j] @ y[:n] - gap[j]
             if d > 0.0:
                 dd = w[j] @ y[n : 2 * n]
-                self.phase[j] = _APPROACH if dd > 0.0 else _RESTITUTION
+                self.phase[j] = APPROACH if dd > 0.0 else RESTITUTION
                 self.start_episode(j, dd)
         # the ground acceleration ag0 + slope (t - t0) of the record interval being solved
         self.ag0 = self.slope = self.t0 = 0.0
@@ -407,10 +384,10 @@ class _Reference:
         w, gap, phase = self.w, self.gap, self.phase
         f = np.zeros(self.nc)
         for j in range(self.nc):
-            if phase[j] != _OPEN:
+            if phase[j] != OPEN:
                 d = w[j] @ x - gap[j]
                 dd = w[j] @ v
-                f[j] = _contact_force(self.model, d, dd, self.beta, self.xi[j], self.meff[j],
+                f[j] = contact_force(self.model, d, dd, self.beta, self.xi[j], self.meff[j],
                                       self.zhd[j], phase[j])  # fmt: skip
         return f
 
@@ -521,14 +498,14 @@ class _Reference:
         _raise_abs_peaks(self.peak_x, yy[:n], grid, dense)
         _raise_abs_peaks(self.peak_u, self.drifts(yy[:n]), grid, lambda t: self.drifts(dense(t)))
         for j in range(nc):
-            if phase[j] == _OPEN:
+            if phase[j] == OPEN:
                 continue
 
             def force_of(s, j=j):
                 # penetration and its rate from the state (displacements, then velocities)
                 d = w[j] @ s[:n] - gap[j]
                 dd = w[j] @ s[n : 2 * n]
-                return _contact_force(self.model, d, dd, self.beta, self.xi[j], self.meff[j],
+                return contact_force(self.model, d, dd, self.beta, self.xi[j], self.meff[j],
                                       self.zhd[j], phase[j])  # fmt: skip
 
             def force_at(t, force_of=force_of):
@@ -564,10 +541,10 @@ class _Reference:
         events, kinds = [], []
         phase = self.phase
         for j in range(self.nc if self.stalled < 3 else 0):
-            if phase[j] == _OPEN:
+            if phase[j] == OPEN:
                 events.append(self.ev_d_up[j])
                 kinds.append((j, "onset"))
-            elif phase[j] == _APPROACH:
+            elif phase[j] == APPROACH:
                 events.append(self.ev_dd_down[j])
                 kinds.append((j, "turn"))
             else:
@@ -638,19 +615,19 @@ class _Reference:
         elif kind == "unload":
             self.e_hyst += self.unload(j, y)
         elif kind == "onset":
-            phase[j] = _APPROACH
+            phase[j] = APPROACH
             self.pending[j] = True  # an impact once the penetration is deep enough
             self.impact_times.append(t)
             self.start_episode(j, w[j] @ y[n : 2 * n])
             self.h_last = None  # let the solver choose a step for the stiff contact
         elif kind == "turn":
-            phase[j] = _RESTITUTION
+            phase[j] = RESTITUTION
             pen = w[j] @ y[:n] - self.gap[j]  # a maximum of the penetration
             self._count(j, pen)
         elif kind == "separation":
-            phase[j] = _OPEN
+            phase[j] = OPEN
         else:
-            phase[j] = _APPROACH
+            phase[j] = APPROACH
         # a yielding storey already unloading: its event fell at this event's instant
         # and the solver reports one (a storey against a wall turns with the contact,
         # the same velocity vanishing); from the next segment's start, where it is past
@@ -672,7 +649,7 @@ class _Reference:
         n, y, model, buildings, starts = self.n, self.y, self.model, self.buildings, self.starts
         # a record that ends inside an episode: its penetration so far counts (an impact once it
         # is deep enough, as the turn above would count it), as it does in the kernels
-        for j in np.flatnonzero(self.phase != _OPEN):
+        for j in np.flatnonzero(self.phase != OPEN):
             pen = self.w[j] @ y[:n] - self.gap[j]
             self._count(j, pen)
         # "left" and "right": the first building and the last (in a row closed by a wall, the
@@ -693,11 +670,9 @@ class _Reference:
         peak_e, total_impacts = self.peak_e, int(self.impacts.sum())
         if np.isfinite(peak_e):  # the law's rebound for that episode's damping, integrated here
             if model == "hertzdamp":
-                peak_e = single_impact_restitution_hertzdamp(
-                    peak_e, self.scene.relation or "ye2009"
-                )
+                peak_e = hertzdamp_rebound(peak_e, self.relation)
             elif model == "jankowski":
-                peak_e = single_impact_restitution(self.peak_xi)
+                peak_e = jankowski_rebound(self.peak_xi)
         energies = {}
         if self.contact_work:
             energies = _contact_energies(model, y[-1], self.w @ y[:n] - self.gap, self.phase,
@@ -740,7 +715,7 @@ class _Reference:
             per_building.append({
                 "building": b,
                 "peak_disp": float(self.peak_x[starts[b] : starts[b + 1]].max()),
-                "peak_ductility": float(duct.max()) if bld.inelastic else np.nan,
+                "peak_ductility": float(duct.max()) if _yields(bld) else np.nan,
                 "peak_drift": float(np.max(peak_u[mine] / hs)) if hs.size else np.nan,
                 "residual_drift": float(np.max(np.abs(u_end[mine]) / hs)) if hs.size else np.nan,
             })  # fmt: skip
@@ -754,7 +729,6 @@ class _Reference:
 
 def _contact_energies(model, work, penetration, phase, beta) -> dict:
     """``contact_work`` and ``dissipated_energy`` [J]: the work less the energy held at the end."""
-    stored = CONTACT_MODELS[model].kernel.stored
-    held = sum(float(stored(max(float(d), 0.0), beta)) for d, p in zip(penetration, phase,
-               strict=True) if p != _OPEN)  # fmt: skip
+    held = sum(stored(model, d, beta) for d, p in zip(penetration, phase, strict=True)
+               if p != OPEN)  # fmt: skip
     return {"contact_work": float(work), "dissipated_energy": float(work) - held}
