@@ -34,6 +34,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "required-gap": ("pound_mc.cli.site", "required_gap_command"),
     "sensitivity": ("pound_mc.cli.sensitivity", "sensitivity_command"),
     "init": ("pound_mc.cli.study", "init_command"),
+    "validate": ("pound_mc.cli.validate", "validate_command"),
 }
 
 #: Chart kinds of ``pound-mc plot``.
@@ -85,6 +86,15 @@ COMPILE_DESCRIPTION = (
     "compiled sources compiles again."
 )
 
+VALIDATE_DESCRIPTION = (
+    "Run the validation cases on this machine and print one row per compared quantity: the "
+    "tool's value, the reference and where it comes from (closed forms, Chopra's El Centro "
+    "examples, the seed's Tables 2 and 3, the project's SciPy reference, OpenSees where "
+    "openseespy is installed), the relative error, the tolerance and the verdict.  Exit "
+    "status 1 when any case fails, 0 otherwise; a case that cannot run is listed with its "
+    "reason and is no failure.  docs/validation.md explains every reference and tolerance."
+)
+
 INIT_DESCRIPTION = (
     "Write a shipped study file NAME.toml, and the scene files it reads, into the "
     "current folder (or --dir), ready for pound-mc check and pound-mc run. Without "
@@ -93,7 +103,8 @@ INIT_DESCRIPTION = (
 )
 
 #: Sub-commands with a description for their ``--help`` (the others show their help line).
-DESCRIPTIONS = {"plot": PLOT_DESCRIPTION, "compile": COMPILE_DESCRIPTION, "init": INIT_DESCRIPTION}
+DESCRIPTIONS = {"plot": PLOT_DESCRIPTION, "compile": COMPILE_DESCRIPTION, "init": INIT_DESCRIPTION,
+                "validate": VALIDATE_DESCRIPTION}  # fmt: skip
 
 #: Arguments that several sub-commands share, declared once: name -> (flag, keywords of
 #: ``add_argument``); a sub-command adds them with :func:`_shared`.
@@ -166,7 +177,7 @@ def _shared(parser: argparse.ArgumentParser, *names: str) -> None:
 
 def add_commands(sub: argparse._SubParsersAction) -> None:
     """Add every sub-command to the ``pound-mc`` parser, in the order of ``--help``."""
-    for group in (_study, _analysis, _physics, _records, _scene):
+    for group in (_study, _analysis, _physics, _records, _scene, _validate):
         group(sub)
     _use_formatter(sub)
 
@@ -283,6 +294,15 @@ def _scene(sub: argparse._SubParsersAction) -> None:
 
     p = _command(sub, "stability", help="map the largest stable step against contact stiffness")
     _shared(p, "table-out", "table-json")
+
+
+def _validate(sub: argparse._SubParsersAction) -> None:
+    """``validate``: the tool against closed forms, textbook values, tables and references."""
+    p = _command(sub, "validate", help="rerun the validation cases: closed forms, Chopra, the "
+                 "seed's tables, the SciPy reference (and OpenSees)")  # fmt: skip
+    p.add_argument("--json", action="store_true", help="print a list of case objects")
+    p.add_argument("--quick", action="store_true", help="only the quick cases (under a minute)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
 
 
 def _study(sub: argparse._SubParsersAction) -> None:

