@@ -1,0 +1,1 @@
+"""Validation cases: pound-mc against independent references."""
