@@ -2,11 +2,12 @@
 
 Layers, lowest first: core (``_jit``, ``_version``, ``errors``, ``data``) <- ``physics`` <-
 ``motions`` <- ``integrators`` <- ``scene`` <- ``validation`` <- ``study`` | ``numerics`` <-
-``analysis`` <- ``cli``.  A module may import its own subpackage and any lower layer, never a higher one or a
-peer (``study`` and ``numerics`` are peers); nothing inside the package imports the top-level
-``pound_mc`` namespace (it re-exports the public API and would pull in every layer); imports
-sit at module level, except those of optional dependencies (and ``TYPE_CHECKING`` blocks) and
-those of the modules :data:`DEFERRED` names; the module graph has no cycle.
+``analysis`` <- ``cli``.  A module may import its own subpackage and any lower layer, never a
+higher one or a peer (``study`` and ``numerics`` are peers); nothing inside the package imports
+the top-level ``pound_mc`` namespace (it re-exports the public API and would pull in every
+layer); imports sit at module level, except those of optional dependencies (and
+``TYPE_CHECKING`` blocks) and those of the modules :data:`DEFERRED` names; the module graph has
+no cycle.
 """
 
 from __future__ import annotations

@@ -187,8 +187,11 @@ def unavailable() -> str | None:
         if (exc.name or "openseespy").startswith("openseespy"):
             return MISSING
         return f"openseespy cannot be imported: {exc}"
-    except (ImportError, OSError) as exc:  # a shared library missing (libblas3, liblapack3)
-        return (f"openseespy cannot be loaded ({exc}); it needs Debian's libblas3 and "
+    except (ImportError, OSError, RuntimeError) as exc:
+        # openseespy turns a shared library that does not load (libblas3, liblapack3) into a
+        # RuntimeError that names no library: the error it comes from does
+        cause = exc.__cause__ or exc.__context__ or exc
+        return (f"openseespy cannot be loaded ({cause}); on Debian it needs libblas3 and "
                 "liblapack3")  # fmt: skip
     return None
 
