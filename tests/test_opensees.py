@@ -14,6 +14,7 @@ import pytest
 from pound_mc.cli import main
 from pound_mc.errors import InputError
 from pound_mc.numerics import bench
+from pound_mc.scene import simulate
 from pound_mc.validation import opensees
 from pound_mc.validation.opensees import CASES, MISSING, case_scene, cases, convergence
 
@@ -118,3 +119,17 @@ def test_bench_peers_json_has_the_opensees_rows(monkeypatch, capfd):
     assert rows["pound-mc adaptive"]["err_peak_force"] < 1e-4
     assert rows["OpenSees dt=0.001"]["analyze_seconds"] <= rows["OpenSees dt=0.001"]["seconds"]
     assert rows["pound-mc adaptive"]["analyze_seconds"] is None
+
+
+def test_opensees_and_pound_mc_newmark_solve_the_same_steps():
+    pytest.importorskip("openseespy.opensees", reason="openseespy is not installed")
+    # the same average-acceleration scheme on the same model at the same step: the two tools
+    # agree to the Newton tolerances (measured 2e-10), which checks the OpenSees model itself
+    # (masses, damping, record, initial state, the contact's sign and effective mass)
+    scene = case_scene("opensees-sdof-pair")
+    theirs = opensees.opensees_run(scene, 1e-3)
+    ours = simulate(scene, method="newmark", dt_s=1e-3).outputs
+    assert theirs["peak_force_steps"] == pytest.approx(ours["peak_force"], rel=1e-8)
+    for q in ("peak_disp_left", "peak_disp_right"):
+        assert theirs[q] == pytest.approx(ours[q], rel=1e-8)
+    assert theirs["impacts"] == ours["impacts"] == 9
