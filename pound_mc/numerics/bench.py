@@ -14,6 +14,8 @@ runs after compilation, on one thread; errors are relative to a reference run: t
 reference solution (:mod:`pound_mc.integrators.reference`) for B1, else ``adaptive`` with 256
 sub-steps at ``dt_s`` / 10.  :func:`shear_scaling` times ``adaptive`` on shear-building pairs
 of growing size (3+5, 10+10, 20+20 storeys): the cost against the number of modes.
+:func:`peers` times B1 in OpenSees (``JankowskiImpact``, :mod:`pound_mc.validation.opensees`)
+beside ``adaptive`` (``pound-mc bench --peers``).
 """
 
 from __future__ import annotations
@@ -33,6 +35,7 @@ from pound_mc.integrators import run_kernel
 from pound_mc.integrators.reference import reference_solution
 from pound_mc.motions import record_arrays
 from pound_mc.scene import load_scene, scene_from_dict, simulate
+from pound_mc.validation.opensees import opensees_run, unavailable
 
 __all__ = [
     "SCENES",
@@ -40,6 +43,7 @@ __all__ = [
     "CONTENDERS",
     "benchmark",
     "head_to_head",
+    "peers",
     "shear_pair",
     "shear_scaling",
     "textbook_newmark",
@@ -428,5 +432,102 @@ def head_to_head(repeats: int = 15, contenders=None) -> tuple[pd.DataFrame, dict
         "reference_peak_force": float(ref["peak_force"]),
         "ratios": {k: v for k, v in ratios.items() if v is not None},
         "overheads": overhead,
+    }
+    return pd.DataFrame(rows), info
+
+
+# -- B1 in other tools ----------------------------------------------------------------------------
+
+#: OpenSees's steps in :func:`peers` [s].
+PEER_STEPS = (1.0e-3, 1.0e-4)
+
+
+def peers(repeats: int = 7, steps=None) -> tuple[pd.DataFrame, dict]:
+    """Time B1 in pound-mc ``adaptive`` and in OpenSees at each of ``steps``, interleaved.
+
+    One process, one numba thread; every contender runs once untimed (compilation, the
+    record, openseespy's import), then each of ``repeats`` rounds runs every contender in
+    turn.  pound-mc's kernel runs twice in a round and the second call is timed, as in
+    :func:`head_to_head` (a 0.1-ms call just after a 100-ms one would be timed with cold
+    caches); an OpenSees run is timed whole: building the model
+    (:func:`pound_mc.validation.opensees.opensees_run`), ``analyze`` and reading its
+    recorders (``analyze`` alone in ``analyze_seconds``).  Errors are relative to the SciPy
+    reference (:mod:`pound_mc.integrators.reference`).  Without openseespy only pound-mc's
+    rows are made, and ``info["opensees_reason"]`` says why.  ``steps``: OpenSees's steps
+    [s], default :data:`PEER_STEPS`.
+
+    Returns
+    -------
+    table : pandas.DataFrame
+        One row per contender: ``label``, ``tool``, ``method``, ``dt_s``, ``seconds``
+        (median), ``analyze_seconds`` (OpenSees; NaN for pound-mc), ``x_adaptive`` (over
+        pound-mc's ``adaptive``), ``peak_force`` [N], ``err_peak_force``,
+        ``err_peak_disp_left``, ``err_peak_disp_right`` (relative), ``impacts``.
+    info : dict
+        ``repeats``, ``threads``, ``load_before`` and ``load_after`` (``os.getloadavg()``),
+        ``reference_peak_force``, ``reference_impacts``, ``opensees_reason`` (None when
+        OpenSees ran).
+    """
+    scene = _scene("B1")
+    record = scene.record_arrays()
+    dt_rec, acc = record
+    arrays = scene.kernel_arrays()
+    ref = reference_solution(scene, record=record)
+    reason = unavailable()
+    contenders = {"pound-mc adaptive": ("pound-mc", "adaptive", scene.dt_s)}
+    if reason is None:
+        contenders |= {f"OpenSees dt={dt:g}": ("OpenSees", "newmark", float(dt))
+                       for dt in (PEER_STEPS if steps is None else steps)}  # fmt: skip
+    kw = dict(model=scene.contact_model, relation=scene.relation, substeps=scene.substeps)
+
+    def call(label):
+        tool, method, dt = contenders[label]
+        if tool == "OpenSees":
+            return opensees_run(scene, dt, record=record)
+        o = run_kernel(acc, dt_rec, **arrays, method=method, dt_s=dt, **kw).outputs
+        return {**o, "seconds": math.nan}
+
+    load_before = os.getloadavg()
+    old = numba.get_num_threads()
+    times = {label: [] for label in contenders}
+    analyze = {label: [] for label in contenders}
+    try:
+        numba.set_num_threads(1)
+        results = {label: call(label) for label in contenders}
+        for _ in range(repeats):
+            for label, (tool, _m, _dt) in contenders.items():
+                if tool == "pound-mc":
+                    call(label)
+                t0 = time.perf_counter()
+                out = call(label)
+                times[label].append(time.perf_counter() - t0)
+                analyze[label].append(out["seconds"])
+    finally:
+        numba.set_num_threads(old)
+    base = float(np.median(times["pound-mc adaptive"]))
+    rows = []
+    for label, (tool, method, dt) in contenders.items():
+        o = results[label]
+        seconds = float(np.median(times[label]))
+        rows.append({
+            "label": label,
+            "tool": tool,
+            "method": method,
+            "dt_s": dt,
+            "seconds": seconds,
+            "analyze_seconds": float(np.median(analyze[label])),
+            "x_adaptive": seconds / base,
+            "peak_force": float(o["peak_force"]),
+            **{f"err_{q}": abs(o[q] - ref[q]) / abs(ref[q]) for q in _QUANTITIES},
+            "impacts": int(o["impacts"]),
+        })  # fmt: skip
+    info = {
+        "repeats": repeats,
+        "threads": 1,
+        "load_before": list(load_before),
+        "load_after": list(os.getloadavg()),
+        "reference_peak_force": float(ref["peak_force"]),
+        "reference_impacts": int(ref["impacts"]),
+        "opensees_reason": reason,
     }
     return pd.DataFrame(rows), info
