@@ -184,14 +184,15 @@ def test_bad_cluster_options(study_file, tmp_path, capsys, extra, message):
 
 
 def test_refused_input_reads_as_in_a_local_run(tmp_path, capfd):
-    """A study the kernels refused at its first simulation (then an elastic-perfectly plastic
-    SDOF with ``adaptive``, now one with ``central-difference``) failed on the workers: the
-    worker's traceback, then a ClusterError naming ``--scheduler``.  The refusal reads as a
-    local run's: the same one line naming the file and the key, exit status 2, no retries."""
-    path = tmp_path / "epp.toml"
+    """A study the kernels refused (once an elastic-perfectly plastic SDOF with ``adaptive``,
+    now restitution set per impact on an undamped law) failed on the workers: the worker's
+    traceback, then a ClusterError naming ``--scheduler``.  The refusal reads as a local
+    run's: the same one line naming the file and the key, exit status 2, no retries."""
+    path = tmp_path / "undamped.toml"
     path.write_text(study_text(
-        left={"hysteresis": "bilinear", "yield_disp_m": 0.01, "post_yield_ratio": 0.0},
-        integrator={"method": "central-difference", "dt_s": 1e-3},
+        contact={"e": None, "model": "hertz", "restitution": "velocity", "material": "concrete",
+                 "e_quantile": 0.5},
+        sampling={"n": 2, "vary": None},
     ))  # fmt: skip
     argv = ["run", str(path), "--no-plot", "--no-progress"]
     errors = []
@@ -200,7 +201,7 @@ def test_refused_input_reads_as_in_a_local_run(tmp_path, capfd):
         assert main([*argv, *extra]) == 2
         errors.append(capfd.readouterr().err)
     assert errors[0] == errors[1], errors
-    assert "integrator.method" in errors[1] and errors[1].count("\n") == 1
+    assert "contact.restitution" in errors[1] and errors[1].count("\n") == 1
     assert not list(tmp_path.glob("*/*.nc")) and not list(tmp_path.glob("*/*/chunk_*"))
 
 

@@ -105,7 +105,10 @@ def test_explicit_methods_converge_to_the_reference(record, references, law, met
     ref = references[law]
     errors = []
     for dt in (1e-4, 5e-5):
-        out = simulate(scene(law, **LAWS[law]), record=record, method=method, dt_s=dt).outputs
+        # the accuracy check off: this test judges the error itself (first order: newmark-
+        # explicit's 1 % at 1e-4 s is rightly flagged against adaptive)
+        out = simulate(scene(law, **LAWS[law]), record=record, method=method, dt_s=dt,
+                       accuracy_check=False).outputs  # fmt: skip
         assert out["status"] == 0
         assert out["impacts"] == ref["impacts"]
         err = _errors(ref, out)

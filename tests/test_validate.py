@@ -39,9 +39,13 @@ def test_quick_set_passes_with_the_pinned_keys(capsys):
     for row in rows:
         assert KEYS <= set(row), row
         assert not any(key.startswith("_") for key in row)  # no histories in the JSON
+        if row["passed"] is None:  # only OpenSees's cases may not run here, saying why
+            assert row["group"] == "opensees" and row["reason"], row
+            continue
         assert row["passed"] is True, row
         assert row["rel_error"] <= row["tolerance"]
-    cases = {row["case"] for row in rows}
+    # the package's own cases, and OpenSees's where its module is there (it says whether)
+    cases = {row["case"] for row in rows if row["group"] != "opensees"}
     assert cases == {c["case"] for c in case_list(quick=True)}
     # every kind of reference is in the quick set
     groups = [c["group"] for c in case_list(quick=True)]
