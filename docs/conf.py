@@ -33,7 +33,7 @@ extensions = [
     "sphinx-mathjax-offline",
 ]
 source_suffix = {".md": "myst-nb", ".ipynb": "myst-nb"}
-exclude_patterns = ["_build", "jupyter_execute"]
+exclude_patterns = ["_build", "jupyter_execute", "tables"]
 nb_execution_mode = "force" if QUICKSTART.is_file() else "off"
 nb_execution_timeout = 600
 nb_execution_raise_on_error = True
