@@ -176,33 +176,6 @@ def _enable_cache(dispatcher, func):
     return dispatcher
 
 
-#: Modules compiled without numba IR-level inlining of their helpers: the scalar-state kernel
-#: and the helper modules themselves (a helper called from it is compiled once, on its own, and
-#: called).  Numba decides by the function being compiled, so a helper inlined into an
-#: array-based general kernel still brings its own helpers inline.  Measured: inlining into the
-#: scalar kernel multiplies its IR (the cold compile of the SDOF-pair ``adaptive`` took ~45 s of
-#: CPU against ~30 s called) and gains no speed there, while the general kernels ran 1.3-1.8x
-#: slower on the 3+5 shear pair with their helpers called.
-SCALAR_KERNEL_MODULES = frozenset(
-    "pound_mc." + name
-    for name in (
-        "integrators.adaptive_pair",
-        "integrators.adaptive_pair_contact",
-        "integrators.adaptive_pair_linear",
-        "integrators.laws",
-        "integrators.toolkit",
-        "integrators.outputs",
-        "physics.contact",
-    )
-)
-
-
-def _inline_unless_scalar_kernel(expr, caller_info, callee_info) -> bool:
-    """Numba inlining cost model: inline a helper except into :data:`SCALAR_KERNEL_MODULES`."""
-    func_ir = getattr(caller_info, "func_ir", caller_info)  # untyped pass: the IR itself
-    return func_ir.func_id.modname not in SCALAR_KERNEL_MODULES
-
-
 class _Dispatcher(CPUDispatcher):
     """numba's CPU dispatcher, compiling the calls from compiled code for plain types only.
 
@@ -258,27 +231,29 @@ def jit(
 ):
     """Compile ``func`` with the project's numba options (usable with or without arguments).
 
-    ``inline=True`` inlines a small helper into its callers at numba's IR level (hot helpers
-    of the integrators), except into :data:`SCALAR_KERNEL_MODULES`; it still works when called
-    from Python.  ``entry=True``: a kernel that Python calls as well as compiled code (one
-    version, with its Python wrapper, for both; see :class:`_Dispatcher`).
-    ``llvm_inline=True``: numba's ``forceinline``, the compiled helper marked ``alwaysinline``
-    for LLVM, which inlines it into every caller that calls it (those of
-    :data:`SCALAR_KERNEL_MODULES`) once linked.  Why: the contact sub-step of the SDOF-pair
-    ``adaptive`` called its Runge-Kutta step, switch location and step bounds, passing state
-    and results through memory on a latency-bound chain; inlined there it ran 4 % faster
-    (benchmark study, accuracy check on), while numba's IR, whose size set the cold compile
-    time, does not grow (+0.4 to +0.8 s of a first run's compile).  Inlining leaves the
-    arithmetic as it is: results are bitwise the same.  Numba would pass the flag on to the
-    helpers first compiled for such a helper; :data:`_OPTIONS` sets it for every function, so
-    only the marked ones are inlined, whichever caller compiles them first.
+    ``inline=True`` or ``llvm_inline=True``: numba's ``forceinline``, the compiled helper
+    marked ``alwaysinline`` for LLVM, which inlines it into every caller once linked; it still
+    works when called from Python.  ``entry=True``: a kernel that Python calls as well as
+    compiled code (one version, with its Python wrapper, for both; see :class:`_Dispatcher`).
+
+    Why LLVM's inlining and not numba's own (IR-level, which copies the helper's typed IR into
+    each caller): the IR's size sets the cold compile time.  Measured in one session (2 cores,
+    load 1-3, a fresh cache each): the general ``adaptive`` kernel of
+    ``studies/shear_spectrum.toml`` compiled in 56 s with its helpers IR-inlined, 29 s with
+    them called and 32 s inlined by LLVM; ``adaptive_rk`` (``studies/yielding_shear.toml``)
+    43, 32 and 35 s.  Called, the general kernels ran 1.1-1.9 times slower; inlined by LLVM
+    they run as fast as IR-inlined or faster (shear 0.12-0.13 against 0.17-0.23 s for 40
+    simulations, yielding 0.78-0.81 against 0.78-0.79 s, the benchmark study's SDOF pairs
+    0.09-0.10 s for 1,000 either way, interleaved runs).  Inlining leaves the arithmetic as it
+    is (no fast-math: nothing is reassociated), so results are bitwise the same.  Numba would
+    pass the flag on to the helpers first compiled for such a helper; :data:`_OPTIONS` sets it
+    for every function, so only the marked ones are inlined, whichever caller compiles them
+    first.
     """
     options = dict(_OPTIONS)
     if parallel:
         options["parallel"] = True
-    if inline:
-        options["inline"] = _inline_unless_scalar_kernel
-    if llvm_inline:
+    if inline or llvm_inline:
         options["forceinline"] = True
 
     def decorate(f):
