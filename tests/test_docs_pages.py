@@ -214,8 +214,8 @@ def test_page_shows_its_formulas_and_code_offline_at_1280_px(name, site, tmp_pat
 
 @browser
 def test_the_probe_sees_a_formula_left_as_tex(site, tmp_path):
-    """The check can fail: the physics page with MathJax from a CDN (blocked) shows TeX."""
-    page = site / "physics.html"
+    """The check can fail: the contact page with MathJax from a CDN (blocked) shows TeX."""
+    page = site / "contact.html"
     text = page.read_text(encoding="utf-8")
     assert 'class="math' in text and "_static/mathjax/" in text
     cdn = re.sub(r'src="[^"]*_static/mathjax/', 'src="https://cdn.jsdelivr.net/npm/mathjax@3/es5/',

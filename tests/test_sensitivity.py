@@ -363,8 +363,10 @@ def test_chart_panels_along_the_first_grid_axis(tmp_path):
     st = found["ST"].isel(record=0, left_period_s=panel_positions(8, 6))
     k = int(np.argmax(st.max("left_period_s").values))
     key = str(found["variable"].values[k])
-    assert fig.get_suptitle().replace("\n", " ").endswith(
-        f"({key}): total-order index up to {float(st.max()):.2f}"
+    assert (
+        fig.get_suptitle()
+        .replace("\n", " ")
+        .endswith(f"({key}): total-order index up to {float(st.max()):.2f}")
     )
     for ax, i in zip(axes, panel_positions(8, 6), strict=True):
         assert ax.get_title() == f"left period {ds['left_period_s'].values[i]:.4g} s"
