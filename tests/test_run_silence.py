@@ -136,6 +136,8 @@ def test_a_dask_run_says_it_starts_its_workers(tmp_path):
     )
     _check_never_silent(writes, end, status)
     texts = [text for _, text in writes]
-    starting = next(t for t, text in writes if "starting 2 Dask workers" in text)
-    assert starting - writes[0][0] <= MOST_SILENCE_S, writes[:5]
-    assert any("on 2 Dask workers" in text for text in texts), texts[:20]
+    # it says so while the cluster starts (22-31 s of silence in issue 41), while the workers
+    # receive the study, and while they load or compile the kernels
+    for words in ("starting 2 Dask workers", "sending the study to the Dask workers",
+                  "kernels on 2 Dask workers", "stopping the Dask workers"):  # fmt: skip
+        assert any(words in text for text in texts), (words, texts)
