@@ -106,21 +106,35 @@ def test_probability_chart_plots_the_pounding_probability_and_rules(ds, tiny):
         np.testing.assert_allclose(line.get_xdata(), ds["contact_gap_m"].values * 1e3)
         np.testing.assert_allclose(line.get_ydata(), prob.sel(left_period_s=period).values)
         assert line.get_label().endswith(f"{period:g} s")
-    vertical = [ln for ln in ax.lines if ln not in data]
-    # ABS: one black line at 4 mm; SRSS: one per period, each in its period's colour
-    abs_lines = [ln for ln in vertical if ln.get_linestyle() == "--"]
+    rest = [ln for ln in ax.lines if ln not in data]
+    # ABS, one gap for every line: one grey vertical line at 4 mm
+    abs_lines = [ln for ln in rest if ln.get_linestyle() == "--"]
     assert [ln.get_xdata()[0] for ln in abs_lines] == [pytest.approx(4.0)]
-    srss = [ln for ln in vertical if ln.get_linestyle() == "-."]
+    # SRSS, a gap per period: a black "+" on each period's line at its gap, no vertical line
+    srss = [ln for ln in rest if ln.get_marker() == "+"]
     assert [ln.get_xdata()[0] for ln in srss] == pytest.approx([1.0, 2.0, 3.0])
-    assert [ln.get_color() for ln in srss] == [ln.get_color() for ln in data]
+    for mark, line in zip(srss, data, strict=True):
+        want = np.interp(mark.get_xdata()[0], line.get_xdata(), line.get_ydata())
+        assert mark.get_ydata()[0] == pytest.approx(want)
+    assert len(rest) == 4
     assert ax.get_xlabel() == "initial separation gap [mm]"
     assert ax.get_ylabel() == "pounding probability [-]"
-    assert "vertical lines: gaps the separation rules ask for" in ax.get_title()
+
+    # the title says the answer (the probabilities at the narrowest and the widest gap)
+    def span(values):
+        lo, hi = f"{100 * values.min():.0f}", f"{100 * values.max():.0f}"
+        return f"{lo} %" if lo == hi else f"{lo}-{hi} %"
+
+    first, last = (prob.isel(contact_gap_m=k).values for k in (0, -1))
+    want = f"Pounding probability: {span(first)} at gap 0 mm, {span(last)} at gap 10 mm"
+    assert ax.get_title() == want
+    caption = ax.figure._pound_caption_artist.get_text().replace("\n", " ")
+    assert "Separation rules: their gaps (median over the samples), marked on each line" in caption
     np.testing.assert_allclose(ds.pound.probability().values, ds["pounding_probability"].values)
-    # without rules the title promised vertical lines all the same
+    # without rules: nothing but the probability lines, and no word of rules
     bare = ds.pound.plot.probability(rules=None)
-    assert len(bare.lines) == len(data) and "vertical lines" not in bare.get_title()
-    assert bare.get_title().endswith("no separation rules drawn")
+    assert len(bare.lines) == len(data)
+    assert "rule" not in bare.figure._pound_caption_artist.get_text()
 
 
 def test_probability_rules_from_attributes_and_from_separation(ds, tiny):
@@ -133,10 +147,12 @@ def test_probability_rules_from_attributes_and_from_separation(ds, tiny):
     # median over samples
     gaps = study_gaps(ds)
     ax = draw(tiny, "probability").axes[0]
-    for style, name in (("--", "gap_abs"), ("-.", "gap_srss"), (":", "gap_ddc")):
-        drawn = [ln.get_xdata()[0] for ln in ax.lines if ln.get_linestyle() == style]
+    lines = ax.lines[: ds.sizes["left_period_s"]]
+    for marker, name in (("x", "gap_abs"), ("+", "gap_srss"), ("o", "gap_ddc")):
+        marks = [ln for ln in ax.lines if ln.get_marker() == marker and ln not in lines]
         expected = gaps[name].isel(record=0, contact_gap_m=0).median("sample").values * 1e3
-        np.testing.assert_allclose(drawn, expected, rtol=1e-12)
+        inside = expected[(expected >= 0.0) & (expected <= 10.0)]  # within the gaps drawn
+        np.testing.assert_allclose([m.get_xdata()[0] for m in marks], inside, rtol=1e-12)
 
 
 # -- distribution ------------------------------------------------------------------------------

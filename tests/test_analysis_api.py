@@ -99,7 +99,13 @@ def test_required_gap_chart_marks_the_gap_the_api_finds(small):
     expected = sorted(float(g) * 1e3 for g in found.values.ravel() if np.isfinite(g))
     assert expected  # P = 0.5 is reached within the grid's gaps: a diamond per such line
     np.testing.assert_allclose(marks, expected)
-    assert "diamonds" in ax.get_title()
+    # the title says the gap the first and the last line with a diamond need, in mm
+    title = ax.get_title()
+    assert title.startswith("Gap for 50 % pounding probability: ")
+    first = next(float(g) * 1e3 for g in found.values.ravel() if np.isfinite(g))
+    assert (f"{first:.0f}" if first >= 100 else f"{first:.3g}") + " mm at PGA " in title
+    assert "diamonds" not in title  # the method is the caption's
+    assert "Diamonds: where each line" in ax.figure._pound_caption_artist.get_text()
 
 
 def test_required_gap_of_a_shear_study_leaves_the_rules_out(small):

@@ -8,7 +8,8 @@ import pytest
 
 import pound_mc
 from pound_mc._docstring import _PLACEHOLDER, fill
-from pound_mc.analysis.plot import distribution_chart, probability_chart
+from pound_mc.analysis.distribution_chart import distribution_chart
+from pound_mc.analysis.plot import probability_chart
 from pound_mc.physics.structures import sdof, shear_building
 
 

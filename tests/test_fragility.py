@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-import re
 
 import numpy as np
 import pytest
@@ -351,8 +350,8 @@ def test_dataset_cli_and_chart_say_what_was_discarded(tmp_path, capsys):
     assert data["n_event"] == [QS_100MM.tolist(), HALF_SEPARATED.tolist()]
     assert data["n_total"] == [[88] * 3] * 2
     fig = fragility_panels(ds, n_boot=200)
-    for ax, f in zip(fig.axes[:2], fits, strict=True):
-        assert ax.get_title().replace("\n", " ").endswith(f.bootstrap_note)
+    for ax in fig.axes[:2]:  # the resamples left out are the fragility command's to say
+        assert "bootstrap" not in ax.get_title() and "resample" not in fig.get_suptitle()
     assert fig.axes[0].collections and not fig.axes[1].collections  # the band only with a CI
 
 
@@ -366,7 +365,9 @@ def test_no_fit_panels_label_their_stripes():
     # 88 simulations in every stripe: the events at each point, "of 88" once in the legend
     assert labels[0] == ["0", "2", "48"] and labels[1] == ["0", "0", "4"]
     assert any("the 88 simulations" in t.get_text() for t in fig.legends[0].get_texts())
-    assert fig.axes[1].get_title().replace("\n", " ").endswith("add stripes near it")
+    assert fig.axes[1].get_title() == "gap 200 mm: no fit"
+    caption = fig._pound_caption_artist.get_text().replace("\n", " ")
+    assert "No fit at gap 200 mm: " in caption and caption.endswith("add stripes near it.")
 
 
 def test_panels_share_the_stripes_range_and_keep_their_counts_apart():
@@ -384,7 +385,10 @@ def test_panels_share_the_stripes_range_and_keep_their_counts_apart():
     wide = fit_fragility(pga, columns[1], np.full(5, 88), n_boot=0)
     assert wide.theta * np.exp(2.5 * wide.beta) > 1.05 * pga[-1]
     assert [ax.get_xlim() for ax in panels] == [(0.0, 1.05 * pga[-1])] * 3
-    assert f"theta = {wide.theta:.3g} g, beta" in panels[1].get_title()
+    assert (
+        panels[1].get_title()
+        == f"gap 200 mm: \u03b8 = {wide.theta:.3g} g, \u03b2 = {wide.beta:.2g}"
+    )
     # the counts: the events at each point, none over another count or over a point, inside
     FigureCanvasAgg(fig).draw()
     renderer = fig.canvas.get_renderer()
@@ -403,9 +407,12 @@ def test_panels_share_the_stripes_range_and_keep_their_counts_apart():
                 for px, py in points
             ]
             assert not any(near), (ax.get_title(), z[k])
-    # the title's bootstrap fits are what the panels' notes count: drawn - left out
-    assert "200 bootstrap fits" in fig.get_suptitle()
-    notes = [re.search(r"(\d+) of (\d+) bootstrap resamples left out", ax.get_title())
-             for ax in panels[:2]]  # fmt: skip
-    assert all(notes)
-    assert [int(m[2]) - int(m[1]) for m in notes] == [200, 200]
+    # the title: the median intensity of the first and the last panel with a fit; the method
+    # (no resample counts) in the caption
+    first = fit_fragility(pga, columns[0], np.full(5, 88), n_boot=0)
+    assert fig.get_suptitle() == (
+        f"Median PGA for pounding: {first.theta:.2g} g at gap 100 mm to {wide.theta:.2g} g at "
+        "gap 200 mm"
+    )
+    caption = fig._pound_caption_artist.get_text().replace("\n", " ")
+    assert "band: 95 % bootstrap interval of the fit" in caption and "resample" not in caption

@@ -395,9 +395,16 @@ def test_required_gap_chart_says_what_each_line_needs():
     assert "none (P = 0.4 at 200)" in rows["0.8 g"]
     assert rows["0.1 g"].split()[-3:] == ["30", "10", "60"]
     assert rows["0.8 g"].split()[-3:] == ["250", "180", "60"]
-    # the title says what the diamonds are: the interpolated crossing, not a grid gap
-    assert "straight between the gaps studied" in ax.get_title()
-    assert "smallest gap" not in ax.get_title()
+    # the title says the answer: the first and the last line's gap, and the line without one
+    g = [float(found["required_gap"].values[k]) * 1e3 for k in (0, 1)]
+    text = [f"{v:.3g}" if v < 100 else f"{v:.0f}" for v in g]
+    assert ax.get_title() == (
+        f"Gap for 10 % pounding probability: {text[0]} mm at PGA 0.1 g to {text[1]} mm at "
+        "0.4 g; more than 200 mm at 0.8 g"
+    )
+    # the caption says what the diamonds are: the interpolated crossing, not a grid gap
+    caption = fig._pound_caption_artist.get_text().replace("\n", " ")
+    assert "straight between the gaps studied" in caption and "smallest gap" not in caption
 
 
 @pytest.mark.slow

@@ -356,10 +356,20 @@ def test_chart_panels_along_the_first_grid_axis(tmp_path):
     assert panel_positions(8, 6) == [0, 1, 3, 4, 6, 7]
     assert len(axes) == 6
     fig = axes[0].figure
-    assert "6 of the 8 values of left.period_s" in fig._suptitle.get_text()
+    caption = fig._pound_caption_artist.get_text().replace("\n", " ")
+    assert "Panels: 6 of the 8 values of left period." in caption
+    assert "(80 runs a panel)" in caption
+    # the title says which key drives the output most, with its total-order index
+    st = found["ST"].isel(record=0, left_period_s=panel_positions(8, 6))
+    k = int(np.argmax(st.max("left_period_s").values))
+    key = str(found["variable"].values[k])
+    assert (
+        fig.get_suptitle()
+        .replace("\n", " ")
+        .endswith(f"({key}): total-order index up to {float(st.max()):.2f}")
+    )
     for ax, i in zip(axes, panel_positions(8, 6), strict=True):
-        assert ax.get_title().startswith(f"left.period_s = {ds['left_period_s'].values[i]:.4g} s\n")
-        assert ax.get_title().endswith("\n80 runs used")
+        assert ax.get_title() == f"left period {ds['left_period_s'].values[i]:.4g} s"
         heights = [p.get_height() for p in ax.patches]
         np.testing.assert_allclose(heights[:3], found["S1"].values[0, i])
         np.testing.assert_allclose(heights[3:], found["ST"].values[0, i])

@@ -65,7 +65,13 @@ def test_storey_profiles_draw_the_median_of_each_building_s_storeys(study, quant
         axes = getattr(ds.pound.plot, quantity)(sel=sel)  # the Axes, left building's first
         fig = axes[0].figure
         assert len(axes) == len(fig.axes) == 2
-        assert f"held: {HELD} = {[0.05, 0.2][held]:g}" in fig.get_suptitle()
+        # the title: the largest median drawn, where it is, and the value the chart holds
+        title = fig.get_suptitle()
+        ratio = [0.05, 0.2][held]
+        assert title.startswith(f"Peak {quantity} (right post-yield ratio {ratio:g}): median")
+        medians = [_median(ds, name, s, held).values.max() * scale for s in ("left", "right")]
+        shown = f"{max(medians):.3g}" + ("" if unit == "-" else f" {unit}")  # a ratio: no unit
+        assert f"median up to {shown} (" in title
         for ax, side in zip(axes, ("left", "right"), strict=True):
             median = _median(ds, name, side, held)
             assert [line.get_label() for line in ax.lines] == ["0 mm", "10 mm", "40 mm"]
@@ -96,7 +102,8 @@ def test_a_building_that_cannot_yield_has_no_ductility_panel(study):
     left_only = ds["storey_peak_ductility"].where(ds["storey_building"] == "left")
     fig = profiles.profile_chart(ds.assign(storey_peak_ductility=left_only), quantity="ductility")
     (ax,) = fig.axes
-    assert "right building left out" in fig.get_suptitle()
+    caption = fig._pound_caption_artist.get_text().replace("\n", " ")
+    assert "The right building is left out" in caption
     np.testing.assert_array_equal(ax.lines[0].get_ydata(), STOREYS["left"])
 
 

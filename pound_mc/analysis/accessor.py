@@ -172,14 +172,20 @@ def _axes_of(fig, ax):
 
 def _chart(name: str) -> Callable:
     """The chart function ``name`` of the analysis modules, imported now (matplotlib with it)."""
-    from pound_mc.analysis import plot, profiles, risk_chart, sensitivity_chart
+    from pound_mc.analysis import (
+        distribution_chart,
+        plot,
+        profiles,
+        risk_chart,
+        sensitivity_chart,
+    )
 
     charts = {
         "sensitivity_chart": sensitivity_chart.sensitivity_chart,
         "spectrum_chart": plot.spectrum_chart,
         "spectrum_panels": plot.spectrum_panels,
         "probability_chart": plot.probability_chart,
-        "distribution_chart": plot.distribution_chart,
+        "distribution_chart": distribution_chart.distribution_chart,
         "fragility_panels": risk_chart.fragility_panels,
         "required_gap_chart": risk_chart.required_gap_chart,
         "contacts_chart": profiles.contacts_chart,
@@ -294,9 +300,10 @@ class PoundPlot:
         "distribution",
         "distribution_chart",
         "np.ndarray",
-        """Peak force distribution (:func:`pound_mc.analysis.plot.distribution_chart`).
+        """Peak force distribution (``distribution_chart.distribution_chart``).
 
-        Two panels: ``ax`` is a sequence of two Axes (box plot, histograms).
+        Two panels: ``ax`` is a sequence of two Axes (box plot, histograms); a group of boxes
+        per intensity where the study has an intensity axis.
         """,
     )
     contacts = _chart_method(
@@ -352,20 +359,20 @@ class PoundPlot:
         See :func:`scene_at` for the arguments; three panels (displacements, penetration,
         force); the figure's title names the simulation.
         """
+        from pound_mc.analysis.labels import coord_text, text_of
         from pound_mc.analysis.plot import save
         from pound_mc.analysis.plot_numerics import time_history_chart
-        from pound_mc.analysis.style import pyplot_figures, value_text
+        from pound_mc.analysis.style import pyplot_figures
 
         result, index = self._ds.pound.simulate(
             record=record, sample=sample, study_path=study_path, **coords
         )
         with pyplot_figures(path is None, unless_set=True):
             fig = time_history_chart(result, ax=ax)
-        names = {"record": lambda i: f"record {self._ds['record'].values[i]}"}
+        names = {"record": lambda i: f"record {text_of(self._ds['record'].values[i])}"}
         names["sample"] = lambda i: f"sample {i}"
         where = ", ".join(
-            names[d](i) if d in names else f"{d} = {value_text(self._ds, d, i)}"
-            for d, i in index.items()
+            names[d](i) if d in names else coord_text(self._ds, d, i) for d, i in index.items()
         )
         fig.suptitle(f"{self._ds.attrs.get('study_name', '')}: {where}", fontsize=9)
         save(fig, path)

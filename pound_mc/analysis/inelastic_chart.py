@@ -13,13 +13,16 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
+from pound_mc.analysis.labels import text_of
 from pound_mc.analysis.plot import (
     _record_index,
     _spectrum_selection,
 )
 from pound_mc.analysis.style import (
     axis_label,
+    caption,
     chart_doc,
+    coord_text,
     legend_below,
     line_style,
     new_figure,
@@ -67,6 +70,7 @@ def inelastic_chart(ds, path: str | Path | None = None, *, side="left", record=0
     fig = new_figure((9.6, 4.6))
     ax_mu, ax_f = fig.subplots(1, 2, sharex=True)
     xs = ds[x].values * scale_of(ds, x)
+    best = (-np.inf, 0, None)  # the largest median ductility demand of a yielding line
     for i, value in enumerate(values):
         pick = {} if value is None else {line: value}
         mu = duct.sel(pick)
@@ -81,6 +85,17 @@ def inelastic_chart(ds, path: str | Path | None = None, *, side="left", record=0
         look["linestyle"] = "--" if elastic else "-"
         for ax, data, text in ((ax_mu, mu, label), (ax_f, force.sel(pick), f"_{label}")):
             q = data.quantile([0.05, 0.5, 0.95], dim="sample").values
+            if (
+                ax is ax_mu
+                and not elastic
+                and np.isfinite(q[1]).any()
+                and np.nanmax(q[1]) > best[0]
+            ):
+                best = (
+                    float(np.nanmax(q[1])),
+                    int(np.nanargmax(q[1])),
+                    None if value is None else i,
+                )
             ax.plot(xs, q[1], lw=1.6, ms=4, label=text, **look)
             ax.fill_between(xs, q[0], q[2], color=look["color"], alpha=0.15, lw=0)
     ax_mu.axhline(1.0, color="k", lw=0.6, alpha=0.5)
@@ -91,15 +106,18 @@ def inelastic_chart(ds, path: str | Path | None = None, *, side="left", record=0
         ax.set(xlabel=axis_label(ds, x), ylabel=ylabel, title=title)
         ax.title.set_fontsize(9)
         ax.grid(True, alpha=0.3)
-    held = ", ".join(
-        [f"record {ds['record'].values[_record_index(ds, record)]}"]
-        + [f"{d} = {value_text(ds, d, 0)}" for d in others]
-    )
-    fig.suptitle(
-        f"Inelastic spectrum ({ds.attrs.get('study_name', '')}, {held}): "
-        f"median over the status-ok runs of {ds.sizes['sample']} samples and 5-95 % band",
-        fontsize=9,
-    )
+    rec = _record_index(ds, record)
+    held = ", ".join([f"record {text_of(ds['record'].values[rec])}"]
+                     + [coord_text(ds, d, 0) for d in others])  # fmt: skip
+    head = f"Ductility demand of the {side} building"
+    if np.isfinite(best[0]):
+        at = coord_text(ds, x, best[1])
+        at += f", {coord_text(ds, line, best[2])}" if best[2] is not None else ""
+        head += f": median up to {best[0]:.2g} at {at}"
+    fig.suptitle(head, fontsize=10)
+    caption(fig, f"Lines: median over the runs that ended ok of the {ds.sizes['sample']} samples "
+            f"({held}); bands: 5-95 %. A building that never yields is drawn dashed, its demand "
+            f"its peak displacement over the smallest yield displacement.")  # fmt: skip
     legend_below(fig, ax_mu, title=axis_label(ds, line) if line is not None else None)
     return save(fig, path)
 

@@ -19,6 +19,7 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from pound_mc.analysis.gaps import RulesDoNotApply, study_gaps
+from pound_mc.analysis.labels import text_of
 from pound_mc.analysis.physics_charts import (  # noqa: F401  (charts of this module before)
     droptest_chart,
     restitution_chart,
@@ -34,7 +35,10 @@ from pound_mc.analysis.selection import (
 )
 from pound_mc.analysis.style import (
     axis_label,
+    caption,
     chart_doc,
+    coord_text,
+    coords_text,
     fit_tick_labels,
     legend_outside,
     line_style,
@@ -53,7 +57,6 @@ __all__ = [
     "spectrum_chart",
     "spectrum_panels",
     "probability_chart",
-    "distribution_chart",
     "spectrum_quantiles",
     "rule_gaps",
     "RULE_ATTRS",
@@ -205,15 +208,18 @@ def spectrum_chart(
         lines = [(i, {line: i}, value_text(ds, line, i)) for i in picked]
     band = len(lines) <= 7
     crowd = len(lines) > 12  # too many to tell apart: thin grey lines and their median
+    best = (-np.inf, None, None)  # the largest median drawn [MN], its x index and line
     for k, (_, where, label) in enumerate(lines):
         style = line_style(k)
         sq = q.isel(where)
+        median = sq.sel(quantile=0.5).values / 1e6
+        if not crowd and np.any(np.isfinite(median)) and np.nanmax(median) > best[0]:
+            best = (float(np.nanmax(median)), int(np.nanargmax(median)), where)
         if crowd:
             first = f"each record ({len(lines)})" if k == 0 else None
-            median = sq.sel(quantile=0.5).values / 1e6
             ax.plot(xs, median, color="0.6", lw=0.7, alpha=0.7, label=first)
             continue
-        ax.plot(xs, sq.sel(quantile=0.5).values / 1e6, lw=1.6, ms=4, label=label, **style)
+        ax.plot(xs, median, lw=1.6, ms=4, label=label, **style)
         if band:
             ax.fill_between(
                 xs,
@@ -226,38 +232,56 @@ def spectrum_chart(
     if crowd:
         over = q.sel(quantile=0.5).median("record").values / 1e6
         ax.plot(xs, over, color="black", lw=2.0, marker="o", ms=4, label="median over records")
+        if np.any(np.isfinite(over)):
+            best = (float(np.nanmax(over)), int(np.nanargmax(over)), {})
     if ds[x].dtype.kind not in "fiu" or x == MATERIAL_DIM:
         ax.set_xticks(xs, [value_text(ds, x, i) for i in range(ds.sizes[x])])
         fit_tick_labels(ax, ds.sizes[x])
-    n_rec, n_smp = ds.sizes["record"], ds.sizes["sample"]
-    over_text = f"{n_smp} samples"
-    if each:
-        rec_text = f"one line per record ({n_rec})"
-    elif isinstance(record, str) and record in ("median", "pooled") and n_rec == 1:
-        rec_text = f"record {ds['record'].values[0]}"
-    elif isinstance(record, str) and record == "pooled":
-        rec_text = f"all {n_rec} records pooled"
-        over_text = f"{n_rec} records x {n_smp} samples"
-    elif isinstance(record, str) and record == "median":
-        rec_text = f"median over {n_rec} records"
-    else:
-        rec_text = f"record {ds['record'].values[_record_index(ds, record)]}"
-    held = ", ".join(f"{d} = {value_text(ds, d, i)}" for d, i in hold.items())
     finish_axes(
         ax,
         xlabel=axis_label(ds, x),
         ylabel="peak impact force [MN]",
-        title=(
-            f"Impact force spectrum ({ds.attrs.get('study_name', '')}, {rec_text}"
-            + (f", {held}" if held else "")
-            + f")\nmedian over {over_text}"
-            + (" and 5-95 % band" if band else "")
-            + " (runs that do not pound count as 0)"
-        ),
+        title=_spectrum_title(ds, x, best, hold),
     )
+    caption(fig, _spectrum_caption(ds, record, band))
     if line is not None:
         ax.get_legend().set_title(axis_label(ds, line), prop={"size": 8})
     return save(fig, path)
+
+
+def _spectrum_title(ds, x, best, hold) -> str:
+    """The spectrum chart's answer: its largest median peak force, and where it is."""
+    held = coords_text(ds, hold)
+    head = "Peak impact force" + (f", {held}" if held else "")
+    value, j, where = best
+    if j is None:
+        return f"{head}: no simulation ended ok"
+    if value <= 0.0:
+        return f"{head}: no pounding in most runs (median 0 everywhere)"
+    at = [coord_text(ds, x, j)]
+    at += [f"record {text_of(ds['record'].values[i])}" if d == "record" else coord_text(ds, d, i)
+           for d, i in where.items()]  # fmt: skip
+    return f"{head}: median up to {value:.3g} MN at {', '.join(at)}"
+
+
+def _spectrum_caption(ds, record, band: bool) -> str:
+    """How the spectrum chart's lines were made (its caption)."""
+    n_rec, n_smp = ds.sizes["record"], ds.sizes["sample"]
+    if isinstance(record, str) and record == "each":
+        over = f"each record's median over its {n_smp} samples"
+    elif isinstance(record, str) and record in ("pooled", "median") and n_rec == 1:
+        over = f"the median over the {n_smp} samples of record {text_of(ds['record'].values[0])}"
+    elif isinstance(record, str) and record == "pooled":
+        over = f"the median over the {n_rec} records and {n_smp} samples together"
+    elif isinstance(record, str) and record == "median":
+        over = f"the median over the {n_rec} records of each record's median over its samples"
+    else:
+        name = text_of(ds["record"].values[_record_index(ds, record)])
+        over = f"the median over the {n_smp} samples of record {name}"
+    return (
+        f"Lines: {over}" + ("; bands: 5-95 %" if band else "")
+        + ". Runs that do not pound count as 0; runs that did not end ok are left out."
+    )  # fmt: skip
 
 
 @chart_doc
@@ -380,7 +404,7 @@ def _reduce_rule(value, ds, line, record, hold):
 
 
 def _line_label(ds, dim, i) -> str:
-    return f"{ds[dim].attrs.get('long_name', dim)} = {value_text(ds, dim, i)}"
+    return coord_text(ds, dim, i)
 
 
 def _hold(ds, dims, sel):
@@ -508,12 +532,16 @@ def probability_chart(
     if record is None:
         counted = pounding_counted(ds["status"])
         prob = (ds["impacts"] > 0).where(counted).isel(hold).mean(("record", "sample"))
-        rec_text = f"all {ds.sizes['record']} records" if ds.sizes["record"] > 1 else "record "
-        rec_text += "" if ds.sizes["record"] > 1 else str(ds["record"].values[0])
+        n_rec = ds.sizes["record"]
+        over = (
+            f"the {n_rec} records and {ds.sizes['sample']} samples"
+            if n_rec > 1
+            else f"the {ds.sizes['sample']} samples of record {text_of(ds['record'].values[0])}"
+        )
     else:
         record = _record_index(ds, record)
         prob = ds["pounding_probability"].isel(record=record, **hold)
-        rec_text = f"record {ds['record'].values[record]}"
+        over = f"the samples of record {text_of(ds['record'].values[record])}"
     if line is None:
         line_idx = [None]
     elif wanted is not None:
@@ -526,175 +554,98 @@ def probability_chart(
     numeric = ds[x].dtype.kind in "fiu" and x != MATERIAL_DIM
     xs = ds[x].values * scale_of(ds, x) if numeric else np.arange(ds.sizes[x])
     fig, (ax,) = new_axes(ax, (8.4, 4.6))
-    colours = {}
+    curves = {}  # line index -> its probabilities
     for k, i in enumerate(line_idx):
         style = line_style(k)
-        colours[i] = style["color"]
         y = prob.transpose(x, ...).values if i is None else prob.isel({line: i}).values
+        curves[i] = np.asarray(y, dtype=float)
         label = "pounding probability" if i is None else value_text(ds, line, i)
         ax.plot(xs, y, ms=4, lw=1.6, label=label, **style)
     if not numeric:
         ax.set_xticks(xs, [value_text(ds, x, i) for i in range(ds.sizes[x])])
         fit_tick_labels(ax, ds.sizes[x])
-    drawn = {}  # rule -> its gaps [mm], to say which rule's lines hide another's
-    for label, value in (rule_gaps(ds, rules, base_dir=base_dir) if x == GAP_DIM else {}).items():
-        style = _RULE_STYLES.get(label, (0, (1, 3)))
-        arr = _reduce_rule(value, ds, line, record, hold)
-        under = _hidden_under(arr * 1e3, drawn, np.ptp(xs) if numeric else 0.0)
-        drawn[label] = arr * 1e3
-        if arr.size == 1:
-            if np.isfinite(arr[0]):
-                rule_label = f"{label} rule: {arr[0] * 1e3:.3g} mm" + (
-                    f" ({under})" if under else ""
-                )
-                ax.axvline(arr[0] * 1e3, color="0.3", ls=style, lw=1.1, label=rule_label)
-            continue
-        if line is None or arr.size != ds.sizes[line]:
-            raise ValueError(
-                f"separation rule {label}: {arr.size} gaps, expected 1 or one per value of {line!r}"
-            )
-        first = True
-        for i in line_idx:
-            if np.isfinite(arr[i]):
-                where = f"in each line's colour; {under}" if under else "in each line's colour"
-                rule_label = f"{label} rule ({where})" if first else None
-                ax.axvline(arr[i] * 1e3, color=colours[i], ls=style, lw=1.1, label=rule_label)
-                first = False
-    held = ", ".join(f"{d} = {value_text(ds, d, i)}" for d, i in hold.items())
-    if x != GAP_DIM:
-        note = "no gap axis: against the first grid axis"
-    elif CONTACT_DIM in ds.dims:
-        note = "shear buildings: no separation rules (they assume SDOF buildings)"
-    elif drawn:
-        over = "records and samples" if record is None and ds.sizes["record"] > 1 else "samples"
-        note = f"vertical lines: gaps the separation rules ask for (median over {over})"
-    else:
-        note = "no separation rules drawn"
+    found = rule_gaps(ds, rules, base_dir=base_dir) if x == GAP_DIM else {}
+    _draw_rules(ax, ds, found, line, line_idx, curves, xs, record, hold)
     finish_axes(
         ax,
         xlabel=axis_label(ds, x),
         ylabel="pounding probability [-]",
         ylim=(-0.03, 1.03),
-        title=(
-            f"Pounding probability ({ds.attrs.get('study_name', '')}, {rec_text}"
-            + (f", {held}" if held else "")
-            + f"): fraction of the samples with an impact\n{note}"
-        ),
+        title=_probability_title(ds, x, curves, hold),
     )
+    text = f"Lines: share of the runs with at least one impact, over {over}."
+    if x != GAP_DIM:
+        text += " The study has no gap axis: drawn against its first grid axis."
+    elif CONTACT_DIM in ds.dims:
+        text += " No separation rules: they assume SDOF buildings."
+    elif found:
+        where = "records and samples" if record is None and ds.sizes["record"] > 1 else "samples"
+        text += f" Separation rules: their gaps (median over the {where}), marked on each line."
+    caption(fig, text)
     if line is not None:
         ax.get_legend().set_title(axis_label(ds, line), prop={"size": 8})
     note_left_out(fig, counted_mask(ds, "pounding").values, left_out_why("pounding"))
     return save(fig, path)
 
 
-def _distribution_groups(ds, by, record, sel):
-    """Peak forces [N] of the pounding simulations (status ok), per value of ``by``."""
-    grid = _grid_dims(ds)
-    held = _hold(ds, [d for d in (sel or {}) if d != by], sel)
-    rec = {} if record is None else {"record": _record_index(ds, record)}
-    force = ds["peak_force"].isel(**rec, **held)
-    ok = (ds["status"] == 0) & (ds["impacts"] > 0)
-    ok = ok.isel(**rec, **held)
-    groups, labels = [], []
-    for i in range(ds.sizes[by]):
-        f = force.isel({by: i}).values
-        m = ok.isel({by: i}).values
-        groups.append(f[m].ravel())
-        labels.append(value_text(ds, by, i))
-    pooled = [d for d in grid if d != by and d not in held]
-    return groups, labels, pooled
+#: Marks of the separation rules' gaps on each probability line: black, and unlike the lines'
+#: own (filled) markers; DDC's ring around SRSS's plus stays readable when the two gaps agree.
+RULE_MARKS = {
+    "ABS": {"marker": "x", "ms": 7},
+    "SRSS": {"marker": "+", "ms": 9},
+    "DDC": {"marker": "o", "ms": 9, "mfc": "none"},
+}
 
 
-@chart_doc
-def distribution_chart(
-    ds: xr.Dataset,
-    path: str | Path | None = None,
-    *,
-    by: str | None = None,
-    record: int | str | None = None,
-    sel: dict | None = None,
-    bins: int = 30,
-    ax: Sequence[Axes] | None = None,
-) -> Figure:
-    """Distribution of the peak impact force: box plot and histogram per value of a dimension.
+def _draw_rules(ax, ds, found, line, line_idx, curves, xs, record, hold) -> None:
+    """The separation rules' gaps of :func:`probability_chart`.
 
-    Only simulations that pounded (at least one impact, status ok) enter; the other grid
-    dimensions are pooled unless held by ``sel``.
-
-    Parameters
-    ----------
-    %(ds)s
-    %(path)s
-    by : str, optional
-        Dimension with one box and one histogram per value (default the material axis
-        ``contact_material`` when the dataset has it, else the gap, else the last grid
-        dimension; a study without grid: one group, its samples).
-    %(record)s
-    sel : dict, optional
-        ``{dim: value}`` of grid dimensions to hold at one value (nearest) instead of pooling.
-    bins : int
-        Number of histogram bins (common to every value).
-    ax : sequence of two matplotlib.axes.Axes, optional
-        Where to draw the box plot and the histograms (default a new figure).
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-        Box plot on the first Axes, one histogram (``patches``, [MN]) per value on the second.
+    A rule with one gap for every line is a vertical line (grey, a dash pattern per rule); a
+    rule with a gap per line is a black mark on each line at that gap (:data:`RULE_MARKS`),
+    where the gap lies within the gaps drawn: a few marks, not a vertical line per line.
     """
-    grid = _grid_dims(ds)
-    if not grid and by is None:  # no grid: the samples of the study's one scene, as run draws
-        ds = ds[["peak_force", "status", "impacts"]].expand_dims(scene=["study scene"])
-        ds["scene"].attrs = {"long_name": "scene", "units": "1"}
-        grid, by = ["scene"], "scene"
-    if by is None:
-        by = MATERIAL_DIM if MATERIAL_DIM in grid else (GAP_DIM if GAP_DIM in grid else None)
-        by = by or (grid[-1] if grid else None)
-    if by is None or by not in ds.dims:
-        raise ValueError(f"cannot draw the distribution per {by!r}: no such grid dimension")
-    groups, labels, pooled = _distribution_groups(ds, by, record, sel)
-    fig, (ax1, ax2) = new_axes(ax, (11.0, 4.6), ncols=2)
-    drawn = [k for k, g in enumerate(groups) if g.size]
-    if drawn:
-        ax1.boxplot(
-            [groups[k] / 1e6 for k in drawn],
-            positions=np.arange(1, len(drawn) + 1),
-            tick_labels=[labels[k] for k in drawn],
-            showmeans=True,
-            whis=(5, 95),
-            flierprops={"markersize": 2},
-        )
-        fit_tick_labels(ax1, len(drawn))
-        edges = np.histogram_bin_edges(np.concatenate([groups[k] for k in drawn]), bins=bins)
-        for j, k in enumerate(drawn):
-            counts, _ = np.histogram(groups[k], bins=edges)
-            style = line_style(j)
-            hist_label = f"{labels[k]} ({groups[k].size})"
-            ax2.stairs(
-                counts,
-                edges / 1e6,
-                color=style["color"],
-                linestyle=style["linestyle"],
-                lw=1.4,
-                label=hist_label,
+    drawn = {}  # rule -> its gap [mm], to say which rule's line hides another's
+    for name, value in found.items():
+        arr = _reduce_rule(value, ds, line, record, hold) * 1e3
+        if arr.size == 1:
+            under = _hidden_under(arr, drawn, float(np.ptp(xs)))
+            drawn[name] = arr
+            if np.isfinite(arr[0]):
+                text = f"{name} rule: {arr[0]:.3g} mm" + (f" ({under})" if under else "")
+                style = _RULE_STYLES.get(name, (0, (1, 3)))
+                ax.axvline(arr[0], color="0.3", ls=style, lw=1.1, label=text)
+            continue
+        if line is None or arr.size != ds.sizes[line]:
+            raise ValueError(
+                f"separation rule {name}: {arr.size} gaps, expected 1 or one per value of {line!r}"
             )
-        legend_outside(ax2, title=f"{axis_label(ds, by)}\n(simulations)")
-    else:
-        ax1.text(0.5, 0.5, "no simulation pounded", transform=ax1.transAxes, ha="center")
-    ax1.set(xlabel=axis_label(ds, by), ylabel="peak impact force [MN]")
-    ax1.set_title("box 25-75 %, whiskers 5-95 %, triangle mean", fontsize=9)
-    ax2.set(xlabel="peak impact force [MN]", ylabel="number of simulations [-]")
-    for axis in (ax1, ax2):
-        axis.grid(alpha=0.3)
-    over = f"; pooled over {', '.join(pooled)}" if pooled else ""
-    if record is None:
-        n = ds.sizes["record"]
-        rec_text = f"all {n} records" if n > 1 else f"record {ds['record'].values[0]}"
-    else:
-        rec_text = f"record {ds['record'].values[_record_index(ds, record)]}"
-    fig.suptitle(
-        f"Peak impact force of the simulations that pounded ({ds.attrs.get('study_name', '')}, "
-        f"{rec_text}{over})",
-        fontsize=9,
-    )
-    return save(fig, path)
+        first = True
+        for i in line_idx:
+            y = curves[i]
+            if not (np.isfinite(arr[i]) and xs[0] <= arr[i] <= xs[-1] and np.isfinite(y).all()):
+                continue
+            ax.plot([arr[i]], [np.interp(arr[i], xs, y)], ls="none", color="black", mew=1.3,
+                    zorder=4, label=f"{name} rule's gap on each line" if first else None,
+                    **RULE_MARKS.get(name, {"marker": "*"}))  # fmt: skip
+            first = False
+
+
+def _percent_range(values) -> str:
+    """``"14-100 %"`` (or ``"18 %"``): the range of probabilities ``values``."""
+    values = np.asarray(values, dtype=float)
+    values = values[np.isfinite(values)]
+    if not values.size:
+        return "no run counted"
+    lo, hi = (f"{100 * v:.0f}" for v in (values.min(), values.max()))
+    return f"{lo} %" if lo == hi else f"{lo}-{hi} %"
+
+
+def _probability_title(ds, x, curves, hold) -> str:
+    """The probability chart's answer: the probabilities at its first and its last x value."""
+    held = coords_text(ds, hold)
+    ys = np.array(list(curves.values()))
+    first, last = coord_text(ds, x, 0), coord_text(ds, x, ds.sizes[x] - 1)
+    return (
+        "Pounding probability" + (f" ({held})" if held else "")
+        + f": {_percent_range(ys[:, 0])} at {first}, {_percent_range(ys[:, -1])} at {last}"
+    )  # fmt: skip

@@ -116,8 +116,27 @@ def _selection(ds, line, sel, *, x_axis: bool = False):
 
 
 def _held_text(ds, hold) -> str:
-    """``"left_yield_disp_m = 20 mm, ..."``: what a chart holds (empty when nothing)."""
-    return ", ".join(f"{d} = {style.value_text(ds, d, i)}" for d, i in hold.items())
+    """``"left yield displacement 20 mm, ..."``: what a chart holds (empty when nothing)."""
+    return style.coords_text(ds, hold)
+
+
+def _largest(panels, line, picks, *, across: bool):
+    """The largest median drawn: ``(value, panel, line pick, point)``, value NaN if none.
+
+    ``panels``: the Axes whose first ``len(picks)`` lines are the medians, one per pick.
+    ``across``: the values are the lines' x data (profiles over the height), else their y.
+    """
+    best = (np.nan, None, None, None)
+    for k, ax in enumerate(panels):
+        for i, ln in zip(picks, ax.lines[: len(picks)], strict=True):
+            values = np.asarray(ln.get_xdata() if across else ln.get_ydata(), dtype=float)
+            if np.isfinite(values).any() and not (np.nanmax(values) <= best[0]):
+                best = (float(np.nanmax(values)), k, i, int(np.nanargmax(values)))
+    return best
+
+
+def _line_where(ds, line, i) -> str:
+    return "" if line is None or i is None else style.coord_text(ds, line, i)
 
 
 def _draw_lines(ax, ds, q, line, picks, at, scale: float, *, across: bool) -> None:
@@ -234,15 +253,19 @@ def contacts_chart(
     _draw_lines(ax, ds, q, line, picks, height, style.scale_of(ds, variable), across=True)
     ax.set_yticks(height, ticks)
     held = _held_text(ds, hold)
-    ax.set(
-        xlabel=style.axis_label(ds, variable),
-        ylabel=ylabel,
-        title=(
-            f"{ds[variable].attrs.get('long_name', variable)} ({ds.attrs.get('study_name', '')})"
-            f"\nmedian over records and samples, 5-95 % band{', ' + held if held else ''}"
-        ),
-    )
+    value, _, i, j = _largest([ax], line, picks, across=True)
+    head = str(ds[variable].attrs.get("long_name", variable))
+    head = head[:1].upper() + head[1:] + (f" ({held})" if held else "")
+    if np.isfinite(value):
+        units = style.chart_units(ds[variable].attrs.get("units"))[0]
+        at = f"the contact at {ticks[j]} m" if ylabel.startswith("contact elevation") else (
+            f"contact {ticks[j]}")  # fmt: skip
+        where = ", ".join(t for t in (at, _line_where(ds, line, i)) if t)
+        head += f": median up to {value:.3g}{'' if units == '-' else ' ' + units} at {where}"
+    ax.set(xlabel=style.axis_label(ds, variable), ylabel=ylabel, title=head)
     ax.title.set_fontsize(9)
+    style.caption(fig, "Lines: median over the records and samples (runs that ended ok); "
+                  "bands: 5-95 %.")  # fmt: skip
     ax.grid(alpha=0.3)
     style.legend_outside(ax, title=style.axis_label(ds, line) if line else None)
     return style.save(fig, path)
@@ -309,24 +332,36 @@ def profile_chart(
         ax_b.grid(alpha=0.3)
     style.legend_outside(axes[-1], title=style.axis_label(ds, line) if line else None)
     left_out = [(name.rsplit("_", 1)[1], name) for name in empty]
-    fig.suptitle(_suptitle(ds, quantity, hold, left_out), fontsize=9)
+    value, k, i, j = _largest(axes, line, picks, across=False)
+    where = None
+    if np.isfinite(value):
+        side = names[k].rsplit("_", 1)[1]
+        where = ", ".join(t for t in (f"{side} building", style.coord_text(ds, x, j) if x else "",
+                                      _line_where(ds, line, i)) if t)  # fmt: skip
+        units = style.chart_units(ds[names[k]].attrs.get("units"))[0]
+        value_text = f"{value:.3g}" + ("" if units == "-" else f" {units}")
+        where = (value_text, where)
+    _titles(fig, ds, quantity, hold, left_out, where)
     return style.save(fig, path)
 
 
-def _suptitle(ds, quantity, hold, left_out) -> str:
-    """Title of a profile chart: what it draws, what it holds, which buildings it leaves out.
+def _titles(fig, ds, quantity, hold, left_out, largest) -> None:
+    """Title and caption of a profile chart: its largest median; what it holds and leaves out.
 
-    ``left_out``: ``(side, variable)`` of each building without values.
+    ``left_out``: ``(side, variable)`` of each building without values; ``largest``:
+    ``(value text, where)`` of the largest median drawn, or None.
     """
-    notes = [f"held: {_held_text(ds, hold)}"] if hold else []
-    notes += [
-        f"{side} building left out ({name} NaN throughout: {_WHY_EMPTY[quantity]})"
+    held = _held_text(ds, hold)
+    head = f"Peak {quantity}" + (f" ({held})" if held else "")
+    if largest is not None:
+        head += f": median up to {largest[0]} ({largest[1]})"
+    fig.suptitle(head, fontsize=10)
+    notes = [
+        f"The {side} building is left out ({name} NaN throughout: {_WHY_EMPTY[quantity]})."
         for side, name in left_out
     ]
-    return (
-        f"Peak {quantity} ({ds.attrs.get('study_name', '')}): median over records and samples, "
-        "5-95 % band" + ("\n" + "; ".join(notes) if notes else "")
-    )
+    style.caption(fig, " ".join(["Lines: median over the records and samples (runs that ended "
+                                 "ok); bands: 5-95 %.", *notes]))  # fmt: skip
 
 
 def _has_storeys(ds, quantity) -> bool:
@@ -374,5 +409,12 @@ def _storey_chart(ds, path, quantity, line, sel, ax) -> Figure:
     for ax_b in axes:  # one scale for both buildings: storeys side by side, values comparable
         ax_b.set(xlim=(0.0, right), ylim=(0.5, tallest + 0.5))
     style.legend_outside(axes[-1], title=style.axis_label(ds, line) if line else None)
-    fig.suptitle(_suptitle(ds, quantity, hold, [(s, name) for s in empty]), fontsize=9)
+    value, k, i, j = _largest(axes, line, picks, across=True)
+    largest = None
+    if np.isfinite(value):
+        storey = axes[k].lines[picks.index(i)].get_ydata()[j]
+        where = ", ".join(t for t in (f"storey {int(storey)} of the {sides[k]} building",
+                                      _line_where(ds, line, i)) if t)  # fmt: skip
+        largest = (f"{value:.3g}" + ("" if units == "-" else f" {units}"), where)
+    _titles(fig, ds, quantity, hold, [(s, name) for s in empty], largest)
     return style.save(fig, path)

@@ -24,12 +24,14 @@ from pound_mc.analysis import (
     risk,
     risk_chart,
 )
+from pound_mc.analysis.distribution_chart import distribution_chart
 from pound_mc.analysis.inelastic_chart import inelastic_chart, yielding_sides
 from pound_mc.analysis.sensitivity_chart import sensitivity_chart
 from pound_mc.analysis.style import (
     output_path,
     pyplot_figures,
     require_simulations,
+    take_caption,
     write_atomically,
 )
 from pound_mc.study.dataset import pounding_counted, study_file
@@ -64,6 +66,13 @@ def chart_png(fig: Figure, dpi: int = 100) -> tuple[bytes, int, int]:
 
 
 def _figure_html(key: str, fig, caption: str) -> str:
+    """The chart ``fig`` as an HTML figure: ``caption`` and the chart's own caption under it.
+
+    The chart's caption (:func:`~pound_mc.analysis.style.caption`: its method) is taken out
+    of the picture and written as text.
+    """
+    method = take_caption(fig)
+    caption = f"{caption} {method}" if method else caption
     data, width, height = chart_png(fig)
     uri = "data:image/png;base64," + base64.b64encode(data).decode("ascii")
     return (
@@ -188,11 +197,8 @@ def _figures(ds: xr.Dataset, base_dir, history: bool, forces: bool = True) -> li
             _figure_html(
                 "spectrum",
                 plot.spectrum_panels(ds),
-                "Impact force spectrum: median peak impact force (line) and the 5-95 % range "
-                "(band) over the records and samples together, against the first grid axis, "
-                "one line per value of the second"
-                + (", one panel per material" if panels else "")
-                + "; runs that do not pound count as 0.",
+                "Impact force spectrum: the peak impact force against the first grid axis, one "
+                "line per value of the second" + (", one panel per material." if panels else "."),
             )
         )
     sides = yielding_sides(ds) if forces and plot._grid_dims(ds) else []
@@ -201,29 +207,19 @@ def _figures(ds: xr.Dataset, base_dir, history: bool, forces: bool = True) -> li
             _figure_html(
                 "inelastic",
                 inelastic_chart(ds, side=sides[0]),
-                f"Inelastic spectrum of the {sides[0]} building: median ductility demand (a "
-                "building that never yields: its peak displacement over the smallest yield "
-                "displacement) and peak impact force over the samples, with the 5-95 % band, "
-                "against the first grid axis, one line per value of the second; first record, "
-                "other grid axes at their first value.",
+                f"Inelastic spectrum of the {sides[0]} building: ductility demand and peak "
+                "impact force against the first grid axis, one line per value of the second; "
+                "first record, other grid axes at their first value.",
             )
         )
     if plot.GAP_DIM in ds.dims:
         caption = (
-            "Pounding probability: the fraction of samples with at least one impact against "
-            "the initial gap"
-            + (
-                "."
-                if plot.CONTACT_DIM in ds.dims
-                else "; vertical lines mark the gaps the ABS, SRSS and DDC separation rules "
-                "ask for."
-            )
-        )
+            "Pounding probability against the initial gap"
+            + ("." if plot.CONTACT_DIM in ds.dims else ", with the gaps the ABS, SRSS and DDC "
+               "separation rules ask for.")
+        )  # fmt: skip
     else:
-        caption = (
-            "Pounding probability: the fraction of samples with at least one impact against "
-            "the first grid axis (the study has no gap axis)."
-        )
+        caption = "Pounding probability against the first grid axis (the study has no gap axis)."
     if plot._grid_dims(ds):
         figures.append(
             _figure_html("probability", plot.probability_chart(ds, base_dir=base_dir), caption)
@@ -234,10 +230,8 @@ def _figures(ds: xr.Dataset, base_dir, history: bool, forces: bool = True) -> li
             _figure_html(
                 "required-gap",
                 risk_chart.required_gap_chart(ds, base_dir=base_dir),
-                "Required gap: pounding probability over records and samples against the gap, "
-                "one line per value of the other grid axis, the separation rules where they "
-                "apply, and the smallest gap with probability at or below 0.1 (diamonds, "
-                "Wilson 95 % interval).",
+                "Required gap: the gap at which the pounding probability falls to 0.1, one line "
+                "per value of the other grid axis, with the separation rules where they apply.",
             )
         )
     if intensity:
@@ -245,8 +239,8 @@ def _figures(ds: xr.Dataset, base_dir, history: bool, forces: bool = True) -> li
             _figure_html(
                 "fragility",
                 risk_chart.fragility_panels(ds),
-                "Fragility: fraction of the simulations that pounded at each intensity (points), "
-                "the lognormal fit by maximum likelihood and its 95 % bootstrap band.",
+                "Fragility: the probability of pounding against the intensity, a panel per "
+                "combination of the other grid axes.",
             )
         )
     if not forces:
@@ -256,18 +250,17 @@ def _figures(ds: xr.Dataset, base_dir, history: bool, forces: bool = True) -> li
             _figure_html(
                 "sensitivity",
                 sensitivity_chart(ds),
-                "Sobol' indices of the peak impact force (SALib, Saltelli's design): first "
-                "order S1 (the sampled key alone) and total order ST (with its interactions) "
-                "of every sampled key with their 95 % bootstrap intervals; a panel per value of "
-                "the first grid axis (at most six), first record, other grid axes at their "
-                "first value.",
+                "Sobol' indices of the peak impact force: first order S1 (the sampled key "
+                "alone) and total order ST (with its interactions) of every sampled key; a "
+                "panel per value of the first grid axis (at most six), first record, other grid "
+                "axes at their first value.",
             )
         )
     if int(((ds["impacts"] > 0) & ds.pound.ok).sum()):
         figures.append(
             _figure_html(
                 "distribution",
-                plot.distribution_chart(ds),
+                distribution_chart(ds),
                 "Distribution of the peak impact force of the simulations that pounded.",
             )
         )
@@ -276,9 +269,8 @@ def _figures(ds: xr.Dataset, base_dir, history: bool, forces: bool = True) -> li
             _figure_html(
                 "contacts",
                 profiles.contacts_chart(ds),
-                "Peak impact force at each contact against the contact's elevation: median "
-                "over records and samples and the 5-95 % band, one line per value of the first "
-                "grid axis.",
+                "Peak impact force at each contact against the contact's elevation, one line "
+                "per value of the first grid axis.",
             )
         )
     for quantity in profiles.PROFILE_VARIABLES:
@@ -287,10 +279,9 @@ def _figures(ds: xr.Dataset, base_dir, history: bool, forces: bool = True) -> li
                 _figure_html(
                     quantity,
                     profiles.profile_chart(ds, quantity=quantity),
-                    f"Peak {quantity} of each building (per storey for shear buildings): "
-                    "median over records and samples and the 5-95 % band, one line per value "
-                    "of a grid axis, the other grid axes held at the value the title names; a "
-                    "building whose values are NaN throughout has no panel.",
+                    f"Peak {quantity} of each building (per storey for shear buildings), one "
+                    "line per value of a grid axis, the other grid axes held at the value the "
+                    "title names; a building whose values are NaN throughout has no panel.",
                 )
             )
     if history:

@@ -25,8 +25,10 @@ from matplotlib.lines import Line2D
 from pound_mc.analysis.fragility import fit_fragility
 from pound_mc.analysis.fragility_chart import fragility_chart, stripe_counts
 from pound_mc.analysis.gaps import RulesDoNotApply
+from pound_mc.analysis.labels import dim_text, name_and_units
 from pound_mc.analysis.plot import (
     CONTACT_DIM,
+    RULE_MARKS,
     _hold,
     _line_label,
     _reduce_rule,
@@ -38,9 +40,12 @@ from pound_mc.analysis.risk import GAP_DIM, _counts, _intensity_dim, left_out_wh
 from pound_mc.analysis.risk import counted as counted_mask
 from pound_mc.analysis.site_risk import code_gaps
 from pound_mc.analysis.style import (
-    _name_and_units,
     axis_label,
+    caption,
     chart_doc,
+    coord_text,
+    coords_text,
+    legend_below,
     new_axes,
     note_left_out,
     value_text,
@@ -104,25 +109,29 @@ def fragility_panels(
     own = ax is None
     legend = None
     x = np.asarray(ds[dim].values, dtype=float)
-    im_name, im_units = _name_and_units(ds[dim].attrs, dim)
+    im_units = name_and_units(ds[dim].attrs, dim)[1]
     im_units = "" if im_units in ("", "1") else im_units  # the fit is in the stored units
-    im_label = f"{im_name} [{im_units or '-'}]"
+    in_g = im_units == "g"
+    im_label = axis_label(ds, dim) if in_g else f"{dim_text(ds, dim)} [{im_units or '-'}]"
     unit = f" {im_units}" if im_units else ""
     x_max = 1.05 * float(x.max())  # every panel over the stripes' range
     counted = np.unique(n_total.values[n_total.values > 0])
     totals = counted.size != 1  # one number of simulations everywhere: said once, in the legend
     percent = 95  # the level of fit_fragility's intervals (read from the fits)
+    medians = []  # per panel with a fit: its place and theta
+    no_fit = []  # per panel without: why, for the caption
     for ax, combo in zip(axes, combos, strict=False):
         where = {**held, **dict(zip(free, combo, strict=True))}
         z = n_event.isel(where).transpose(dim).values
         n = n_total.isel(where).transpose(dim).values
-        title = ", ".join(_line_label(ds, d, i) for d, i in where.items()) or "all simulations"
+        title = ", ".join(_line_label(ds, d, i) for d, i in where.items())
         try:
             fit = fit_fragility(x, z, n, n_boot=n_boot, seed=seed)
         except InputError as exc:
             ax.plot(x, np.divide(z, n, out=np.full(x.shape, np.nan), where=n > 0), "o", c="k")
             why = textwrap.shorten(exc.message, 180, placeholder=" ...")
-            ax.set_title(f"{title}\n" + textwrap.fill(f"no fit: {why}", 60), fontsize=7)
+            ax.set_title(f"{title}: no fit" if title else "no fit", fontsize=8)
+            no_fit.append(f"No fit at {title}: {why}" if title else f"No fit: {why}")
             ax.set_xlabel(im_label)
             ax.set_ylabel(f"P({event} | IM)")
             ax.set_xlim(0.0, x_max)
@@ -141,47 +150,52 @@ def fragility_panels(
             totals=totals,
         )
         percent = round(100 * fit.ci)
-        head = f"{title}\ntheta = {fit.theta:.3g}{unit}, beta = {fit.beta:.3g}"
+        head = f"{title}: " if title else ""
+        head += f"\u03b8 = {fit.theta:.3g}{unit}, \u03b2 = {fit.beta:.2g}"
         if fit.theta > x_max:
-            head += " (theta beyond the stripes)"
-        note = f"\n{textwrap.fill(fit.bootstrap_note, 64)}" if fit.bootstrap_note else ""
-        ax.set_title(head + note, fontsize=8)
+            head += " (beyond the stripes)"
+        ax.set_title(head, fontsize=8)
+        medians.append((where, fit.theta))
         if not legend:
             handles, labels = ax.get_legend_handles_labels()
             # the fit's numbers are per panel (in its title): the legend names the curve only
             generic = [label.split(":")[0] if label.startswith("lognormal") else label
                        for label in labels]  # fmt: skip
             if own:
-                legend = fig.legend(
-                    handles, generic, loc="outside lower center", ncols=3, fontsize=8
-                )
+                legend_below(fig, ax, handles=handles, labels=generic)
+                legend = True
             else:  # a caller's figure: in the first panel, where a rising curve leaves room
                 legend = ax.legend(handles, generic, loc="lower right", fontsize=7)
     for ax in axes[len(combos) :]:
         ax.set_visible(False)
     if own:  # a figure of its own: the title over the panels (not on a caller's figure)
-        boot = (
-            f"; bands: {percent} % of {n_boot} bootstrap fits (a resample without a fit is "
-            "left out and another drawn)"
-            if n_boot
-            else "; no bootstrap"
-        )
-        fig.suptitle(
-            f"Fragility ({ds.attrs.get('study_name', '')}): P({event}) over records and "
-            f"samples, lognormal fit by maximum likelihood{boot}",
-            fontsize=9,
-        )
+        fig.suptitle(_fragility_title(ds, dim, event, medians, unit), fontsize=10)
+    boot = f"band: {percent} % bootstrap interval of the fit" if n_boot else "no bootstrap band"
+    caption(fig, f"Points: share of the simulations of each stripe with {event} (the number "
+            f"beside), over records and samples; curve: lognormal fit by maximum likelihood "
+            f"(\u03b8 median, \u03b2 dispersion); {boot}.")  # fmt: skip
+    for text in no_fit:
+        caption(fig, text if text.endswith(".") else f"{text}.")
     note_left_out(fig, counted_mask(ds, event), left_out_why(event))
     return save(fig, path)
 
 
-#: Marks of the separation rules' gaps on each probability line: black, and unlike the lines'
-#: own (filled) markers; DDC's ring around SRSS's plus stays readable when the two gaps agree.
-RULE_MARKS = {
-    "ABS": {"marker": "x", "ms": 7},
-    "SRSS": {"marker": "+", "ms": 9},
-    "DDC": {"marker": "o", "ms": 9, "mfc": "none"},
-}
+def _fragility_title(ds, dim, event, medians, unit) -> str:
+    """The fragility chart's answer: the median intensity of ``event``, first to last panel.
+
+    ``medians``: ``(where, theta)`` of every panel with a fit, ``where`` its ``{dim: index}``.
+    """
+    head = f"Median {dim_text(ds, dim)} for {event}"
+    if not medians:
+        return f"{head}: no fit"
+
+    def one(where, theta):
+        text = f"{theta:.2g}{unit}"
+        return text + (f" at {coords_text(ds, where)}" if where else "")
+
+    if len(medians) == 1:
+        return f"{head}: {one(*medians[0])}"
+    return f"{head}: {one(*medians[0])} to {one(*medians[-1])}"
 
 
 def _mm(value: float) -> str:
@@ -246,7 +260,6 @@ def required_gap_chart(
         raise InputError("does not apply: the required gap needs a study with the gap on its grid")
     fig = probability_chart(ds, None, line=line, sel=sel, rules=None, ax=ax)
     ax = ax if ax is not None else fig.axes[0]
-    headline = ax.get_title().split("\n")[0]
     found = required_gap(ds, probability, rules=False)
     rest = list(found["required_gap"].dims)
     sel = dict(sel or {})
@@ -272,6 +285,7 @@ def required_gap_chart(
     level = round(100 * found.attrs["ci"])
     gaps_mm = np.asarray(ds[GAP_DIM].values, dtype=float) * 1e3
     cells, short, diamonds = {}, [], False  # per line: its table cells; lines without a gap
+    answers = []  # per line: its name and required gap [mm] (NaN: none within the gaps)
     for ln in drawn:
         where, i = labels[ln.get_label()]
         xs, ys = np.asarray(ln.get_xdata(), float), np.asarray(ln.get_ydata(), float)
@@ -286,13 +300,15 @@ def required_gap_chart(
                 color=ln.get_color(),
                 ms=6,
                 capsize=3,
-                label="required gap (bars: its Wilson interval)",
+                label=f"required gap ({level} % interval)",
             )
             diamonds = True
+            answers.append((i, gap))
             cell = _gap_text(gap, lo, hi, gaps_mm)
         elif np.isfinite(ys[-1]) and ys[-1] > probability:
             cell = f"none (P = {ys[-1]:.2g} at {_mm(gaps_mm[-1])})"
             short.append((ln, xs[-1], ys[-1]))
+            answers.append((i, np.nan))
         else:  # no simulations counted at some gap
             cell = "none"
         rules_row = []
@@ -314,7 +330,7 @@ def required_gap_chart(
                     mew=1.3,
                     zorder=4,
                     label=(
-                        f"{name}: median gap, at the share of runs pounding at their own"
+                        f"{name} rule: median gap"
                         if share is not None
                         else f"{name} rule's gap on each line"
                     ),
@@ -356,25 +372,52 @@ def required_gap_chart(
     )
     for text in ax.get_legend().get_texts()[: len(cells) + 1 if cells else 0]:
         text.set_family("monospace")
-    if not diamonds:  # no line reaches the target within the grid's gaps: say so
-        marks = f"no gap studied brings P to {probability:g} or less: widen the gap range"
-    else:
+    ax.set_title(_required_title(ds, line, probability, answers, gaps_mm), fontsize=9)
+    if diamonds:
         marks = (
-            f"diamonds: the gap at which each line (straight between the gaps studied) falls "
-            f"to P = {probability:g}"
+            f"Diamonds: where each line, straight between the gaps studied, falls to "
+            f"{100 * probability:g} % (bars: its {level} % Wilson interval)."
         )
+    else:  # no line reaches the target within the grid's gaps: say so
+        marks = f"No gap studied brings the probability to {probability:g}: widen the gap range."
     if shares:
         marks += (
-            "\nblack marks: each rule's median gap, at the share of runs that pound at their "
-            "own rule gap (in brackets)"
+            " Black marks: each rule's median gap, at the share of runs that pound at their "
+            "own rule gap (in brackets in the table)."
         )
     elif ruled:
-        marks += (
-            "\nblack marks: the separation rules' gaps on each line (median over records and "
-            "samples)"
-        )
-    ax.set_title(headline + "\n" + marks, fontsize=8)
+        marks += " Black marks: the separation rules' gaps on each line."
+    caption(fig, marks)
     return save(fig, path)
+
+
+def _required_title(ds, line, probability, answers, gaps_mm) -> str:
+    """The required-gap chart's answer: the gap each line needs, first to last.
+
+    ``answers``: ``(line index or None, required gap [mm] or NaN)`` per line drawn.
+    """
+    head = f"Gap for {100 * probability:g} % pounding probability"
+    named = [(i, g) for i, g in answers if np.isfinite(g)]
+    none = [i for i, g in answers if not np.isfinite(g)]
+
+    def at(i, first=True):
+        if i is None:
+            return ""
+        return f" at {coord_text(ds, line, i) if first else value_text(ds, line, i)}"
+
+    if named:
+        (i0, g0), (i1, g1) = named[0], named[-1]
+        text = f"{_mm(g0)} mm{at(i0)}"
+        text += f" to {_mm(g1)} mm{at(i1, False)}" if len(named) > 1 else ""
+    else:
+        text = "none within the gaps studied"
+    if none and named:
+        where = ", ".join(value_text(ds, line, i) for i in none) if line is not None else ""
+        text += f"; more than {_mm(gaps_mm[-1])} mm" + (f" at {where}" if where else "")
+    elif none:
+        text = f"more than {_mm(gaps_mm[-1])} mm, the widest gap studied"
+        text += f", for every {dim_text(ds, line)}" if line is not None and len(none) > 1 else ""
+    return f"{head}: {text}"
 
 
 def _own_rule_gaps(ds, line, hold, base_dir) -> tuple[dict, dict]:

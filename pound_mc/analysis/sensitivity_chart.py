@@ -20,9 +20,10 @@ import xarray as xr
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
+from pound_mc.analysis.labels import coord_text, key_text, name_and_units, text_of
 from pound_mc.analysis.plot import _hold, _record_index, save
 from pound_mc.analysis.sensitivity import left_out_why, sensitivity
-from pound_mc.analysis.style import PALETTE, _name_and_units, chart_doc, new_axes, value_text
+from pound_mc.analysis.style import PALETTE, caption, chart_doc, legend_below, new_axes
 
 __all__ = ["sensitivity_chart", "panel_positions"]
 
@@ -41,19 +42,21 @@ def panel_positions(size: int, most: int) -> list[int]:
 
 
 def _where_text(ds: xr.Dataset, where: dict) -> str:
-    """``"record elcentro, left.period_s = 0.5 s"``: what a panel holds."""
+    """``"record elcentro, left period 0.5 s"``: what a panel holds."""
     parts = []
     for dim, i in where.items():
         if dim == "record":
-            parts.append(f"record {ds['record'].values[i]}")
+            parts.append(f"record {text_of(ds['record'].values[i])}")
         else:
-            key = ds[dim].attrs.get("scene_key", dim)
-            parts.append(f"{key} = {value_text(ds, dim, i)}")
+            parts.append(coord_text(ds, dim, i))
     return ", ".join(parts)
 
 
-def _panel(ax: Axes, found: xr.Dataset, where: dict) -> str:
-    """S1 and ST bars of every key at one grid point, with their intervals; the runs used."""
+def _panel(ax: Axes, found: xr.Dataset, where: dict) -> tuple[int, int]:
+    """S1 and ST bars of every key at one grid point, with their intervals; the runs used.
+
+    Returns the runs used and the runs left out.
+    """
     keys = [str(k) for k in found["variable"].values]
     x = np.arange(len(keys))
     width = 0.38
@@ -73,13 +76,11 @@ def _panel(ax: Axes, found: xr.Dataset, where: dict) -> str:
         label.set_rotation_mode("anchor")
     ax.set_ylabel("Sobol' index [-]")
     ax.grid(axis="y", alpha=0.3)
-    n_out = int(at["n_left_out"])
-    foot = f"{int(at['n_used']):,} runs used" + (f", {n_out:,} left out" if n_out else "")
     message = str(at["message"].values)
     if message:
         ax.text(0.5, 0.5, textwrap.fill("no indices: " + message, 40), transform=ax.transAxes,
                 ha="center", va="center", fontsize=8)  # fmt: skip
-    return foot
+    return int(at["n_used"]), int(at["n_left_out"])
 
 
 @chart_doc
@@ -124,8 +125,8 @@ def sensitivity_chart(
     -------
     matplotlib.figure.Figure
         Per panel the bars ``S1`` then ``ST`` (``ax.patches``) and their error bars; its title
-        names the grid point and the runs used and left out, and a panel without indices says
-        why.
+        names the grid point, and a panel without indices says why; the caption gives the
+        runs used and left out.
     """
     found = indices if indices is not None else sensitivity(ds, output, n_boot=n_boot)
     grid = [d for d in found["S1"].dims if d not in ("record", "variable")]
@@ -142,10 +143,12 @@ def sensitivity_chart(
         fig, axes = new_axes(None, (width * ncols, 3.9 * nrows + 0.5), nrows=nrows, ncols=ncols)
     else:
         fig, axes = new_axes(ax, (0.0, 0.0), ncols=len(combos), spare=True)
+    used = []
     for panel, i in zip(axes, combos, strict=False):
         where = held | ({by: i} if by else {})
-        foot = _panel(panel, found, where)
-        panel.set_title((f"{_where_text(ds, {by: i})}\n" if by else "") + foot, fontsize=8)
+        used.append(_panel(panel, found, where))
+        if by:
+            panel.set_title(_where_text(ds, {by: i}), fontsize=8)
     for extra in axes[len(combos) :]:
         extra.set_visible(False)
     # one scale for every panel, 0 to 1 at least, and every interval drawn whole
@@ -160,23 +163,43 @@ def sensitivity_chart(
         axes[0].legend(fontsize=7, loc="upper left")
         return save(fig, path)
     handles, labels = axes[0].get_legend_handles_labels()
-    fig.legend(handles, labels, loc="outside lower center", ncols=2, fontsize=8, frameon=False)
-    name, units = _name_and_units({"long_name": found.attrs["output_long_name"],
-                                   "units": found.attrs["output_units"]}, "")  # fmt: skip
+    legend_below(fig, axes[0], handles=handles, labels=labels, ncols=2)
+    chars = int(fig.get_figwidth() * 72 / (10 * 0.6))  # characters of 10 pt text a line holds
+    fig.suptitle(textwrap.fill(_sensitivity_title(found, shown), chars), fontsize=10)
     percent = round(100 * found.attrs["conf_level"])
     some = ""
     if by and len(combos) < ds.sizes[by]:
-        some = (
-            f"; {len(combos)} of the {ds.sizes[by]} values of {ds[by].attrs.get('scene_key', by)}"
-        )
+        some = f" Panels: {len(combos)} of the {ds.sizes[by]} values of {key_text(_key(ds, by))}."
     held_text = _where_text(ds, {d: i for d, i in held.items() if d != "record" or
                                  ds.sizes["record"] > 1})  # fmt: skip
-    head = f"Sobol' indices of {name} [{'-' if units in ('', '1') else units}]"
-    tail = (f"study {ds.attrs.get('study_name', '')}: N = {found.attrs['base_n']} base points, "
-            f"{percent} % bootstrap intervals{some}"
-            + (f"; at {held_text}" if held_text else ""))  # fmt: skip
-    if int(shown["n_left_out"].sum()):  # no analysis leaves runs out without saying which
-        tail += f"; left out: {left_out_why(found.attrs['output'])}"
-    chars = int(fig.get_figwidth() * 72 / (9 * 0.6))  # characters of 9 pt text a line holds
-    fig.suptitle(f"{head}\n{textwrap.fill(tail, chars)}", fontsize=9)
+    runs = sorted({n for n, _ in used})
+    n_out = sum(n for _, n in used)
+    text = (f"Sobol' indices (SALib) from N = {found.attrs['base_n']} base points of "
+            f"Saltelli's design ({'-'.join(f'{n:,}' for n in runs[:: max(1, len(runs) - 1)])} "
+            f"runs a panel); bars: {percent} % bootstrap intervals.{some}"
+            + (f" Held: {held_text}." if held_text else ""))  # fmt: skip
+    if n_out:  # no analysis leaves runs out without saying which
+        text += f" {n_out:,} runs left out: {left_out_why(found.attrs['output'])}."
+    caption(fig, text)
     return save(fig, path)
+
+
+def _key(ds: xr.Dataset, dim: str) -> str:
+    return str(ds[dim].attrs.get("scene_key", dim))
+
+
+def _sensitivity_title(found: xr.Dataset, shown: xr.Dataset) -> str:
+    """The sensitivity chart's answer: the key with the largest total-order index shown."""
+    name, _ = name_and_units(
+        {"long_name": found.attrs["output_long_name"], "units": found.attrs["output_units"]}, ""
+    )
+    total = shown["ST"].transpose("variable", ...).values.reshape(shown.sizes["variable"], -1)
+    name = name.split(" (")[0]  # "peak impact force (continuous-time maximum)": the first part
+    if not np.isfinite(total).any():
+        return f"What drives the {name}: no indices"
+    k, j = np.unravel_index(np.nanargmax(total), total.shape)
+    key = str(shown["variable"].values[k])
+    return (
+        f"{name[:1].upper()}{name[1:]} depends most on {key_text(key)} ({key}): "
+        f"total-order index up to {total[k, j]:.2f}"
+    )

@@ -66,18 +66,38 @@ def risk_chart(
         for k, rule in enumerate(c["rule"].values):
             g = 1e3 * float(c["code_gap"].sel(rule=rule))
             share = 100 * float(c["code_gap_exceedance"].sel(rule=rule))
-            text = f"{rule} {g:.0f} mm: {share:.0f} % of runs pound at their own"
+            text = f"{str(rule).upper()} {g:.0f} mm: {share:.0f} % of runs pound at their own"
             ax.axvline(g, color=style.line_style(k + 1)["color"], lw=1.0, ls=":", label=text)
-    where = ", ".join(f"{d} = {style.value_text(out, d, 0)}" for d in held)
-    ax.set(xlabel="initial gap [mm]", ylabel="mean annual rate [1/year]",
-           title=f"{out.attrs['event']} at the site (hazard {out.attrs['hazard']})"
-           + (f"\n{where}" if where else ""))  # fmt: skip
+    where = style.coords_text(out, held)
+    ax.set(xlabel="initial separation gap [mm]", ylabel="mean annual rate [1/year]",
+           title=_risk_title(out, sel, gaps, rate, target, where))  # fmt: skip
     ax.title.set_fontsize(9)
+    ax.title.set_wrap(True)
+    why = str(sel["gap_message"].values) if "gap_message" in sel else ""
+    if why:
+        style.caption(fig, f"No risk-targeted gap: {why}.")
+    style.caption(fig, f"Hazard: {out.attrs['hazard']}. Line: the mean annual rate of "
+                  f"{out.attrs['event']} at each gap studied; band: "
+                  f"{round(100 * out.attrs['ci'])} % bootstrap interval.")  # fmt: skip
     ax.grid(alpha=0.3, which="both")
     style.legend_outside(ax, size=7)
     counted = np.ones(int(out["n_total"].sum() + out["n_left_out"].sum()), bool)
+    if out.attrs.get("extrapolation"):
+        style.caption(fig, out.attrs["extrapolation"])
     counted[: int(out["n_left_out"].sum())] = False
     style.note_left_out(fig, counted, left_out_why(out.attrs["event"]))
-    if out.attrs.get("extrapolation"):
-        fig.text(0.005, 0.03, out.attrs["extrapolation"], fontsize=7, color="dimgray")
     return style.save(fig, path)
+
+
+def _risk_title(out, sel, gaps, rate, target, where) -> str:
+    """The site risk chart's answer: the risk-targeted gap, or the rates at the ends."""
+    event = out.attrs["event"]
+    head = f"Annual rate of {event}" + (f" ({where})" if where else "")
+    if np.isfinite(target) and "required_gap" in sel:
+        gap = float(sel["required_gap"])
+        if np.isfinite(gap):
+            return f"Gap for {target:.2g} {event} a year at the site: {1e3 * gap:.0f} mm" + (
+                f" ({where})" if where else "")  # fmt: skip
+        return f"Gap for {target:.2g} {event} a year at the site: none found" + (
+            f" ({where})" if where else "")  # fmt: skip
+    return f"{head}: {rate[0]:.2g} at gap {gaps[0]:.0f} mm, {rate[-1]:.2g} at {gaps[-1]:.0f} mm"

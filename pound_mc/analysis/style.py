@@ -15,6 +15,7 @@ placement from here, so that charts read alike:
 from __future__ import annotations
 
 import contextvars
+import textwrap
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
@@ -24,19 +25,28 @@ import numpy as np
 import xarray as xr
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
+from matplotlib.layout_engine import ConstrainedLayoutEngine
 
 from pound_mc._docstring import fill
+from pound_mc.analysis.labels import (  # noqa: F401  (charts take the names from here too)
+    UNITS,
+    chart_units,
+    coord_text,
+    coords_text,
+    intensity_name,
+    name_and_units,
+    value_text,
+)
 from pound_mc.errors import InputError, OutputError
 from pound_mc.study.files import temporary_beside
 
 __all__ = [
     "PALETTE",
     "MARKERS",
-    "UNITS",
     "line_style",
-    "chart_units",
     "axis_label",
-    "value_text",
+    "caption",
+    "take_caption",
     "legend_outside",
     "fit_tick_labels",
     "new_axes",
@@ -53,9 +63,6 @@ PALETTE = ("#0072B2", "#E69F00", "#009E73", "#D55E00", "#CC79A7", "#56B4E9", "#0
 #: Markers, one per line in turn.
 MARKERS = ("o", "s", "^", "D", "v", "P", "X", "*")
 _DASHES = ("-", "--", ":")
-
-#: Chart units of a dataset's units: ``{dataset units: (chart units, factor)}``.
-UNITS = {"m": ("mm", 1e3), "N": ("MN", 1e-6), "N s": ("kN s", 1e-3), "J": ("kJ", 1e-3)}
 
 
 def line_style(k: int) -> dict:
@@ -74,25 +81,15 @@ def line_style(k: int) -> dict:
     }
 
 
-def chart_units(units: str | None) -> tuple[str, float]:
-    """Units a chart draws a quantity stored in ``units`` in, and the factor to them."""
-    units = (units or "").strip()
-    if units in UNITS:
-        return UNITS[units]
-    return ("-" if units in ("", "1") else units), 1.0
-
-
-def _name_and_units(attrs: dict, fallback: str) -> tuple[str, str]:
-    name = str(attrs.get("long_name", fallback))
-    units = str(attrs.get("units", ""))
-    if name.endswith(" in units of g"):  # dimensionless multiples of g: say [g] once
-        return name[: -len(" in units of g")], "g"
-    return name, units
-
-
 def axis_label(ds: xr.Dataset, name: str) -> str:
-    """``"long name [chart units]"`` of variable or coordinate ``name`` of ``ds``."""
-    long_name, units = _name_and_units(ds[name].attrs, name)
+    """``"long name [chart units]"`` of variable or coordinate ``name`` of ``ds``.
+
+    The intensity axes read as people write them, with the period of Sa:
+    ``"PGA [g]"``, ``"Sa(T = 1.0 s) [g]"``.
+    """
+    if name in ("pga_g", "sa_g"):
+        return f"{intensity_name(ds, name)} [g]"
+    long_name, units = name_and_units(ds[name].attrs, name)
     if name == "contact_material":  # names, not numbers: no units
         return long_name
     shown, _ = chart_units(units)
@@ -101,30 +98,7 @@ def axis_label(ds: xr.Dataset, name: str) -> str:
 
 def scale_of(ds: xr.Dataset, name: str) -> float:
     """Factor from ``ds[name]``'s stored units to its chart units."""
-    return chart_units(_name_and_units(ds[name].attrs, name)[1])[1]
-
-
-def value_text(ds: xr.Dataset, dim: str, i: int) -> str:
-    """The ``i``-th value of coordinate ``dim`` as text, in chart units (``"10 mm"``).
-
-    A material axis (``contact_material`` with a ``material`` variable of names) gives the name;
-    a yield displacement at which no run of the building yields says so (a study's elastic
-    variant, e.g. ``left.yield_disp_m = 1000``: "1e+06 mm (never yields)").
-    """
-    if dim == "contact_material" and "material" in ds and ds["material"].dims == (dim,):
-        return str(ds["material"].values[i])
-    value = ds[dim].values[i]
-    if not isinstance(value, float | np.floating | int | np.integer):
-        return str(value)
-    _, units = _name_and_units(ds[dim].attrs, dim)
-    shown, factor = chart_units(units)
-    text = f"{float(value) * factor:.4g}" + ("" if shown == "-" else f" {shown}")
-    side = dim.removesuffix("_yield_disp_m")
-    ductility = ds.get(f"peak_ductility_{side}") if side != dim else None
-    if ductility is not None and dim in ductility.dims:
-        if not bool((ductility.isel({dim: i}) > 1.0).any()):
-            text += " (never yields)"
-    return text
+    return chart_units(name_and_units(ds[name].attrs, name)[1])[1]
 
 
 def legend_outside(ax: Axes, *, title: str | None = None, size: float = 8, **kwargs) -> None:
@@ -144,25 +118,46 @@ def legend_outside(ax: Axes, *, title: str | None = None, size: float = 8, **kwa
     )
 
 
-def legend_below(fig: Figure, ax: Axes, *, title: str | None = None, size: float = 8) -> None:
+def legend_below(
+    fig: Figure,
+    ax: Axes,
+    *,
+    title: str | None = None,
+    size: float = 8,
+    handles: Sequence | None = None,
+    labels: Sequence[str] | None = None,
+    ncols: int = 3,
+) -> None:
     """One legend of ``ax``'s lines below every panel of ``fig`` (panels sharing their lines).
 
     Below rather than beside, so that long labels do not narrow the panels; ``fig`` needs the
-    constrained layout (:func:`new_axes`).  Nothing is drawn if no line has a label.
+    constrained layout (:func:`new_axes`), which keeps room for it above the caption
+    (:func:`caption`).  ``handles`` and ``labels``: the entries, when not ``ax``'s.  Nothing is
+    drawn if no line has a label.
     """
-    handles, labels = ax.get_legend_handles_labels()
+    if handles is None or labels is None:
+        handles, labels = ax.get_legend_handles_labels()
     if not handles:
         return
-    fig.legend(
+    ncols = min(len(handles), ncols)
+    legend = fig.legend(
         handles,
         labels,
-        loc="outside lower center",
-        ncols=min(len(handles), 3),
+        loc="lower center",
+        bbox_to_anchor=(0.5, 0.0),
+        bbox_transform=fig.transFigure,
+        ncols=ncols,
         fontsize=size,
         title=title,
         title_fontsize=size,
         frameon=False,
     )
+    lines = 0  # text lines of the legend: per row its tallest label, and the title's
+    for row in range(0, len(labels), ncols):
+        lines += max(str(text).count("\n") + 1 for text in labels[row : row + ncols])
+    lines += title.count("\n") + 1 if title else 0
+    fig._pound_legend = (legend, (lines * size * 1.45 + size) / 72.0)
+    _layout_foot(fig)
 
 
 def fit_tick_labels(ax: Axes, n: int, *, axis: str = "x", most: int = 6) -> None:
@@ -316,7 +311,7 @@ def require_simulations(ds: xr.Dataset, file: str | None = None) -> None:
 
 
 def note_left_out(fig: Figure, counted, why: str) -> None:
-    """Say at the figure's foot how many simulations a chart leaves out, where any are.
+    """Say in the figure's caption how many simulations a chart leaves out, where any are.
 
     ``counted``: the mask of the simulations the chart counts; ``why``: which statuses those
     left out have.  No analysis leaves runs out silently.
@@ -324,8 +319,62 @@ def note_left_out(fig: Figure, counted, why: str) -> None:
     mask = np.asarray(counted, dtype=bool)
     n_out = int(mask.size - mask.sum())
     if n_out:
-        fig.text(0.005, 0.005, f"{n_out:,} of {mask.size:,} simulations left out ({why})",
-                 fontsize=7, color="dimgray", ha="left", va="bottom")  # fmt: skip
+        caption(fig, f"{n_out:,} of {mask.size:,} simulations left out ({why}).")
+
+
+#: Caption text size [pt].
+CAPTION_SIZE = 7.0
+
+
+def caption(fig: Figure, text: str) -> None:
+    """Add ``text`` to the caption at the foot of ``fig``: how the chart was made.
+
+    A chart's title says its answer; its method (what the lines, bands and marks are, what
+    was pooled, what was left out) goes here, in small grey text under the axes.  Each text
+    is added once (panels drawn by one chart on one figure share it); a figure with the
+    constrained layout (:func:`new_figure`) keeps room for it under its axes.
+    :func:`take_caption` removes it again (the HTML report writes it under the picture).
+    """
+    texts = fig.__dict__.setdefault("_pound_caption", [])
+    if text in texts:
+        return
+    texts.append(text)
+    _draw_caption(fig)
+
+
+def _draw_caption(fig: Figure) -> None:
+    old = fig.__dict__.pop("_pound_caption_artist", None)
+    if old is not None:
+        old.remove()
+    texts = fig.__dict__.get("_pound_caption", [])
+    if texts:
+        chars = max(40, int(fig.get_figwidth() * 72 / (CAPTION_SIZE * 0.55)))
+        text = textwrap.fill(" ".join(texts), chars)
+        fig._pound_caption_artist = fig.text(
+            0.005, 0.005, text, fontsize=CAPTION_SIZE, color="dimgray", ha="left", va="bottom"
+        )
+    _layout_foot(fig)
+
+
+def _layout_foot(fig: Figure) -> None:
+    """Room at the foot of ``fig`` for its caption and, above it, its legend below the panels."""
+    caption = fig.__dict__.get("_pound_caption_artist")
+    lines = caption.get_text().count("\n") + 1 if caption is not None else 0
+    height = (lines * CAPTION_SIZE * 1.3 + 4.0) / 72.0 if lines else 0.0  # [in]
+    legend, legend_height = fig.__dict__.get("_pound_legend", (None, 0.0))
+    if legend is not None:
+        legend.set_bbox_to_anchor((0.5, height / fig.get_figheight()), fig.transFigure)
+    engine = fig.get_layout_engine()
+    if isinstance(engine, ConstrainedLayoutEngine):
+        bottom = (height + legend_height) / fig.get_figheight()
+        engine.set(rect=(0.0, bottom, 1.0, 1.0 - bottom))
+
+
+def take_caption(fig: Figure) -> str:
+    """Remove the caption of ``fig`` (:func:`caption`) and return its text (empty if none)."""
+    texts = fig.__dict__.pop("_pound_caption", [])
+    _draw_caption(fig)
+    return " ".join(texts)
 
 
 def save(fig: Figure, path: str | Path | None) -> Figure:

@@ -18,6 +18,11 @@ from pathlib import Path
 from pound_mc._version import __version__
 from pound_mc.cli.commands import COMMANDS, HelpFormatter, add_commands
 from pound_mc.errors import InputError, OutputError, named_by
+from pound_mc.study.status import STATUS
+
+#: Commands that say on a terminal what they are doing from the start (``run`` loads the
+#: libraries and compiles for many seconds: :mod:`pound_mc.study.status`).
+_STATUS_COMMANDS = ("run",)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -67,17 +72,21 @@ def main(argv: list[str] | None = None) -> int:
     if extra:  # with the command's own usage, not the program's
         command_parser = getattr(args, "command_parser", None) or parser
         command_parser.error(f"unrecognized arguments: {' '.join(extra)}")
+    if args.command in _STATUS_COMMANDS and not getattr(args, "no_progress", False):
+        STATUS.say(f"pound-mc {args.command}: loading the libraries")  # the first seconds
     try:
         with warnings.catch_warnings():
             _quiet_library_warnings()
             status = command_function(args.handler)(args)
     except InputError as exc:
+        STATUS.clear()
         scene = getattr(args, "scene", None)  # simulate: its record's errors, and the kernels'
         if scene is not None and (exc.file or exc.key) and not isinstance(exc, OutputError):
             exc = named_by(exc, Path(scene))  # (a law a method cannot step), in the scene file
         print(f"pound-mc {args.command}: error: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
+        STATUS.clear()
         print(f"pound-mc {args.command}: interrupted", file=sys.stderr)
         return 130
     except BrokenPipeError:
@@ -85,14 +94,18 @@ def main(argv: list[str] | None = None) -> int:
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 0
     except MemoryError:
+        STATUS.clear()
         print(f"pound-mc {args.command}: error: out of memory; make the study or the record "
               "smaller", file=sys.stderr)  # fmt: skip
         return 2
     except OSError as exc:
         # a file or folder the command cannot read or write (permissions, a full disk)
+        STATUS.clear()
         where = f"{exc.filename}: " if exc.filename else ""
         print(f"pound-mc {args.command}: error: {where}{exc.strerror or exc}", file=sys.stderr)
         return 2
+    finally:
+        STATUS.clear()
     return 0 if status is None else int(status)
 
 

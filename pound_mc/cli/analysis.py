@@ -13,7 +13,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from pound_mc.analysis import plot, plot_numerics, profiles, risk_chart
+from pound_mc.analysis import distribution_chart, plot, plot_numerics, profiles, risk_chart
+from pound_mc.analysis.labels import dim_text
 from pound_mc.analysis.report import write_report
 from pound_mc.analysis.risk import counted, fragility, left_out_why
 from pound_mc.analysis.selection import MATERIAL_DIM, dim_name, selection
@@ -195,7 +196,9 @@ def draw(path: str | Path, kind: str, *, out=None, sel=None, record=None, sample
                 base_dir=study_folder(ds, path.parent),
             )
         if kind == "distribution":
-            return plot.distribution_chart(ds, out, record=record, sel=sel, by=kwargs.get("by"))
+            return distribution_chart.distribution_chart(
+                ds, out, record=record, sel=sel, by=kwargs.get("by")
+            )
         if kind == "restitution":
             return ds.pound.plot.restitution(out).figure
         if kind == "history":
@@ -267,7 +270,8 @@ def plot_command(args) -> int:
         out = Path(args.out)
     else:
         stem = "restitution" if args.file == "-" else path.stem
-        out = (Path("outputs") if args.file == "-" else path.parent) / f"{stem}_{args.kind}.png"
+        name = args.kind.replace("-", "_")  # as run names them: NAME_required_gap.png
+        out = (Path("outputs") if args.file == "-" else path.parent) / f"{stem}_{name}.png"
     output_path(out, key="--out", suffix=".png")  # before anything is read or drawn
     try:
         draw(
@@ -320,6 +324,13 @@ def _jsonable(value):
     if isinstance(out, float):
         return None if math.isnan(out) else out
     return json.loads(json.dumps(out).replace("NaN", "null"))
+
+
+def _where(ds, dim: str, value: float) -> str:
+    """``"gap 20 mm"``: a grid value as people write it (a gap in mm)."""
+    if dim == "contact_gap_m":
+        return f"{dim_text(ds, dim)} {1e3 * value:g} mm"
+    return f"{dim_text(ds, dim)} {value:g}"
 
 
 def fragility_command(args) -> int:
@@ -376,7 +387,9 @@ def fragility_command(args) -> int:
     notes = np.atleast_1d(np.asarray(fit["bootstrap_note"].values, dtype=object)).ravel()
     grids = np.meshgrid(*(fit[d].values for d in rest), indexing="ij") if rest else []
     for k in range(flat_theta.size):
-        where = ", ".join(f"{d} = {g.ravel()[k]:g}" for d, g in zip(rest, grids, strict=True))
+        where = ", ".join(
+            _where(fit, d, float(g.ravel()[k])) for d, g in zip(rest, grids, strict=True)
+        )
         head = f"  {where or 'all'}: "
         if msgs[k]:
             print(head + f"no fit ({msgs[k]})")

@@ -15,7 +15,7 @@ from pound_mc.analysis.risk import left_out_why
 from pound_mc.analysis.risk import required_gap as probability_gap
 from pound_mc.analysis.site_chart import risk_chart
 from pound_mc.analysis.site_risk import code_gaps, design_intensity, risk
-from pound_mc.cli.analysis import _jsonable, _open_dataset
+from pound_mc.cli.analysis import _jsonable, _open_dataset, _where
 from pound_mc.errors import InputError
 
 
@@ -138,9 +138,8 @@ def design_code_gaps(ds, out, hazard, codes):
 
 
 def _value(out, dim: str, i: int) -> str:
-    """``"contact_gap_m = 20 mm"`` (a gap in mm) or ``"dim = value"``."""
-    value = float(out[dim].values[i])
-    return f"{dim} = {1e3 * value:g} mm" if dim == "contact_gap_m" else f"{dim} = {value:g}"
+    """``"gap 20 mm"`` (a gap in mm) or ``"name value"``, as people write them."""
+    return _where(out, dim, float(out[dim].values[i]))
 
 
 def _print_risk(path: Path, out, gaps) -> None:
@@ -171,8 +170,7 @@ def _print_risk(path: Path, out, gaps) -> None:
             msg = out["gap_message"].values[index]
             lo, hi = out["required_gap_ci"].values[index]
             head = f"  gap for {target:.3g}/year"
-            head += "".join(f", {d} = {float(out[d][i]):g}" for d, i in
-                            zip(gap.dims, index, strict=True))  # fmt: skip
+            head += "".join(f", {_value(out, d, i)}" for d, i in zip(gap.dims, index, strict=True))
             found = f"{1e3 * gap.values[index]:.1f} mm [{1e3 * lo:.1f}, {1e3 * hi:.1f}]"
             print(head + (f": none ({msg})" if msg else f": {found}"))
     if gaps is not None:

@@ -9,14 +9,17 @@ import shutil
 import sys
 import time
 import tomllib
+from collections.abc import Iterator
+from functools import partial
 from importlib import resources
 from pathlib import Path
 
 import numpy as np
 import xarray as xr
 
+from pound_mc.analysis.distribution_chart import distribution_chart
 from pound_mc.analysis.inelastic_chart import inelastic_chart, yielding_sides
-from pound_mc.analysis.plot import CONTACT_DIM, GAP_DIM, distribution_chart, spectrum_panels
+from pound_mc.analysis.plot import CONTACT_DIM, GAP_DIM, spectrum_panels
 from pound_mc.analysis.profiles import contacts_chart
 from pound_mc.analysis.risk_chart import fragility_panels, required_gap_chart
 from pound_mc.analysis.sensitivity_chart import sensitivity_chart
@@ -38,6 +41,7 @@ from pound_mc.study.runner import (
     run_study,
 )
 from pound_mc.study.schema import STUDY
+from pound_mc.study.status import STATUS
 from pound_mc.study.warmup import cache_directory, compile_kernels, warm_up
 
 #: Fixed cost per chunk of a local run (writing its file, Python around the batch call) [s],
@@ -67,10 +71,12 @@ def run_command(args) -> int:
     if dask:
         # a missing optional dependency is reported before any work, naming the option
         _import_distributed("--workers" if args.workers is not None else "--scheduler")
+    STATUS.off = args.no_progress
+    STATUS.say(f"reading {Path(args.study).name} and its records")
     study = load_study(args.study)
     engine = StudyEngine(study)
     for line in engine.record_warnings:
-        print(line, file=sys.stderr)
+        STATUS.announce(line)
     t0 = time.perf_counter()
     common = dict(
         fresh=args.fresh,
@@ -91,12 +97,14 @@ def run_command(args) -> int:
         else:
             report = run_study(study, args.out, threads=args.threads, **common)
     except KeyboardInterrupt:
+        STATUS.clear()
         print(
             f"interrupted: finished chunks are kept under {Path(args.out) / study.name}; "
             "run the same command again to resume",
             file=sys.stderr,
         )
         return 130
+    STATUS.clear()
     if not report.complete:
         print(
             f"interrupted after {count_text(report.chunks_run, 'chunk')}: finished chunks are "
@@ -121,6 +129,7 @@ def run_command(args) -> int:
         return ALL_FAILED_STATUS
     if not args.no_plot:
         for png in _charts(study, report.path, Path(args.out)):
+            STATUS.clear()
             print(f"wrote {png}")
     return 0
 
@@ -171,8 +180,8 @@ def status_warnings(path: Path) -> list[str]:
     return lines
 
 
-def _charts(study, path: Path, out: Path) -> list[Path]:
-    """The charts ``run`` draws, chosen from what the dataset holds.
+def _charts(study, path: Path, out: Path) -> Iterator[Path]:
+    """The charts ``run`` draws, chosen from what the dataset holds: each file once written.
 
     Without an intensity axis: the impact force spectrum, one panel per material where the
     material is a grid axis the spectrum would otherwise hold at its first value
@@ -187,33 +196,31 @@ def _charts(study, path: Path, out: Path) -> list[Path]:
     Saltelli's design also gets the Sobol' indices of its peak force (``_sensitivity.png``,
     :func:`~pound_mc.analysis.sensitivity_chart.sensitivity_chart`).
     """
-    written = []
     with xr.open_dataset(path) as ds:
         ds.load()
+        charts = []  # (file name's kind, how to draw it)
         if study.method == "saltelli":
-            written.append(out / f"{study.name}_sensitivity.png")
-            sensitivity_chart(ds, written[-1])
+            charts.append(("sensitivity", sensitivity_chart))
         if not study.grid:
-            written.append(out / f"{study.name}_distribution.png")
-            distribution_chart(ds, written[-1])
-            return written
-        if study.intensity_key is None:
-            written.append(out / f"{study.name}_spectrum.png")
-            spectrum_panels(ds, written[-1])
-            sides = yielding_sides(ds)
-            if sides:
-                written.append(out / f"{study.name}_inelastic.png")
-                inelastic_chart(ds, written[-1], side=sides[0])
-        if GAP_DIM in ds.dims and ds.sizes[GAP_DIM] > 1:
-            written.append(out / f"{study.name}_required_gap.png")
-            required_gap_chart(ds, written[-1], base_dir=study.path.parent)
-        if study.intensity_key is not None:
-            written.append(out / f"{study.name}_fragility.png")
-            fragility_panels(ds, written[-1])
-        if CONTACT_DIM in ds.dims and ds.sizes[CONTACT_DIM] > 1 and "contact_peak_force" in ds:
-            written.append(out / f"{study.name}_contacts.png")
-            contacts_chart(ds, written[-1])
-    return written
+            charts.append(("distribution", distribution_chart))
+        else:
+            if study.intensity_key is None:
+                charts.append(("spectrum", spectrum_panels))
+                sides = yielding_sides(ds)
+                if sides:
+                    charts.append(("inelastic", partial(inelastic_chart, side=sides[0])))
+            if GAP_DIM in ds.dims and ds.sizes[GAP_DIM] > 1:
+                base_dir = study.path.parent
+                charts.append(("required_gap", partial(required_gap_chart, base_dir=base_dir)))
+            if study.intensity_key is not None:
+                charts.append(("fragility", fragility_panels))
+            if CONTACT_DIM in ds.dims and ds.sizes[CONTACT_DIM] > 1 and "contact_peak_force" in ds:
+                charts.append(("contacts", contacts_chart))
+        for kind, draw in charts:
+            png = out / f"{study.name}_{kind}.png"
+            STATUS.say(f"drawing {png.name}")
+            draw(ds, png)
+            yield png
 
 
 def check_command(args) -> int:

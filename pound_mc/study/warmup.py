@@ -29,6 +29,7 @@ from pound_mc.integrators import METHODS
 from pound_mc.physics.contact import CONTACT_MODELS
 from pound_mc.study.definition import study_from_text
 from pound_mc.study.engine import StudyEngine
+from pound_mc.study.status import STATUS
 
 __all__ = [
     "COMPILING_MESSAGE",
@@ -85,7 +86,9 @@ def compiling_notice(stream: TextIO | None = None, after_s: float | None = None,
         state["shown"] = True
         if not quiet:
             text = where if where is not None else f"(cache: {cache_directory()})"
-            print(f"{COMPILING_MESSAGE} {text}", file=stream, flush=True)
+            STATUS.announce(f"{COMPILING_MESSAGE} {text}", stream)  # above the status line
+            if stream is sys.stderr:  # the status line's stream: it counts the seconds
+                STATUS.say("compiling kernels" + (f" {where}" if where is not None else ""))
 
     def notice():
         if done.wait(after_s):
@@ -144,13 +147,18 @@ def noticed(work, *, stream: TextIO | None = None, quiet: bool = False, where: s
     """
     stream = sys.stderr if stream is None else stream
     t0 = time.perf_counter()
-    with compiling_notice(stream, where=where, quiet=quiet) as state:
-        work()
+    if not quiet and stream is sys.stderr:  # on a terminal: until the notice, and after it
+        STATUS.say("loading the kernels" + (f" {where}" if where is not None else ""))
+    try:
+        with compiling_notice(stream, where=where, quiet=quiet) as state:
+            work()
+    finally:
+        STATUS.clear()
     seconds = time.perf_counter() - t0
     if state["shown"] and not quiet:
         place = "" if where is None else f"{where} "
-        print(f"kernels compiled {place}in {seconds:.1f} s (cached for later runs)", file=stream,
-              flush=True)  # fmt: skip
+        STATUS.announce(f"kernels compiled {place}in {seconds:.1f} s (cached for later runs)",
+                        stream)  # fmt: skip
     return seconds, state["shown"]
 
 
