@@ -237,3 +237,28 @@ def _run_gap(ds, engine, rule, i, k):
     if rule == "srss":
         return g["gap_srss"]
     return gap_asce7(g["linear_disp_left"], g["linear_disp_right"], r=8.0, cd=5.5, ie=1.0)
+
+
+def test_report_risk_section_tables_the_risk(counted):
+    """``pound-mc report --hazard ...``'s section: the chart, each gap's annual rate and its
+    interval, the risk-targeted gap: the numbers of :func:`risk` itself (``pound-mc risk``)."""
+    import re
+
+    from pound_mc.analysis.report import _site_html
+    from pound_mc.analysis.site_risk import site_assessment
+
+    out, gaps = site_assessment(counted, power_law(1e-3, 2.5), target_rate=1e-2, n_boot=50)
+    assert np.isfinite(float(out["required_gap"]))  # a target inside the gaps studied
+    assert gaps is None  # a dataset without a study: no rule describes its buildings
+    html = "".join(_site_html(out, gaps))
+    assert "<h2>Risk at the site</h2>" in html and 'id="chart-site-risk"' in html
+    rates = re.search(r'<table id="site-rates">(.*?)</table>', html).group(1)
+    cells = re.findall(r"<td[^>]*>([^<]*)</td>", rates)
+    for j, gap in enumerate(GAPS):
+        row = cells[5 * j : 5 * j + 5]
+        assert row[1] == f"{1e3 * gap:.0f} mm"
+        assert row[2] == f"{out['annual_rate'].values[j]:.3g}"
+        lo, hi = out["annual_rate_ci"].values[j]
+        assert row[3] == f"{lo:.3g} - {hi:.3g}"
+    gap = re.search(r'<table id="site-gap">(.*?)</table>', html).group(1)
+    assert f"{1e3 * float(out['required_gap']):.0f} mm" in gap

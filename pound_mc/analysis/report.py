@@ -26,7 +26,9 @@ from pound_mc.analysis import (
 )
 from pound_mc.analysis.distribution_chart import distribution_chart
 from pound_mc.analysis.inelastic_chart import inelastic_chart, yielding_sides
+from pound_mc.analysis.labels import coord_text
 from pound_mc.analysis.sensitivity_chart import sensitivity_chart
+from pound_mc.analysis.site_chart import risk_chart as site_risk_chart
 from pound_mc.analysis.style import (
     output_path,
     pyplot_figures,
@@ -134,7 +136,13 @@ def _provenance_html(ds) -> str:
     return f'<h2>Provenance</h2><table id="provenance">{"".join(rows)}</table>'
 
 
-def report_html(ds: xr.Dataset, *, base_dir: str | Path | None = None, history: bool = True) -> str:
+def report_html(
+    ds: xr.Dataset,
+    *,
+    base_dir: str | Path | None = None,
+    history: bool = True,
+    site: tuple[xr.Dataset, xr.Dataset | None] | None = None,
+) -> str:
     """The results page of a study dataset as one HTML string.
 
     Parameters
@@ -146,6 +154,10 @@ def report_html(ds: xr.Dataset, *, base_dir: str | Path | None = None, history: 
     history : bool
         Include the time history of the simulation with the largest peak force (rebuilt from
         the study text and run again).
+    site : tuple, optional
+        ``(risk, gaps)`` of :func:`pound_mc.analysis.site_risk.site_assessment`: a section on
+        the risk at the site (the chart of the annual rate against the gap, a table per gap,
+        the risk-targeted gap and the codes' gaps).
     """
     require_simulations(ds)
     name = ds.attrs.get("study_name", "study")
@@ -170,6 +182,7 @@ def report_html(ds: xr.Dataset, *, base_dir: str | Path | None = None, history: 
         f'<p class="lead">{html.escape(description)}</p>',
         "<h2>Charts</h2>",
         *figures,
+        *([] if site is None else _site_html(*site)),
         _summary_html(ds),
         "<h2>Study</h2>",
         f'<pre id="study-text">{html.escape(str(ds.attrs.get("study_text", "")))}</pre>',
@@ -182,6 +195,61 @@ def report_html(ds: xr.Dataset, *, base_dir: str | Path | None = None, history: 
         f"<title>pound-mc results: {html.escape(name)}</title>"
         f"<style>{_CSS}</style></head>\n<body>\n" + "\n".join(body) + "\n</body></html>\n"
     )
+
+
+def _mm(value) -> str:
+    """A gap in mm for the page (a dash where it is not a number)."""
+    value = float(value)
+    return "-" if not np.isfinite(value) else f"{1e3 * value:.0f} mm"
+
+
+def _site_html(out: xr.Dataset, gaps: xr.Dataset | None) -> list[str]:
+    """The risk section: chart, annual rate per gap, risk-targeted gap, the codes' gaps."""
+    with pyplot_figures(False):  # into the page, not pyplot
+        fig = site_risk_chart(out, code=gaps)
+        parts = ["<h2>Risk at the site</h2>",
+                 f"<p>Hazard: {html.escape(str(out.attrs['hazard']))}; event: "
+                 f"{html.escape(str(out.attrs['event']))}; intensity "
+                 f"{html.escape(str(out.attrs['im']))}.</p>",
+                 _figure_html("site-risk", fig, "Mean annual rate of the event against the "
+                              "gap.")]  # fmt: skip
+    rate = out["annual_rate"]
+    gap_dim = rate.dims[0]
+    others = [d for d in rate.dims if d != gap_dim]
+    cells = ["" if not others else "where", "gap", "annual rate [1/year]", "interval", "note"]
+    rows = [_row(*cells, header=True)]
+    for index in np.ndindex(*rate.shape):
+        point = dict(zip(rate.dims, index, strict=True))
+        where = ", ".join(coord_text(out, d, point[d]) for d in others)
+        lo, hi = (float(v) for v in out["annual_rate_ci"].isel(point).values)
+        value = float(rate.values[index])
+        note = str(out["rate_message"].isel(point).values) if "rate_message" in out else ""
+        rows.append(_row(where, _mm(out[gap_dim].values[point[gap_dim]]),
+                         value if np.isfinite(value) else "-",
+                         f"{lo:.3g} - {hi:.3g}" if np.isfinite(value) else "-",
+                         note))  # fmt: skip
+    parts.append(f'<table id="site-rates">{"".join(rows)}</table>')
+    if "required_gap" in out:
+        target = out.attrs["target_rate"]
+        lines = []
+        for index in np.ndindex(*out["required_gap"].shape):
+            point = dict(zip(out["required_gap"].dims, index, strict=True))
+            lo, hi = (float(v) for v in out["required_gap_ci"].isel(point).values)
+            message = str(out["gap_message"].isel(point).values)
+            lines.append(_row(_mm(out["required_gap"].values[index]), f"{_mm(lo)} - {_mm(hi)}",
+                              message))  # fmt: skip
+        parts.append(f"<p>Gap for an annual rate of {target:.3g}:</p>"
+                     f'<table id="site-gap">{_row("gap", "interval", "note", header=True)}'
+                     f'{"".join(lines)}</table>')  # fmt: skip
+    if gaps is not None:
+        rows = [_row("rule", "gap", "runs pounding at their own gap", header=True)]
+        for rule in gaps["rule"].values:
+            g = gaps.sel(rule=rule)
+            share = np.asarray(g["code_gap_exceedance"].values, float).ravel()
+            rows.append(_row(str(rule), ", ".join(_mm(v) for v in np.ravel(g["code_gap"].values)),
+                             ", ".join(f"{100 * v:.0f} %" for v in share)))  # fmt: skip
+        parts.append(f'<table id="site-codes">{"".join(rows)}</table>')
+    return parts
 
 
 def _figures(ds: xr.Dataset, base_dir, history: bool, forces: bool = True) -> list[str]:
@@ -324,8 +392,9 @@ def write_report(
     *,
     base_dir: str | Path | None = None,
     history: bool = True,
+    site: tuple[xr.Dataset, xr.Dataset | None] | None = None,
 ) -> Path:
     """Write the results page (:func:`report_html`) to ``path`` atomically."""
     path = output_path(path)  # before the charts are drawn
-    text = report_html(ds, base_dir=base_dir, history=history)
+    text = report_html(ds, base_dir=base_dir, history=history, site=site)
     return write_atomically(path, lambda tmp: tmp.write_text(text, encoding="utf-8"))

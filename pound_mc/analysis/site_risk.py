@@ -22,7 +22,7 @@ import numpy as np
 import xarray as xr
 
 from pound_mc.analysis.fragility import fit_fragility
-from pound_mc.analysis.gaps import engine_of, study_gaps
+from pound_mc.analysis.gaps import RulesDoNotApply, engine_of, study_gaps
 from pound_mc.analysis.hazard import HazardCurve, probability_in, rate_lognormal, rate_stripes
 from pound_mc.analysis.risk import (
     _COUNTED,
@@ -392,3 +392,43 @@ def _pounding_at(engine, table: xr.DataArray) -> tuple[xr.DataArray, xr.DataArra
     coords = {"rule": table["rule"], **{d: table[d] for d in dims if d in table.coords}}
     return (xr.DataArray(np.stack(hits), dims=("rule", *dims), coords=coords),
             xr.DataArray(np.stack(ok), dims=("rule", *dims), coords=coords))  # fmt: skip
+
+
+def design_code_gaps(ds, out, hazard, codes):
+    """The rules' and codes' gaps at each code's design intensity on ``hazard``.
+
+    ASCE 7-22's design earthquake is two thirds of the MCE_R (2 % in 50 years), EN 1998-1's
+    the 10 % in 50 years action (:func:`~pound_mc.analysis.site_risk.design_intensity`); the
+    rules (ABS, SRSS, DDC) are taken at EN 1998-1's.  Each gap is read at that intensity
+    from the stripes (linear in the intensity, as the linear displacements are).
+    """
+    gaps = code_gaps(ds, **codes)
+    dim = out.attrs["im"]
+    levels = {rule: design_intensity(hazard, rule) for rule in gaps["rule"].values}
+    x = np.asarray(gaps[dim].values, float)
+    picked = []
+    for rule in gaps["rule"].values:
+        g = gaps.sel(rule=rule)
+        picked.append(g.interp({dim: levels[rule]}, kwargs={"fill_value": "extrapolate"})
+                      if x.size > 1 else g.isel({dim: 0}))  # fmt: skip
+    table = xr.concat(picked, dim="rule", coords="minimal", compat="override")
+    table = table.drop_vars(dim, errors="ignore")
+    table.attrs["design_im"] = {str(k): v for k, v in levels.items()}
+    return table
+
+
+def site_assessment(ds: xr.Dataset, hazard: HazardCurve, codes: dict | None = None, **options):
+    """:func:`risk` of ``ds`` on ``hazard`` and, where it gives a risk-targeted gap, the codes'.
+
+    ``options`` go to :func:`risk`; ``codes``: the factors of :func:`code_gaps` (``asce``,
+    ``ec8``; none: the rules alone).  Returns ``(risk, gaps)``, ``gaps`` None where no rule
+    describes the buildings (shear buildings, a wall) or the dataset has no study text.
+    """
+    out = risk(ds, hazard, **options)
+    gaps = None
+    if "required_gap" in out and ds.attrs.get("study_text"):
+        try:
+            gaps = design_code_gaps(ds, out, hazard, codes or {})
+        except RulesDoNotApply:
+            gaps = None
+    return out, gaps

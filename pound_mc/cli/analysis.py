@@ -14,10 +14,12 @@ import numpy as np
 import pandas as pd
 
 from pound_mc.analysis import distribution_chart, plot, plot_numerics, profiles, risk_chart
+from pound_mc.analysis.hazard import power_law, read_hazard
 from pound_mc.analysis.labels import dim_text
 from pound_mc.analysis.report import write_report
 from pound_mc.analysis.risk import counted, fragility, left_out_why
 from pound_mc.analysis.selection import MATERIAL_DIM, dim_name, selection
+from pound_mc.analysis.site_risk import site_assessment
 from pound_mc.analysis.style import output_path, require_simulations
 from pound_mc.errors import InputError, OutputError
 from pound_mc.scene import load_scene, simulate
@@ -304,17 +306,57 @@ def report_command(args) -> int:
     path = Path(args.file)
     out = Path(args.out) if args.out else path.with_name(f"{path.stem}_report.html")
     output_path(out, key="--out")
+    hazard = None if args.hazard is None and args.hazard_power is None else hazard_of(args)
     ds = _open_dataset(path)
     with ds:
         ds.load()
         try:
-            write_report(ds, out, base_dir=study_folder(ds, path.parent))
+            site = None
+            if hazard is not None:  # the risk section, as pound-mc risk gives it
+                site = site_assessment(ds, hazard, codes_of(args), im=args.im, event=args.event,
+                                       target_rate=args.target_rate,
+                                       target_probability=args.target_probability,
+                                       years=args.years)  # fmt: skip
+            write_report(ds, out, base_dir=study_folder(ds, path.parent), site=site)
         except OutputError:
             raise
         except InputError as exc:
             raise InputError(exc.message, file=str(path), key=exc.key) from None
     print(f"wrote {out}")
     return 0
+
+
+def numbers_of(text: str | None, key: str, count: tuple[int, ...]) -> list[float] | None:
+    """``"8,5.5,1"`` as numbers > 0 (``count``: how many are allowed)."""
+    if text is None:
+        return None
+    try:
+        values = [float(v) for v in text.split(",")]
+    except ValueError:
+        values = []
+    if len(values) not in count or not all(math.isfinite(v) and v > 0 for v in values):
+        raise InputError(f"give {' or '.join(map(str, count))} numbers > 0 separated by commas, "
+                         f"got {text!r}", key=key)  # fmt: skip
+    return values
+
+
+def codes_of(args) -> dict:
+    """The ``code_gaps`` factors the options give (none: the rules only)."""
+    asce = numbers_of(args.asce, "--asce", (3,))
+    ec8 = numbers_of(args.ec8, "--ec8", (1, 2))
+    return {
+        "asce": None if asce is None else tuple(asce),
+        "ec8": None if ec8 is None else (ec8[0], ec8[1] if len(ec8) > 1 else None,
+                                         bool(args.same_levels)),
+    }  # fmt: skip
+
+
+def hazard_of(args):
+    """The hazard curve ``--hazard FILE.csv`` or ``--hazard-power K0,K`` gives."""
+    if args.hazard is not None:
+        return read_hazard(args.hazard)
+    k0, k = numbers_of(args.hazard_power, "--hazard-power", (2,))
+    return power_law(k0, k)
 
 
 def _jsonable(value):

@@ -150,6 +150,27 @@ def _code_options(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def _site_options(parser: argparse.ArgumentParser, required: bool) -> None:
+    """The IM, event, hazard and target of ``risk`` (and of ``report``'s risk section)."""
+    _shared(parser, "im", "event")
+    hazard = parser.add_mutually_exclusive_group(required=required)
+    hazard.add_argument(
+        "--hazard", metavar="FILE.csv", help="hazard curve: columns im [g] and annual_rate [1/year]"
+    )
+    hazard.add_argument(
+        "--hazard-power", metavar="K0,K", help="hazard curve annual_rate = K0 im^-K"
+    )
+    parser.add_argument("--target-rate", type=float, metavar="R",
+                        help="target annual rate [1/year]")  # fmt: skip
+    parser.add_argument(
+        "--target-probability",
+        type=float,
+        metavar="P",
+        help="target probability of the event in --years years",
+    )
+    parser.add_argument("--years", type=float, metavar="Y", help="years of --target-probability")
+
+
 def _json_and_plot(parser: argparse.ArgumentParser, plot_help: str) -> None:
     """The ``--json`` and ``--plot FILE.png`` options of a command that prints one result."""
     parser.add_argument("--json", action="store_true", help="print one JSON object")
@@ -425,22 +446,7 @@ def _analysis(sub: argparse._SubParsersAction) -> None:
     p = _command(sub, "risk", help="annual rate of an event per gap at a site, and the gap that "
                  "meets a target")  # fmt: skip
     p.add_argument("file", metavar="RESULT.nc")
-    _shared(p, "im", "event")
-    hazard = p.add_mutually_exclusive_group(required=True)
-    hazard.add_argument(
-        "--hazard", metavar="FILE.csv", help="hazard curve: columns im [g] and annual_rate [1/year]"
-    )
-    hazard.add_argument(
-        "--hazard-power", metavar="K0,K", help="hazard curve annual_rate = K0 im^-K"
-    )
-    p.add_argument("--target-rate", type=float, metavar="R", help="target annual rate [1/year]")
-    p.add_argument(
-        "--target-probability",
-        type=float,
-        metavar="P",
-        help="target probability of the event in --years years",
-    )
-    p.add_argument("--years", type=float, metavar="Y", help="years of --target-probability")
+    _site_options(p, required=True)
     p.add_argument(
         "--method",
         default="fragility",
@@ -482,3 +488,6 @@ def _analysis(sub: argparse._SubParsersAction) -> None:
     p = _command(sub, "report", help="write a self-contained HTML results page of a study")
     p.add_argument("file", metavar="RESULT.nc")
     p.add_argument("--out", metavar="FILE.html", help="page to write (default next to RESULT.nc)")
+    # a risk section where a hazard is given (as pound-mc risk, the fitted fragility)
+    _site_options(p, required=False)
+    _code_options(p)

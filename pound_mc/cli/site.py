@@ -7,41 +7,14 @@ import math
 from pathlib import Path
 
 import numpy as np
-import xarray as xr
 
 from pound_mc.analysis.gaps import RulesDoNotApply
-from pound_mc.analysis.hazard import power_law, read_hazard
 from pound_mc.analysis.risk import left_out_why
 from pound_mc.analysis.risk import required_gap as probability_gap
 from pound_mc.analysis.site_chart import risk_chart
-from pound_mc.analysis.site_risk import code_gaps, design_intensity, risk
-from pound_mc.cli.analysis import _jsonable, _open_dataset, _where
+from pound_mc.analysis.site_risk import code_gaps, site_assessment
+from pound_mc.cli.analysis import _jsonable, _open_dataset, _where, codes_of, hazard_of
 from pound_mc.errors import InputError
-
-
-def _numbers(text: str | None, key: str, count: tuple[int, ...]) -> list[float] | None:
-    """``"8,5.5,1"`` as numbers > 0 (``count``: how many are allowed)."""
-    if text is None:
-        return None
-    try:
-        values = [float(v) for v in text.split(",")]
-    except ValueError:
-        values = []
-    if len(values) not in count or not all(math.isfinite(v) and v > 0 for v in values):
-        raise InputError(f"give {' or '.join(map(str, count))} numbers > 0 separated by commas, "
-                         f"got {text!r}", key=key)  # fmt: skip
-    return values
-
-
-def _codes(args) -> dict:
-    """The ``code_gaps`` factors the options give (none: the rules only)."""
-    asce = _numbers(args.asce, "--asce", (3,))
-    ec8 = _numbers(args.ec8, "--ec8", (1, 2))
-    return {
-        "asce": None if asce is None else tuple(asce),
-        "ec8": None if ec8 is None else (ec8[0], ec8[1] if len(ec8) > 1 else None,
-                                         bool(args.same_levels)),
-    }  # fmt: skip
 
 
 def _named(exc: InputError, path: Path) -> InputError:
@@ -53,24 +26,15 @@ def risk_command(args) -> int:
     path = Path(args.file)
     if args.n_boot < 0:
         raise InputError(f"must be >= 0, got {args.n_boot}", key="--n-boot")
-    if args.hazard is not None:
-        hazard = read_hazard(args.hazard)
-    else:
-        k0, k = _numbers(args.hazard_power, "--hazard-power", (2,))
-        hazard = power_law(k0, k)
-    codes = _codes(args)
+    hazard = hazard_of(args)
+    codes = codes_of(args)
     with _open_dataset(path) as ds:
         ds.load()
         try:
-            out = risk(ds, hazard, im=args.im, event=args.event, method=args.method,
-                       target_rate=args.target_rate, target_probability=args.target_probability,
-                       years=args.years, n_boot=args.n_boot)  # fmt: skip
-            gaps = None
-            if "required_gap" in out and ds.attrs.get("study_text"):
-                try:
-                    gaps = design_code_gaps(ds, out, hazard, codes)
-                except RulesDoNotApply:  # shear buildings, a wall: no rule describes them
-                    gaps = None
+            out, gaps = site_assessment(ds, hazard, codes, im=args.im, event=args.event,
+                                        method=args.method, target_rate=args.target_rate,
+                                        target_probability=args.target_probability,
+                                        years=args.years, n_boot=args.n_boot)  # fmt: skip
         except InputError as exc:
             raise _named(exc, path) from None
     rest = list(out["annual_rate"].dims)
@@ -112,29 +76,6 @@ def risk_command(args) -> int:
     if args.plot:
         print(f"wrote {args.plot}")
     return 0
-
-
-def design_code_gaps(ds, out, hazard, codes):
-    """The rules' and codes' gaps at each code's design intensity on ``hazard``.
-
-    ASCE 7-22's design earthquake is two thirds of the MCE_R (2 % in 50 years), EN 1998-1's
-    the 10 % in 50 years action (:func:`~pound_mc.analysis.site_risk.design_intensity`); the
-    rules (ABS, SRSS, DDC) are taken at EN 1998-1's.  Each gap is read at that intensity
-    from the stripes (linear in the intensity, as the linear displacements are).
-    """
-    gaps = code_gaps(ds, **codes)
-    dim = out.attrs["im"]
-    levels = {rule: design_intensity(hazard, rule) for rule in gaps["rule"].values}
-    x = np.asarray(gaps[dim].values, float)
-    picked = []
-    for rule in gaps["rule"].values:
-        g = gaps.sel(rule=rule)
-        picked.append(g.interp({dim: levels[rule]}, kwargs={"fill_value": "extrapolate"})
-                      if x.size > 1 else g.isel({dim: 0}))  # fmt: skip
-    table = xr.concat(picked, dim="rule", coords="minimal", compat="override")
-    table = table.drop_vars(dim, errors="ignore")
-    table.attrs["design_im"] = {str(k): v for k, v in levels.items()}
-    return table
 
 
 def _value(out, dim: str, i: int) -> str:
@@ -188,7 +129,7 @@ def required_gap_command(args) -> int:
     path = Path(args.file)
     if not 0 < args.probability < 1:
         raise InputError(f"must be in (0, 1), got {args.probability!r}", key="--probability")
-    codes = _codes(args)
+    codes = codes_of(args)
     with _open_dataset(path) as ds:
         ds.load()
         try:
