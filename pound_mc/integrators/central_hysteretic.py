@@ -33,11 +33,9 @@ from pound_mc.integrators.fixed import (
     newmark_arrays,
 )
 from pound_mc.integrators.hysteretic import (
-    S_ALPHA,
-    S_BW,
-    S_K,
     plastic_load,
     return_map,
+    settle_storeys,
     storey_outputs,
 )
 from pound_mc.integrators.toolkit import mechanical_energy, rowdot, run_sizes
@@ -55,17 +53,7 @@ def _storeys_at(dmat, store, q, drift, drift_o, up, up_o, peak_u, e_h):
     for s in range(drift.size):
         drift[s] = rowdot(dmat, s, q)
     return_map(drift, store, up_o, up, drift_o)
-    for s in range(drift.size):
-        z = drift[s] - up[s]
-        if store[s, S_BW] > 0.0:  # z varies over the step: trapezoid in the plastic drift
-            z = 0.5 * (z + drift_o[s] - up_o[s])
-        if up[s] != up_o[s]:  # a wall's storey (k infinite) never yields: no inf * 0
-            e_h += (1.0 - store[s, S_ALPHA]) * store[s, S_K] * z * (up[s] - up_o[s])
-        up_o[s] = up[s]
-        drift_o[s] = drift[s]
-        if abs(drift[s]) > peak_u[s]:
-            peak_u[s] = abs(drift[s])
-    return e_h
+    return settle_storeys(store, drift, drift_o, up, up_o, peak_u, e_h)
 
 
 @jit

@@ -139,6 +139,28 @@ def plastic_load(dmat, store, up, pl):
 
 
 @jit(inline=True)
+def settle_storeys(store, drift, drift_n, up, up_n, peak_u, e_h):
+    """A step's end for the storeys: dissipation, peaks, and the end taken as the next start.
+
+    ``drift, up``: the drifts and plastic drifts at the step's end, ``drift_n, up_n`` at its
+    start (set to the end here); ``peak_u``: each storey's peak |drift|.  Returns the
+    hysteretic dissipation so far [J] (``(1 - alpha) k z du_p`` a step; Bouc-Wen: ``z`` by the
+    trapezoid, as it varies over the step).
+    """
+    for s in range(drift.size):
+        z = drift[s] - up[s]
+        if store[s, S_BW] > 0.0:  # z varies over the step: trapezoid in the plastic drift
+            z = 0.5 * (z + drift_n[s] - up_n[s])
+        if up[s] != up_n[s]:  # a wall's storey (k infinite) never yields: no inf * 0
+            e_h += (1.0 - store[s, S_ALPHA]) * store[s, S_K] * z * (up[s] - up_n[s])
+        up_n[s] = up[s]
+        drift_n[s] = drift[s]
+        if abs(drift[s]) > peak_u[s]:
+            peak_u[s] = abs(drift[s])
+    return e_h
+
+
+@jit(inline=True)
 def _nanmax(a, b):
     """The larger of ``a`` and ``b``, ``b`` where ``a`` is NaN."""
     return a if a >= b else b
@@ -260,16 +282,7 @@ def newmark_hysteretic(
         if not conv:
             status = outputs.STATUS_NOT_CONVERGED
         newmark_rates(q, v, a, qn, h, vn, an)
-        for s in range(ns):
-            z = drift[s] - up[s]
-            if store[s, S_BW] > 0.0:  # z varies over the step: trapezoid in the plastic drift
-                z = 0.5 * (z + drift_n[s] - up_n[s])
-            if up[s] != up_n[s]:  # a wall's storey (k infinite) never yields: no inf * 0
-                e_h += (1.0 - store[s, S_ALPHA]) * store[s, S_K] * z * (up[s] - up_n[s])
-            up_n[s] = up[s]
-            drift_n[s] = drift[s]
-            if abs(drift[s]) > peak_u[s]:
-                peak_u[s] = abs(drift[s])
+        e_h = settle_storeys(store, drift, drift_n, up, up_n, peak_u, e_h)
         for f in range(nf):
             xa = abs(rowdot(phi, f, an) + ag1)
             if xa > peak_acc[f]:
