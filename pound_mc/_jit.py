@@ -44,8 +44,9 @@ except ImportError:  # Windows: numba's own, unlocked index update
 #: numba's optimisation level for every kernel: 2 (LLVM's -O2), unless ``NUMBA_OPT`` is set.
 #: Measured in one session on 2 cores (a fresh cache each, idle machine): the cold warm-up of
 #: ``studies/shear_spectrum.toml`` 31.7 s at -O3 against 28.8 s, ``inelastic_spectrum`` 33.2
-#: against 21.6 s, ``yielding_shear`` about 31 against 28.8 s; the kernels' run times the same
-#: within the noise of interleaved runs (-3 % to +2 %).  numba reads it when it next compiles
+#: against 21.6 s, ``yielding_shear`` about 31 against 28.8 s; the general kernels run as fast,
+#: the SDOF pair 2.8 % slower (the benchmark study, one thread, alternated processes) and B1
+#: 0.5 % (``docs/performance.md``).  numba reads it when it next compiles
 #: (``config.reload_config``), so it holds though ``numba`` was imported first; it is the
 #: process's setting, so other numba code compiled in the same process gets it too.
 os.environ.setdefault("NUMBA_OPT", "2")
