@@ -19,6 +19,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pytest
 import xarray as xr
+from browser import CHROMIUM, COMMON_FLAGS, run_chromium
 
 import pound_mc  # noqa: F401  (registers ds.pound)
 from pound_mc.analysis.gaps import study_gaps
@@ -377,30 +378,11 @@ def test_report_is_self_contained(ds, tiny, tmp_path):
     assert f"{ds.pound.energy_summary()['max']:.3g}" in page
 
 
-CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
-_FLAGS = [
-    "--headless",
-    "--no-sandbox",
-    "--disable-gpu",
-    "--disable-dev-shm-usage",
-    "--no-first-run",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-sync",
-    "--hide-scrollbars",
-    "--force-device-scale-factor=1",
-    "--window-size=1200,3000",
-]
+_FLAGS = ["--headless", *COMMON_FLAGS, "--window-size=1200,3000"]
 
 
 def _chromium(tmp_path, *args):
-    profile = tmp_path / f"profile-{len(list(tmp_path.glob('profile-*')))}"
-    return subprocess.run(
-        [CHROMIUM, *_FLAGS, f"--user-data-dir={profile}", *args],
-        capture_output=True,
-        text=True,
-        timeout=90,
-    )
+    return run_chromium(tmp_path, _FLAGS, *args, timeout=90)
 
 
 def _console_messages(stderr: str) -> list[str]:

@@ -17,12 +17,12 @@ import json
 import os
 import re
 import shutil
-import subprocess
 from html import unescape
 from html.parser import HTMLParser
 from pathlib import Path
 
 import pytest
+from browser import CHROMIUM, COMMON_FLAGS, run_chromium
 
 ROOT = Path(__file__).resolve().parent.parent
 HTML = ROOT / "docs" / "_build" / "html"
@@ -31,7 +31,6 @@ pytestmark = pytest.mark.skipif(
     reason="the documentation is not built (python -m sphinx -b html docs docs/_build/html; "
     ".ci/run builds it, then runs this file)",
 )
-CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
 browser = pytest.mark.skipif(
     not os.access(CHROMIUM, os.X_OK),
     reason="Debian's chromium is not installed (/usr/bin/chromium); .ci/run installs it",
@@ -40,15 +39,7 @@ browser = pytest.mark.skipif(
 WIDTH, HEIGHT = 1280, 900
 FLAGS = [
     "--headless=new",
-    "--no-sandbox",
-    "--disable-gpu",
-    "--disable-dev-shm-usage",
-    "--no-first-run",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-sync",
-    "--hide-scrollbars",
-    "--force-device-scale-factor=1",
+    *COMMON_FLAGS,
     f"--window-size={WIDTH},{HEIGHT}",
     # offline: no host name resolves, and the proxy every request would go through is absent
     "--host-resolver-rules=MAP * ~NOTFOUND",
@@ -176,13 +167,7 @@ def _look(site: Path, page: Path, tmp_path: Path, html: str | None = None) -> di
     text = page.read_text(encoding="utf-8") if html is None else html
     probe = page.with_name(f"probe-{page.name}")
     probe.write_text(text.replace("</body>", PROBE + "</body>"), encoding="utf-8")
-    profile = tmp_path / f"profile-{len(list(tmp_path.glob('profile-*')))}"
-    run = subprocess.run(
-        [CHROMIUM, *FLAGS, f"--user-data-dir={profile}", "--dump-dom", probe.as_uri()],
-        capture_output=True,
-        text=True,
-        timeout=120,
-    )
+    run = run_chromium(tmp_path, FLAGS, "--dump-dom", probe.as_uri(), timeout=120)
     probe.unlink()
     assert run.returncode == 0, run.stderr[-2000:]
     found = re.search(r'id="pound-probe" data-found="([^"]*)"', run.stdout)

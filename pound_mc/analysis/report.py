@@ -26,7 +26,7 @@ from pound_mc.analysis import (
 )
 from pound_mc.analysis.distribution_chart import distribution_chart
 from pound_mc.analysis.inelastic_chart import inelastic_chart, yielding_sides
-from pound_mc.analysis.labels import coord_text
+from pound_mc.analysis.labels import coord_text, value_text
 from pound_mc.analysis.sensitivity_chart import sensitivity_chart
 from pound_mc.analysis.site_chart import risk_chart as site_risk_chart
 from pound_mc.analysis.style import (
@@ -224,7 +224,7 @@ def _site_html(out: xr.Dataset, gaps: xr.Dataset | None) -> list[str]:
         lo, hi = (float(v) for v in out["annual_rate_ci"].isel(point).values)
         value = float(rate.values[index])
         note = str(out["rate_message"].isel(point).values) if "rate_message" in out else ""
-        rows.append(_row(where, _mm(out[gap_dim].values[point[gap_dim]]),
+        rows.append(_row(where, value_text(out, gap_dim, point[gap_dim]),
                          value if np.isfinite(value) else "-",
                          f"{lo:.3g} - {hi:.3g}" if np.isfinite(value) else "-",
                          note))  # fmt: skip
